@@ -1,0 +1,67 @@
+/* The envelope of every binary artifact (ARCHITECTURE section 6).
+ *
+ *   offset size  field
+ *   0      8     magic (e.g. "SLPOINTS")
+ *   8      4     format version   (u32 LE)
+ *   12     4     producing stage version (u32 LE)
+ *   16     8     body size in bytes (u64 LE)
+ *   24     8     XXH3-64 of the body (u64 LE)
+ *   32     ...   body
+ *
+ * Readers refuse a wrong magic, an unknown format version, a body size that disagrees
+ * with the file size, or a checksum mismatch, with an error naming the file (SL_E_CORRUPT
+ * for our own artifacts: the engine then reruns the producing stage).
+ */
+#ifndef SCANLOD_PIPELINE_ARTIFACT_H
+#define SCANLOD_PIPELINE_ARTIFACT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "pipeline/error.h"
+
+#define SL_ARTIFACT_HEADER_SIZE 32u
+
+typedef struct sl_artifact_part {
+    const void *data;
+    size_t size;
+} sl_artifact_part;
+
+/* Writes header + the concatenated parts through the atomic-write helper. */
+int sl_artifact_write(const char *path, const char magic[8], uint32_t format_version,
+                      uint32_t stage_version, const sl_artifact_part *parts, int part_count,
+                      sl_error *err);
+
+/* Reads and validates; *body is malloc'd (caller frees), *body_size its size.
+ * `stage_version` may be NULL. Bodies above max_body_size are refused (SL_E_LIMIT). */
+int sl_artifact_read(const char *path, const char magic[8], uint32_t format_version,
+                     uint64_t max_body_size, void **body, uint64_t *body_size,
+                     uint32_t *stage_version, sl_error *err);
+
+/* Little-endian helpers for bodies (the format is LE on every host). */
+static inline void sl_put_u32(unsigned char *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+static inline void sl_put_u64(unsigned char *p, uint64_t v)
+{
+    for (int i = 0; i < 8; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+static inline uint32_t sl_get_u32(const unsigned char *p)
+{
+    uint32_t v = 0;
+    for (int i = 0; i < 4; i++)
+        v |= (uint32_t)p[i] << (8 * i);
+    return v;
+}
+static inline uint64_t sl_get_u64(const unsigned char *p)
+{
+    uint64_t v = 0;
+    for (int i = 0; i < 8; i++)
+        v |= (uint64_t)p[i] << (8 * i);
+    return v;
+}
+
+#endif

@@ -1,0 +1,51 @@
+/* The contract of a stage (ARCHITECTURE section 2).
+ *
+ * A stage is a pure function of (its input artifacts, its config section, its code
+ * version): the same inputs give byte-identical outputs whatever the thread count. The
+ * engine calls `run` in a child process per item (a crash or OOM costs one item), with
+ * the OpenMP thread count already set. The stage:
+ *   - reads the source file and/or the upstream stage's artifact directory `in_dir`;
+ *   - writes its artifacts into `out_dir` through pipeline/atomicfile.h only (the engine
+ *     hashes every file in `out_dir` and writes the commit record last);
+ *   - adds counts to `report` (an open JSON object: the stage's part of the item report);
+ *   - polls `progress` and returns SL_E_INTERRUPTED at a safe point when asked to stop;
+ *   - returns 0 or a negative SL_E_* with `err` naming the file and the cause. Bad input
+ *     must be SL_E_BADINPUT/SL_E_LIMIT/SL_E_UNSUPPORTED (the item is quarantined).
+ */
+#ifndef SCANLOD_PIPELINE_STAGE_H
+#define SCANLOD_PIPELINE_STAGE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "pipeline/config.h"
+#include "pipeline/error.h"
+#include "pipeline/json.h"
+#include "pipeline/progress.h"
+
+typedef struct sl_stage_io {
+    const char *item;        /* item id: input path relative to [run] input, no ".ply" */
+    const char *source_path; /* the item's input file */
+    const char *in_dir;      /* upstream stage's artifact directory; NULL for the first */
+    const char *out_dir;     /* this stage's artifact directory (exists and is empty) */
+    sl_json *report;         /* open object: this stage's section of the item report */
+    sl_progress *progress;
+    int threads;             /* OpenMP threads for this item (already set) */
+} sl_stage_io;
+
+typedef struct sl_stage {
+    const char *name;         /* also the config section */
+    const char *description;  /* one line, for --help and docs */
+    uint32_t version;         /* bump when the output for the same input changes */
+    const sl_option *options; /* this stage's options (section == name) */
+    /* Reads the stage's section into a freshly allocated config struct. */
+    int (*configure)(const sl_config *cfg, void **stage_config, sl_error *err);
+    void (*release_config)(void *stage_config);
+    int (*run)(const void *stage_config, const sl_stage_io *io, sl_error *err);
+} sl_stage;
+
+/* The registered stages, in pipeline order, NULL-terminated (pipeline/registry.c). */
+const sl_stage *const *sl_stage_registry(void);
+const sl_stage *sl_stage_find(const char *name);
+
+#endif

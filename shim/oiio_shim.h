@@ -1,0 +1,39 @@
+/* extern "C" shim around OpenImageIO (C++). Every entry point catches every exception
+ * and turns OIIO's per-thread geterror() into an sl_error naming the file.
+ * OIIO's own thread pool is set to 1 thread (sl_oiio_init): we call it from inside
+ * OpenMP regions, as OIIO's docs ask of applications with their own threads.
+ */
+#ifndef SCANLOD_SHIM_OIIO_SHIM_H
+#define SCANLOD_SHIM_OIIO_SHIM_H
+
+#include <stdint.h>
+
+#include "pipeline/error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct sl_image {
+    int width, height, channels; /* channels as stored in `pixels` */
+    float *pixels;               /* width * height * channels, row 0 = top */
+} sl_image;
+
+void sl_oiio_init(void);
+
+/* Reads any image OIIO knows, converted to float, at most max_pixels pixels
+ * (SL_E_LIMIT beyond; checked from the header before reading). */
+int sl_image_read(const char *path, uint64_t max_pixels, sl_image *out, sl_error *err);
+
+/* Writes `pixels` (float, width*height*channels) to `path`; the format follows the
+ * extension (.exr as half/float, .png as 8-bit). Written to a temp name in the same
+ * directory, fsynced and renamed (nothing partial is ever visible). */
+int sl_image_write(const char *path, int width, int height, int channels, const float *pixels,
+                   sl_error *err);
+
+void sl_image_release(sl_image *img);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
