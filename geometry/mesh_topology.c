@@ -1,0 +1,184 @@
+/* Edge topology: weld equal positions, then count how many triangles share each edge.
+ *
+ * Welding uses an open-addressing hash of the three coordinates' bit patterns (after
+ * -0 -> +0), so it is O(n) and exact: positions merge only when they are equal. Edges
+ * are bucketed by their lower welded endpoint (a CSR array: counts, prefix sums, fill),
+ * then each small bucket is sorted and its runs counted -- O(n) memory of 4 bytes per
+ * edge end instead of sorting 64-bit edge keys.
+ */
+#include "geometry/mesh_distance.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#define NONE UINT32_MAX
+
+static uint32_t coordinate_bits(float x)
+{
+    uint32_t u;
+    if (x == 0.0f)
+        x = 0.0f; /* -0 and +0 are the same position */
+    memcpy(&u, &x, sizeof u);
+    return u;
+}
+
+static uint64_t position_hash(const uint32_t k[3])
+{
+    uint64_t h = k[0] * 0x9e3779b97f4a7c15ull;
+    h ^= (h >> 29) ^ k[1] * 0xbf58476d1ce4e5b9ull;
+    h ^= (h >> 31) ^ k[2] * 0x94d049bb133111ebull;
+    return h ^ (h >> 32);
+}
+
+static void position_key(const sl_mesh *m, uint32_t v, uint32_t k[3])
+{
+    for (int a = 0; a < 3; a++)
+        k[a] = coordinate_bits(m->positions[3 * (uint64_t)v + a]);
+}
+
+/* weld[v] = dense id of v's position (ids in order of first vertex), NONE if unused.
+ * Returns the number of ids, or -1 when out of memory. */
+static int64_t weld_positions(const sl_mesh *m, uint32_t *weld)
+{
+    uint64_t used = 0;
+    for (uint64_t v = 0; v < m->vertex_count; v++)
+        weld[v] = NONE;
+    for (uint64_t i = 0; i < 3 * m->triangle_count; i++)
+        if (weld[m->triangles[i]] == NONE) {
+            weld[m->triangles[i]] = 0;
+            used++;
+        }
+    uint64_t cap = 16;
+    while (cap < 2 * used)
+        cap *= 2;
+    uint32_t *table = malloc(cap * sizeof *table); /* representative vertex per slot */
+    if (!table)
+        return -1;
+    memset(table, 0xff, cap * sizeof *table);
+    uint32_t ids = 0;
+    for (uint64_t v = 0; v < m->vertex_count; v++) {
+        if (weld[v] == NONE)
+            continue;
+        uint32_t key[3], other[3];
+        position_key(m, (uint32_t)v, key);
+        uint64_t slot = position_hash(key) & (cap - 1);
+        for (;; slot = (slot + 1) & (cap - 1)) {
+            if (table[slot] == NONE) {
+                table[slot] = (uint32_t)v;
+                weld[v] = ids++;
+                break;
+            }
+            position_key(m, table[slot], other);
+            if (memcmp(key, other, sizeof key) == 0) {
+                weld[v] = weld[table[slot]];
+                break;
+            }
+        }
+    }
+    free(table);
+    return ids;
+}
+
+static int cmp_u32(const void *x, const void *y)
+{
+    uint32_t a = *(const uint32_t *)x, b = *(const uint32_t *)y;
+    return (a > b) - (a < b);
+}
+
+static void sort_bucket(uint32_t *v, uint64_t n)
+{
+    if (n > 32) { /* a fan around one vertex can be large on broken meshes */
+        qsort(v, n, sizeof *v, cmp_u32);
+        return;
+    }
+    for (uint64_t i = 1; i < n; i++) {
+        uint32_t x = v[i];
+        uint64_t j = i;
+        for (; j > 0 && v[j - 1] > x; j--)
+            v[j] = v[j - 1];
+        v[j] = x;
+    }
+}
+
+/* Welded corners of triangle t; returns 0 if two coincide (degenerate). */
+static int welded_triangle(const sl_mesh *m, const uint32_t *weld, uint64_t t, uint32_t w[3])
+{
+    for (int c = 0; c < 3; c++)
+        w[c] = weld[m->triangles[3 * t + c]];
+    return w[0] != w[1] && w[1] != w[2] && w[2] != w[0];
+}
+
+static void count_edge_runs(uint32_t *ends, const uint64_t *start, uint64_t ids,
+                            sl_mesh_topology *out)
+{
+    for (uint64_t lo = 0; lo < ids; lo++) {
+        uint64_t n = start[lo + 1] - start[lo];
+        uint32_t *v = ends + start[lo];
+        sort_bucket(v, n);
+        for (uint64_t i = 0; i < n;) {
+            uint64_t j = i + 1;
+            while (j < n && v[j] == v[i])
+                j++;
+            out->edges++;
+            if (j - i == 1)
+                out->boundary_edges++;
+            else if (j - i > 2)
+                out->nonmanifold_edges++;
+            i = j;
+        }
+    }
+}
+
+int sl_mesh_topology_compute(const sl_mesh *m, sl_mesh_topology *out, sl_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (m->vertex_count > (uint64_t)UINT32_MAX)
+        return sl_error_set(err, SL_E_LIMIT, 0, NULL,
+                            "%llu vertices: edge topology handles at most 2^32 - 1",
+                            (unsigned long long)m->vertex_count);
+    uint32_t *weld = malloc((m->vertex_count ? m->vertex_count : 1) * sizeof *weld);
+    int64_t ids = weld ? weld_positions(m, weld) : -1;
+    uint64_t *start = ids >= 0 ? calloc((uint64_t)ids + 2, sizeof *start) : NULL;
+    uint32_t *ends = NULL;
+    if (start) {
+        /* start[lo + 2] counts edges with lower end lo, so that after the prefix sum
+         * start[lo + 1] is the fill cursor and, once filled, bucket lo's end. */
+        for (uint64_t t = 0; t < m->triangle_count; t++) {
+            uint32_t w[3];
+            if (!welded_triangle(m, weld, t, w)) {
+                out->degenerate_triangles++;
+                continue;
+            }
+            for (int c = 0; c < 3; c++) {
+                uint32_t a = w[c], b = w[(c + 1) % 3];
+                start[(a < b ? a : b) + 2]++;
+            }
+        }
+        for (int64_t i = 0; i < ids; i++)
+            start[i + 2] += start[i + 1];
+        ends = malloc((start[ids + 1] ? start[ids + 1] : 1) * sizeof *ends);
+    }
+    if (!ends) {
+        free(weld);
+        free(start);
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "edge topology of %llu triangles",
+                            (unsigned long long)m->triangle_count);
+    }
+    for (uint64_t t = 0; t < m->triangle_count; t++) {
+        uint32_t w[3];
+        if (!welded_triangle(m, weld, t, w))
+            continue;
+        for (int c = 0; c < 3; c++) {
+            uint32_t a = w[c], b = w[(c + 1) % 3];
+            uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
+            ends[start[lo + 1]++] = hi;
+        }
+    }
+    out->welded_vertices = (uint64_t)ids;
+    count_edge_runs(ends, start, (uint64_t)ids, out);
+    out->watertight = out->edges > 0 && out->boundary_edges == 0 && out->nonmanifold_edges == 0;
+    free(weld);
+    free(start);
+    free(ends);
+    return SL_OK;
+}

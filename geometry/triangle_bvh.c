@@ -1,0 +1,412 @@
+/* Triangle BVH and exact point-triangle distance (see triangle_bvh.h).
+ *
+ * Build: items {centroid, triangle} are partitioned in place by quickselect around the
+ * median of the widest centroid axis, top-down; a range of at most SL_BVH_LEAF_SIZE
+ * items becomes a leaf, which copies its corners out in leaf order and computes its
+ * bounds; inner bounds are the union of the children's, computed after both are built.
+ * Subtrees above PARALLEL_CUTOFF triangles run as OpenMP tasks; offsets come from
+ * subtree_nodes(), so the layout does not depend on the schedule.
+ */
+#include "geometry/triangle_bvh.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PARALLEL_CUTOFF 65536
+
+typedef struct bvh_item {
+    float centroid[3];
+    uint32_t triangle;
+} bvh_item;
+
+/* Plain comparisons: fminf/fmaxf are out-of-line calls (NaN rules), and the inputs are
+ * finite. */
+static inline float min_f(float a, float b) { return a < b ? a : b; }
+static inline float max_f(float a, float b) { return a > b ? a : b; }
+
+typedef struct bvh_build {
+    sl_triangle_bvh *bvh;
+    const sl_mesh *mesh;
+    bvh_item *items;
+} bvh_build;
+
+/* Leaves of a median-split subtree over n and over n + 1 triangles (n >= 1). The halves
+ * of n and of n + 1 are always among {k, k + 1} with k = n / 2, so computing the pair
+ * together takes O(log n) steps instead of one per node. */
+static void leaf_counts(uint64_t n, uint64_t *leaves_n, uint64_t *leaves_n1)
+{
+    if (n + 1 <= SL_BVH_LEAF_SIZE) {
+        *leaves_n = *leaves_n1 = 1;
+        return;
+    }
+    if (n <= SL_BVH_LEAF_SIZE) { /* n + 1 splits into two halves that are leaves */
+        *leaves_n = 1;
+        *leaves_n1 = 2;
+        return;
+    }
+    uint64_t k = n / 2, a, b;
+    leaf_counts(k, &a, &b);
+    if (n % 2 == 0) {
+        *leaves_n = 2 * a;   /* k + k */
+        *leaves_n1 = a + b;  /* k + (k + 1) */
+    } else {
+        *leaves_n = a + b;   /* k + (k + 1) */
+        *leaves_n1 = 2 * b;  /* (k + 1) + (k + 1) */
+    }
+}
+
+/* Every inner node has two children, so nodes = 2 * leaves - 1. */
+static uint64_t subtree_nodes(uint64_t n)
+{
+    uint64_t leaves, unused;
+    leaf_counts(n, &leaves, &unused);
+    return 2 * leaves - 1;
+}
+
+/* Total order on items along an axis; the triangle index breaks ties so the partition
+ * is the same whatever the input order of equal keys. */
+static int item_less(const bvh_item *x, const bvh_item *y, int axis)
+{
+    if (x->centroid[axis] != y->centroid[axis])
+        return x->centroid[axis] < y->centroid[axis];
+    return x->triangle < y->triangle;
+}
+
+static void item_swap(bvh_item *x, bvh_item *y)
+{
+    bvh_item t = *x;
+    *x = *y;
+    *y = t;
+}
+
+/* Rearranges items[0..n) so that items[k] is the k-th smallest along `axis`, smaller
+ * ones before it and larger ones after (Hoare's selection, median-of-three pivot). */
+static void select_kth(bvh_item *items, uint64_t n, uint64_t k, int axis)
+{
+    uint64_t lo = 0, hi = n - 1;
+    while (hi > lo) {
+        uint64_t mid = lo + (hi - lo) / 2;
+        if (item_less(&items[mid], &items[lo], axis))
+            item_swap(&items[mid], &items[lo]);
+        if (item_less(&items[hi], &items[lo], axis))
+            item_swap(&items[hi], &items[lo]);
+        if (item_less(&items[hi], &items[mid], axis))
+            item_swap(&items[hi], &items[mid]);
+        bvh_item pivot = items[mid];
+        uint64_t i = lo, j = hi;
+        for (;;) {
+            while (item_less(&items[i], &pivot, axis))
+                i++;
+            while (item_less(&pivot, &items[j], axis))
+                j--;
+            if (i >= j)
+                break;
+            item_swap(&items[i], &items[j]);
+            i++;
+            j--;
+        }
+        /* items[lo..j] <= pivot <= items[j+1..hi] */
+        if (k <= j)
+            hi = j;
+        else
+            lo = j + 1;
+    }
+}
+
+static void make_leaf(bvh_build *b, uint64_t node_index, uint64_t begin, uint64_t count)
+{
+    sl_triangle_bvh *bvh = b->bvh;
+    sl_bvh_node *node = &bvh->nodes[node_index];
+    for (int a = 0; a < 3; a++) {
+        node->lo[a] = FLT_MAX;
+        node->hi[a] = -FLT_MAX;
+    }
+    for (uint64_t i = begin; i < begin + count; i++) {
+        uint32_t t = b->items[i].triangle;
+        bvh->source[i] = t;
+        for (int c = 0; c < 3; c++) {
+            const float *v = &b->mesh->positions[3 * (uint64_t)b->mesh->triangles[3 * (uint64_t)t + c]];
+            for (int a = 0; a < 3; a++) {
+                bvh->corners[9 * i + 3 * c + a] = v[a];
+                node->lo[a] = min_f(node->lo[a], v[a]);
+                node->hi[a] = max_f(node->hi[a], v[a]);
+            }
+        }
+    }
+    node->first = (uint32_t)begin;
+    node->count = (uint32_t)count;
+}
+
+static int widest_centroid_axis(const bvh_item *items, uint64_t count)
+{
+    float lo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, hi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
+    for (uint64_t i = 0; i < count; i++)
+        for (int a = 0; a < 3; a++) {
+            lo[a] = min_f(lo[a], items[i].centroid[a]);
+            hi[a] = max_f(hi[a], items[i].centroid[a]);
+        }
+    int axis = 0;
+    for (int a = 1; a < 3; a++)
+        if (hi[a] - lo[a] > hi[axis] - lo[axis])
+            axis = a;
+    return axis;
+}
+
+static void build_node(bvh_build *b, uint64_t node_index, uint64_t begin, uint64_t count)
+{
+    if (count <= SL_BVH_LEAF_SIZE) {
+        make_leaf(b, node_index, begin, count);
+        return;
+    }
+    uint64_t left_count = count / 2;
+    int axis = widest_centroid_axis(b->items + begin, count);
+    select_kth(b->items + begin, count, left_count, axis);
+
+    uint64_t left = node_index + 1, right = left + subtree_nodes(left_count);
+    if (count > PARALLEL_CUTOFF) {
+#pragma omp task default(none) firstprivate(b, left, begin, left_count)
+        build_node(b, left, begin, left_count);
+        build_node(b, right, begin + left_count, count - left_count);
+#pragma omp taskwait
+    } else {
+        build_node(b, left, begin, left_count);
+        build_node(b, right, begin + left_count, count - left_count);
+    }
+
+    sl_bvh_node *node = &b->bvh->nodes[node_index];
+    const sl_bvh_node *l = &b->bvh->nodes[left], *r = &b->bvh->nodes[right];
+    for (int a = 0; a < 3; a++) {
+        node->lo[a] = min_f(l->lo[a], r->lo[a]);
+        node->hi[a] = max_f(l->hi[a], r->hi[a]);
+    }
+    node->first = (uint32_t)right;
+    node->count = 0;
+}
+
+int sl_triangle_bvh_build(sl_triangle_bvh *bvh, const sl_mesh *mesh, sl_error *err)
+{
+    memset(bvh, 0, sizeof *bvh);
+    uint64_t n = mesh->triangle_count;
+    if (n == 0)
+        return sl_error_set(err, SL_E_BADINPUT, 0, NULL, "no triangles to build a BVH over");
+    if (n > UINT32_MAX)
+        return sl_error_set(err, SL_E_LIMIT, 0, NULL,
+                            "%llu triangles: the BVH holds at most 2^32 - 1",
+                            (unsigned long long)n);
+    bvh->triangle_count = n;
+    bvh->node_count = subtree_nodes(n);
+    bvh->nodes = malloc(bvh->node_count * sizeof *bvh->nodes);
+    bvh->corners = malloc(n * 9 * sizeof *bvh->corners);
+    bvh->source = malloc(n * sizeof *bvh->source);
+    bvh_item *items = malloc(n * sizeof *items);
+    if (!bvh->nodes || !bvh->corners || !bvh->source || !items) {
+        free(items);
+        sl_triangle_bvh_release(bvh);
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "BVH over %llu triangles",
+                            (unsigned long long)n);
+    }
+
+#pragma omp parallel for schedule(static)
+    for (uint64_t t = 0; t < n; t++) {
+        const uint32_t *tri = &mesh->triangles[3 * t];
+        for (int a = 0; a < 3; a++)
+            items[t].centroid[a] = (mesh->positions[3 * (uint64_t)tri[0] + a] +
+                                    mesh->positions[3 * (uint64_t)tri[1] + a] +
+                                    mesh->positions[3 * (uint64_t)tri[2] + a]) / 3.0f;
+        items[t].triangle = (uint32_t)t;
+    }
+
+    bvh_build b = {bvh, mesh, items};
+#pragma omp parallel default(none) shared(b, n)
+#pragma omp single
+    build_node(&b, 0, 0, n);
+
+    free(items);
+    return SL_OK;
+}
+
+void sl_triangle_bvh_release(sl_triangle_bvh *bvh)
+{
+    free(bvh->nodes);
+    free(bvh->corners);
+    free(bvh->source);
+    memset(bvh, 0, sizeof *bvh);
+}
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* Closest point on segment ab to p; returns the squared distance. */
+static double closest_point_segment(const double p[3], const double a[3], const double b[3],
+                                    double out[3])
+{
+    double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+    double len_sq = dot3(ab, ab), t = 0.0;
+    if (len_sq > 0.0) {
+        t = dot3(ap, ab) / len_sq;
+        t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
+    }
+    double d_sq = 0.0;
+    for (int i = 0; i < 3; i++) {
+        out[i] = a[i] + t * ab[i];
+        d_sq += (p[i] - out[i]) * (p[i] - out[i]);
+    }
+    return d_sq;
+}
+
+/* A sliver (sine of its largest angle below 1e-6, or an edge of length 0) has no
+ * well-conditioned plane; its closest point is taken on its edges instead, which is off
+ * by at most the sliver's height (1e-6 of its edge length). */
+static double closest_point_sliver(const double p[3], const double a[3], const double b[3],
+                                   const double c[3], double out[3])
+{
+    double q[3], best = closest_point_segment(p, a, b, out), d;
+    if ((d = closest_point_segment(p, b, c, q)) < best) {
+        best = d;
+        memcpy(out, q, sizeof q);
+    }
+    if ((d = closest_point_segment(p, c, a, q)) < best) {
+        best = d;
+        memcpy(out, q, sizeof q);
+    }
+    return best;
+}
+
+static double finish(const double p[3], double out[3])
+{
+    double d[3] = {p[0] - out[0], p[1] - out[1], p[2] - out[2]};
+    return dot3(d, d);
+}
+
+static void set_lerp(double out[3], const double a[3], const double d[3], double t)
+{
+    for (int i = 0; i < 3; i++)
+        out[i] = a[i] + t * d[i];
+}
+
+double sl_closest_point_triangle(const double p[3], const double a[3], const double b[3],
+                                 const double c[3], double out[3])
+{
+    double ab[3], ac[3], ap[3], bp[3], cp[3], n[3];
+    for (int i = 0; i < 3; i++) {
+        ab[i] = b[i] - a[i];
+        ac[i] = c[i] - a[i];
+        ap[i] = p[i] - a[i];
+        bp[i] = p[i] - b[i];
+        cp[i] = p[i] - c[i];
+    }
+    n[0] = ab[1] * ac[2] - ab[2] * ac[1];
+    n[1] = ab[2] * ac[0] - ab[0] * ac[2];
+    n[2] = ab[0] * ac[1] - ab[1] * ac[0];
+    double area_sq = dot3(n, n);
+    if (!(area_sq > 1e-12 * dot3(ab, ab) * dot3(ac, ac)))
+        return closest_point_sliver(p, a, b, c, out);
+
+    /* Ericson 5.1.5: find the Voronoi region of p among vertices, edges and face. */
+    double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0) {
+        memcpy(out, a, 3 * sizeof *out);
+        return finish(p, out);
+    }
+    double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+    if (d3 >= 0.0 && d4 <= d3) {
+        memcpy(out, b, 3 * sizeof *out);
+        return finish(p, out);
+    }
+    double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+        set_lerp(out, a, ab, d1 / (d1 - d3));
+        return finish(p, out);
+    }
+    double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+    if (d6 >= 0.0 && d5 <= d6) {
+        memcpy(out, c, 3 * sizeof *out);
+        return finish(p, out);
+    }
+    double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+        set_lerp(out, a, ac, d2 / (d2 - d6));
+        return finish(p, out);
+    }
+    double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
+        double bc[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
+        set_lerp(out, b, bc, (d4 - d3) / ((d4 - d3) + (d5 - d6)));
+        return finish(p, out);
+    }
+    double sum = va + vb + vc;
+    if (!(sum > 0.0)) /* rounding with p far away from a thin triangle */
+        return closest_point_sliver(p, a, b, c, out);
+    double v = vb / sum, w = vc / sum;
+    for (int i = 0; i < 3; i++)
+        out[i] = a[i] + ab[i] * v + ac[i] * w;
+    return finish(p, out);
+}
+
+static double box_distance_sq(const sl_bvh_node *node, const double p[3])
+{
+    double d_sq = 0.0;
+    for (int a = 0; a < 3; a++) {
+        double d = 0.0;
+        if (p[a] < node->lo[a])
+            d = node->lo[a] - p[a];
+        else if (p[a] > node->hi[a])
+            d = p[a] - node->hi[a];
+        d_sq += d * d;
+    }
+    return d_sq;
+}
+
+static void try_triangle(const sl_triangle_bvh *bvh, const double p[3], uint32_t t,
+                         sl_closest *best)
+{
+    const float *f = &bvh->corners[9 * (uint64_t)t];
+    double a[3] = {f[0], f[1], f[2]}, b[3] = {f[3], f[4], f[5]}, c[3] = {f[6], f[7], f[8]};
+    double q[3];
+    double d_sq = sl_closest_point_triangle(p, a, b, c, q);
+    if (d_sq < best->distance_sq) {
+        best->distance_sq = d_sq;
+        memcpy(best->point, q, sizeof q);
+        best->triangle = t;
+    }
+}
+
+void sl_triangle_bvh_closest(const sl_triangle_bvh *bvh, const double p[3], uint32_t hint,
+                             sl_closest *out)
+{
+    /* Depth-first, nearer child first; a median-split tree over < 2^32 triangles is at
+     * most 32 levels deep and the stack holds at most one entry per level. */
+    struct entry { uint32_t node; double d_sq; } stack[64];
+    int top = 0;
+    out->distance_sq = INFINITY;
+    out->triangle = 0;
+    if (hint < bvh->triangle_count)
+        try_triangle(bvh, p, hint, out);
+    stack[top++] = (struct entry){0, box_distance_sq(&bvh->nodes[0], p)};
+    while (top > 0) {
+        struct entry e = stack[--top];
+        if (e.d_sq >= out->distance_sq)
+            continue;
+        const sl_bvh_node *node = &bvh->nodes[e.node];
+        if (node->count) {
+            for (uint32_t i = 0; i < node->count; i++)
+                try_triangle(bvh, p, node->first + i, out);
+            continue;
+        }
+        uint32_t l = e.node + 1, r = node->first;
+        double dl = box_distance_sq(&bvh->nodes[l], p), dr = box_distance_sq(&bvh->nodes[r], p);
+        if (dl > dr) {
+            uint32_t ti = l; l = r; r = ti;
+            double td = dl; dl = dr; dr = td;
+        }
+        if (dr < out->distance_sq)
+            stack[top++] = (struct entry){r, dr};
+        if (dl < out->distance_sq)
+            stack[top++] = (struct entry){l, dl};
+    }
+}
