@@ -1,0 +1,262 @@
+/* k-d tree (Bentley 1975; Friedman, Bentley & Finkel 1977: median split on the widest
+ * axis, branch-and-bound search visiting the near child first).
+ *
+ * Method: the points are copied into one array of {x, y, z, index} records and reordered
+ * in place while building, so every leaf is a contiguous run of at most LEAF_SIZE records
+ * (cache friendly queries, no per-point pointers). Each split is at the median of the
+ * node's widest axis, found by quickselect on the key (coordinate, index): all keys are
+ * distinct, so the tree shape is a pure function of the input. Queries keep the k best
+ * candidates sorted by (squared distance, index), which makes equal distances resolve to
+ * the lower index, and prune a far child only when its splitting plane is strictly
+ * farther than the current k-th candidate.
+ *
+ * A uniform grid hash was the other candidate; on scans whose density varies by orders
+ * of magnitude (range scans: dense near the scanner, sparse at grazing angles) a grid
+ * needs a per-cell size choice that the tree does not (timings: docs/range-stage.md).
+ */
+#include "geometry/kdtree.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+enum { LEAF_SIZE = 8, AXIS_LEAF = 3, STACK_RESULTS = 256 };
+
+typedef struct kd_point {
+    float p[3];
+    uint32_t index; /* the caller's point index */
+} kd_point;
+
+typedef struct kd_node {
+    float split;        /* inner: left has key <= split, right >= split on `axis` */
+    uint32_t axis;      /* 0..2, or AXIS_LEAF */
+    uint32_t begin, end; /* range of records (leaf) */
+    uint32_t child;     /* inner: left child; right child = child + 1 */
+} kd_node;
+
+struct sl_kdtree {
+    kd_point *points;
+    uint32_t count;
+    kd_node *nodes;
+    uint32_t node_count, node_capacity;
+};
+
+/* Lexicographic (coordinate, index) order: a strict total order on the records. */
+static int key_less(const kd_point *a, const kd_point *b, int axis)
+{
+    if (a->p[axis] != b->p[axis])
+        return a->p[axis] < b->p[axis];
+    return a->index < b->index;
+}
+
+static void swap_points(kd_point *a, kd_point *b)
+{
+    kd_point t = *a;
+    *a = *b;
+    *b = t;
+}
+
+/* Rearranges pts[0..n) so that pts[m] is the record of rank m and everything before it is
+ * smaller (Hoare's FIND with a median-of-three pivot, deterministic). */
+static void select_rank(kd_point *pts, uint32_t n, uint32_t m, int axis)
+{
+    uint32_t lo = 0, hi = n - 1;
+    while (hi > lo) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (key_less(&pts[mid], &pts[lo], axis))
+            swap_points(&pts[mid], &pts[lo]);
+        if (key_less(&pts[hi], &pts[lo], axis))
+            swap_points(&pts[hi], &pts[lo]);
+        if (key_less(&pts[hi], &pts[mid], axis))
+            swap_points(&pts[hi], &pts[mid]);
+        kd_point pivot = pts[mid];
+        uint32_t i = lo, j = hi;
+        while (i <= j) {
+            while (key_less(&pts[i], &pivot, axis))
+                i++;
+            while (key_less(&pivot, &pts[j], axis))
+                j--;
+            if (i <= j) {
+                swap_points(&pts[i], &pts[j]);
+                i++;
+                if (j == 0)
+                    break;
+                j--;
+            }
+        }
+        if (m <= j)
+            hi = j;
+        else if (m >= i)
+            lo = i;
+        else
+            return;
+    }
+}
+
+static int widest_axis(const kd_point *pts, uint32_t n)
+{
+    float lo[3], hi[3];
+    memcpy(lo, pts[0].p, sizeof lo);
+    memcpy(hi, pts[0].p, sizeof hi);
+    for (uint32_t i = 1; i < n; i++)
+        for (int a = 0; a < 3; a++) {
+            if (pts[i].p[a] < lo[a])
+                lo[a] = pts[i].p[a];
+            if (pts[i].p[a] > hi[a])
+                hi[a] = pts[i].p[a];
+        }
+    int axis = 0;
+    for (int a = 1; a < 3; a++)
+        if (hi[a] - lo[a] > hi[axis] - lo[axis])
+            axis = a;
+    return axis;
+}
+
+/* Builds the subtree of records [begin, end) into node `at` (already allocated). */
+static void build_node(sl_kdtree *t, uint32_t at, uint32_t begin, uint32_t end)
+{
+    kd_node *nd = &t->nodes[at];
+    nd->begin = begin;
+    nd->end = end;
+    if (end - begin <= LEAF_SIZE) {
+        nd->axis = AXIS_LEAF;
+        nd->split = 0.0f;
+        nd->child = 0;
+        return;
+    }
+    uint32_t n = end - begin, half = n / 2;
+    int axis = widest_axis(t->points + begin, n);
+    select_rank(t->points + begin, n, half, axis);
+    uint32_t child = t->node_count;
+    t->node_count += 2; /* capacity is sized for the worst case in sl_kdtree_build */
+    nd->axis = (uint32_t)axis;
+    nd->split = t->points[begin + half].p[axis];
+    nd->child = child;
+    build_node(t, child, begin, begin + half);
+    build_node(t, child + 1, begin + half, end);
+}
+
+int sl_kdtree_build(sl_kdtree **out, const float *points, uint64_t count, sl_error *err)
+{
+    *out = NULL;
+    if (count > SL_KDTREE_MAX_POINTS)
+        return sl_error_set(err, SL_E_LIMIT, 0, NULL, "k-d tree: %llu points exceed the limit",
+                            (unsigned long long)count);
+    sl_kdtree *t = calloc(1, sizeof *t);
+    if (!t)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "k-d tree: out of memory");
+    t->count = (uint32_t)count;
+    /* Leaves hold > LEAF_SIZE / 2 records (or all of them), so there are fewer than
+     * count / (LEAF_SIZE / 2) + 1 leaves and twice that many nodes. */
+    uint64_t leaves = count / (LEAF_SIZE / 2) + 1;
+    t->node_capacity = (uint32_t)(2 * leaves);
+    t->points = malloc((count ? count : 1) * sizeof *t->points);
+    t->nodes = malloc((size_t)t->node_capacity * sizeof *t->nodes);
+    if (!t->points || !t->nodes) {
+        sl_kdtree_free(t);
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "k-d tree: out of memory (%llu points)",
+                            (unsigned long long)count);
+    }
+    for (uint32_t i = 0; i < t->count; i++) {
+        memcpy(t->points[i].p, points + 3 * (uint64_t)i, 3 * sizeof(float));
+        t->points[i].index = i;
+    }
+    t->node_count = 1;
+    build_node(t, 0, 0, t->count);
+    *out = t;
+    return SL_OK;
+}
+
+typedef struct knn_state {
+    const float *q;
+    uint32_t k, found;
+    uint32_t *idx;
+    float *dist2;
+} knn_state;
+
+static void knn_offer(knn_state *s, float d2, uint32_t index)
+{
+    uint32_t pos = s->found;
+    if (s->found == s->k) {
+        uint32_t last = s->k - 1;
+        if (d2 > s->dist2[last] || (d2 == s->dist2[last] && index > s->idx[last]))
+            return;
+        pos = last;
+    } else {
+        s->found++;
+    }
+    while (pos > 0 && (d2 < s->dist2[pos - 1] ||
+                       (d2 == s->dist2[pos - 1] && index < s->idx[pos - 1]))) {
+        s->dist2[pos] = s->dist2[pos - 1];
+        s->idx[pos] = s->idx[pos - 1];
+        pos--;
+    }
+    s->dist2[pos] = d2;
+    s->idx[pos] = index;
+}
+
+static void knn_visit(const sl_kdtree *t, uint32_t at, knn_state *s)
+{
+    const kd_node *nd = &t->nodes[at];
+    if (nd->axis == AXIS_LEAF) {
+        for (uint32_t i = nd->begin; i < nd->end; i++) {
+            const kd_point *p = &t->points[i];
+            float dx = p->p[0] - s->q[0], dy = p->p[1] - s->q[1], dz = p->p[2] - s->q[2];
+            knn_offer(s, dx * dx + dy * dy + dz * dz, p->index);
+        }
+        return;
+    }
+    float diff = s->q[nd->axis] - nd->split;
+    uint32_t near = diff <= 0.0f ? nd->child : nd->child + 1;
+    knn_visit(t, near, s);
+    /* The plane bound only (not the cell's): rounding keeps it a true lower bound, so
+     * ties at exactly the k-th distance, which may hide a lower index on the far side,
+     * are never pruned. */
+    if (s->found < s->k || diff * diff <= s->dist2[s->k - 1])
+        knn_visit(t, near == nd->child ? nd->child + 1 : nd->child, s);
+}
+
+uint32_t sl_kdtree_knn(const sl_kdtree *tree, const float query[3], uint32_t k,
+                       uint32_t *out_idx, float *out_dist2)
+{
+    if (!tree || tree->count == 0 || k == 0)
+        return 0;
+    if (k > tree->count)
+        k = tree->count;
+    float stack_dist2[STACK_RESULTS];
+    float *dist2 = out_dist2;
+    if (!dist2) {
+        dist2 = k <= STACK_RESULTS ? stack_dist2 : malloc((size_t)k * sizeof *dist2);
+        if (!dist2)
+            return 0;
+    }
+    knn_state s = {query, k, 0, out_idx, dist2};
+    knn_visit(tree, 0, &s);
+    if (!out_dist2 && dist2 != stack_dist2)
+        free(dist2);
+    return s.found;
+}
+
+uint32_t sl_kdtree_nearest(const sl_kdtree *tree, const float query[3], float *dist2)
+{
+    uint32_t idx = UINT32_MAX;
+    float d2 = 0.0f;
+    if (sl_kdtree_knn(tree, query, 1, &idx, &d2) == 0)
+        return UINT32_MAX;
+    if (dist2)
+        *dist2 = d2;
+    return idx;
+}
+
+uint64_t sl_kdtree_count(const sl_kdtree *tree)
+{
+    return tree ? tree->count : 0;
+}
+
+void sl_kdtree_free(sl_kdtree *tree)
+{
+    if (!tree)
+        return;
+    free(tree->points);
+    free(tree->nodes);
+    free(tree);
+}
