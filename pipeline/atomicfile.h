@@ -22,7 +22,7 @@
 typedef struct sl_atomic_file {
     int fd;                 /* -1 when closed */
     char final_path[1024];
-    char tmp_path[1100];
+    char tmp_path[1400];
     uint64_t bytes_written;
     /* buffered writes: */
     unsigned char *buf;

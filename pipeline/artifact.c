@@ -1,0 +1,135 @@
+/* Binary artifact envelope: magic, versions, size, checksum (see artifact.h). */
+#include "pipeline/artifact.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <xxhash.h>
+
+#include "pipeline/atomicfile.h"
+
+int sl_artifact_write(const char *path, const char magic[8], uint32_t format_version,
+                      uint32_t stage_version, const sl_artifact_part *parts, int part_count,
+                      sl_error *err)
+{
+    XXH3_state_t *state = XXH3_createState();
+    if (!state)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    XXH3_64bits_reset(state);
+    uint64_t body_size = 0;
+    for (int i = 0; i < part_count; i++) {
+        if (parts[i].size)
+            XXH3_64bits_update(state, parts[i].data, parts[i].size);
+        body_size += parts[i].size;
+    }
+    uint64_t checksum = XXH3_64bits_digest(state);
+    XXH3_freeState(state);
+
+    unsigned char header[SL_ARTIFACT_HEADER_SIZE];
+    memcpy(header, magic, 8);
+    sl_put_u32(header + 8, format_version);
+    sl_put_u32(header + 12, stage_version);
+    sl_put_u64(header + 16, body_size);
+    sl_put_u64(header + 24, checksum);
+
+    sl_atomic_file f;
+    int rc = sl_atomic_open(&f, path, err);
+    if (rc)
+        return rc;
+    rc = sl_atomic_write(&f, header, sizeof header, err);
+    for (int i = 0; rc == 0 && i < part_count; i++)
+        if (parts[i].size)
+            rc = sl_atomic_write(&f, parts[i].data, parts[i].size, err);
+    if (rc) {
+        sl_atomic_abort(&f);
+        return rc;
+    }
+    return sl_atomic_commit(&f, err);
+}
+
+static int read_all(int fd, void *buf, size_t n)
+{
+    unsigned char *p = buf;
+    while (n > 0) {
+        ssize_t r = read(fd, p, n);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0)
+            return r < 0 ? -1 : 1;
+        p += r;
+        n -= (size_t)r;
+    }
+    return 0;
+}
+
+int sl_artifact_read(const char *path, const char magic[8], uint32_t format_version,
+                     uint64_t max_body_size, void **body, uint64_t *body_size,
+                     uint32_t *stage_version, sl_error *err)
+{
+    *body = NULL;
+    *body_size = 0;
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return sl_error_errno(err, errno, path, "open");
+    int rc = 0;
+    unsigned char header[SL_ARTIFACT_HEADER_SIZE];
+    struct stat st;
+    void *data = NULL;
+    if (fstat(fd, &st) != 0) {
+        rc = sl_error_errno(err, errno, path, "stat");
+        goto done;
+    }
+    if ((uint64_t)st.st_size < SL_ARTIFACT_HEADER_SIZE || read_all(fd, header, sizeof header)) {
+        rc = sl_error_set(err, SL_E_CORRUPT, 0, path, "truncated artifact header");
+        goto done;
+    }
+    if (memcmp(header, magic, 8) != 0) {
+        rc = sl_error_set(err, SL_E_CORRUPT, 0, path, "not a %.8s file (wrong magic)", magic);
+        goto done;
+    }
+    uint32_t version = sl_get_u32(header + 8);
+    if (version != format_version) {
+        rc = sl_error_set(err, SL_E_CORRUPT, 0, path,
+                          "format version %u, this scanlod reads version %u", version,
+                          format_version);
+        goto done;
+    }
+    uint64_t size = sl_get_u64(header + 16);
+    if (size != (uint64_t)st.st_size - SL_ARTIFACT_HEADER_SIZE) {
+        rc = sl_error_set(err, SL_E_CORRUPT, 0, path,
+                          "header declares %llu body bytes, file holds %llu",
+                          (unsigned long long)size,
+                          (unsigned long long)st.st_size - SL_ARTIFACT_HEADER_SIZE);
+        goto done;
+    }
+    if (size > max_body_size) {
+        rc = sl_error_set(err, SL_E_LIMIT, 0, path, "body of %llu bytes exceeds limit %llu",
+                          (unsigned long long)size, (unsigned long long)max_body_size);
+        goto done;
+    }
+    data = malloc(size ? size : 1);
+    if (!data) {
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+        goto done;
+    }
+    if (read_all(fd, data, size)) {
+        rc = sl_error_set(err, SL_E_CORRUPT, 0, path, "truncated artifact body");
+        goto done;
+    }
+    if (XXH3_64bits(data, size) != sl_get_u64(header + 24)) {
+        rc = sl_error_set(err, SL_E_CORRUPT, 0, path, "checksum mismatch");
+        goto done;
+    }
+    if (stage_version)
+        *stage_version = sl_get_u32(header + 12);
+    *body = data;
+    *body_size = size;
+    data = NULL;
+done:
+    free(data);
+    close(fd);
+    return rc;
+}

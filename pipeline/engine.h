@@ -1,0 +1,50 @@
+/* The engine: scans a collection, keeps the per-stage queues, runs items through the
+ * stages in child processes, commits and publishes (docs/engine.md).
+ *
+ * Lifecycle: sl_engine_open (config, logs, work dir) -> sl_engine_scan (enqueue what is
+ * missing or stale; `run` only) -> sl_engine_work (claim, run, commit until no ready work)
+ * -> sl_engine_exit_code -> sl_engine_close. Several engines (processes, hosts) may work on
+ * one work dir at once: they cooperate through the queues and leases.
+ */
+#ifndef SCANLOD_PIPELINE_ENGINE_H
+#define SCANLOD_PIPELINE_ENGINE_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "pipeline/config.h"
+#include "pipeline/error.h"
+
+typedef struct sl_engine sl_engine;
+
+typedef struct sl_engine_options {
+    const char *config_path;
+    const char *const *overrides; /* "section.key=value" */
+    int override_count;
+    const char *command;          /* "run", "worker", "status": names the log file */
+    int quiet;                    /* stderr: errors only */
+    int verbose;                  /* stderr: debug */
+    int open_logs;                /* 0 for read-only commands (status) */
+} sl_engine_options;
+
+int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err);
+void sl_engine_close(sl_engine *e);
+
+/* Walks [run] input and makes every item's queue state match its current keys. */
+int sl_engine_scan(sl_engine *e, sl_error *err);
+
+/* Claims and runs ready work until none is left (or an interrupt / storage failure). */
+int sl_engine_work(sl_engine *e, sl_error *err);
+
+/* Exit code from the state of every item of the collection (docs/exit-codes.md);
+ * prints the one-paragraph summary to stdout and writes logs/<run>.summary.json. */
+int sl_engine_finish(sl_engine *e);
+
+/* Checks every commit record in the work dir against its files; prints each mismatch.
+ * Returns 0 or SL_E_CORRUPT. */
+int sl_engine_verify(sl_engine *e, FILE *out, uint64_t *checked, uint64_t *bad);
+
+/* Per stage: ready / claimed / done / failed / quarantined counts, and the reasons. */
+int sl_engine_status(sl_engine *e, FILE *out, sl_error *err);
+
+#endif

@@ -1,0 +1,162 @@
+/* Garbage collection of temp files and staged folders left by killed processes, and
+ * `scanlod verify` (every commit record still vouches for its files).
+ *
+ * Temp names carry their writer: `.NAME.HOST.PID.N.tmp` (atomicfile.c) and
+ * `.NAME.publish.HOST.PID` (engine_publish.c). On this host a temp whose writer pid is gone
+ * is removed at once; another host's temps are left to that host (we cannot judge its
+ * pids), unless older than a day.
+ */
+#include "pipeline/engine_internal.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "pipeline/log.h"
+
+#define FOREIGN_TEMP_MAX_AGE_S (24 * 3600)
+
+/* The writer pid of a temp name if it was written on this host, else 0. */
+static long own_temp_pid(const char *name, const char *host)
+{
+    char buf[512];
+    snprintf(buf, sizeof buf, "%s", name);
+    size_t len = strlen(buf);
+    if (len > 4 && strcmp(buf + len - 4, ".tmp") == 0) {
+        buf[len - 4] = '\0';
+        char *dot = strrchr(buf, '.'); /* ".N" */
+        if (!dot)
+            return 0;
+        *dot = '\0';
+    }
+    char *dot = strrchr(buf, '.'); /* ".PID" */
+    if (!dot)
+        return 0;
+    char *end;
+    long pid = strtol(dot + 1, &end, 10);
+    if (*end || pid <= 0)
+        return 0;
+    *dot = '\0';
+    size_t hl = strlen(host), bl = strlen(buf);
+    if (bl <= hl || buf[bl - hl - 1] != '.' || strcmp(buf + bl - hl, host) != 0)
+        return 0;
+    return pid;
+}
+
+static int remove_tree_gc(const char *path)
+{
+    struct stat st;
+    if (lstat(path, &st) != 0)
+        return -1;
+    if (!S_ISDIR(st.st_mode))
+        return unlink(path);
+    DIR *d = opendir(path);
+    if (d) {
+        struct dirent *de;
+        while ((de = readdir(d))) {
+            if (!strcmp(de->d_name, ".") || !strcmp(de->d_name, ".."))
+                continue;
+            char child[PATH_MAX];
+            if (sl_engine_path(child, sizeof child, "%s/%s", path, de->d_name) == 0)
+                remove_tree_gc(child);
+        }
+        closedir(d);
+    }
+    return rmdir(path);
+}
+
+static void gc_dir(const sl_engine *e, const char *dir, int depth, uint64_t *removed)
+{
+    if (depth > 64)
+        return;
+    DIR *d = opendir(dir);
+    if (!d)
+        return;
+    struct dirent *de;
+    time_t now = time(NULL);
+    while ((de = readdir(d))) {
+        if (!strcmp(de->d_name, ".") || !strcmp(de->d_name, ".."))
+            continue;
+        char path[PATH_MAX];
+        if (sl_engine_path(path, sizeof path, "%s/%s", dir, de->d_name))
+            continue;
+        struct stat st;
+        if (lstat(path, &st) != 0)
+            continue;
+        if (de->d_name[0] != '.') {
+            if (S_ISDIR(st.st_mode))
+                gc_dir(e, path, depth + 1, removed);
+            continue;
+        }
+        long pid = own_temp_pid(de->d_name, e->self.host);
+        int dead = pid > 0 && pid != e->self.pid && kill((pid_t)pid, 0) != 0 && errno == ESRCH;
+        int ancient = pid == 0 && now - st.st_mtime > FOREIGN_TEMP_MAX_AGE_S &&
+                      (strstr(de->d_name, ".tmp") || strstr(de->d_name, ".publish."));
+        if ((dead || ancient) && remove_tree_gc(path) == 0)
+            (*removed)++;
+    }
+    closedir(d);
+}
+
+void sl_engine_gc(sl_engine *e)
+{
+    uint64_t removed = 0;
+    gc_dir(e, e->work, 0, &removed);
+    gc_dir(e, e->output, 0, &removed);
+    if (removed)
+        SL_LOG(SL_LOG_INFO, "gc", NULL, "removed %llu temp files of dead processes",
+               (unsigned long long)removed);
+}
+
+/* ---- verify ---------------------------------------------------------------------- */
+
+static int verify_one(const char *record, const char *dir, FILE *out)
+{
+    sl_error err;
+    sl_error_init(&err);
+    if (sl_record_verify(record, dir, NULL, NULL, &err) == 0)
+        return 0;
+    char line[1600];
+    fprintf(out, "%s: %s\n", record, sl_error_format(&err, line, sizeof line));
+    return 1;
+}
+
+int sl_engine_verify(sl_engine *e, FILE *out, uint64_t *checked, uint64_t *bad)
+{
+    *checked = *bad = 0;
+    for (int s = 0; s <= e->stage_count; s++) {
+        const char *stage = s < e->stage_count ? e->stages[s]->name : "_publish";
+        char root[PATH_MAX];
+        sl_engine_path(root, sizeof root, "%s/artifacts/%s", e->work, stage);
+        DIR *d = opendir(root);
+        if (!d)
+            continue;
+        struct dirent *de;
+        while ((de = readdir(d))) {
+            if (de->d_name[0] == '.')
+                continue;
+            char dir[PATH_MAX], record[PATH_MAX];
+            sl_engine_path(dir, sizeof dir, "%s/%s", root, de->d_name);
+            sl_engine_path(record, sizeof record, "%s/%s", dir, SL_RECORD_FILE);
+            if (access(record, F_OK) != 0)
+                continue; /* not committed: nothing is claimed */
+            if (s == e->stage_count) { /* publish records vouch for the output folder */
+                sl_record rec;
+                sl_error err;
+                sl_error_init(&err);
+                if (sl_record_read(record, &rec, &err) == 0)
+                    sl_engine_path(dir, sizeof dir, "%s/%s", e->output, rec.item);
+            }
+            (*checked)++;
+            *bad += (uint64_t)verify_one(record, dir, out);
+        }
+        closedir(d);
+    }
+    return *bad ? SL_E_CORRUPT : 0;
+}

@@ -1,0 +1,83 @@
+/* Engine internals shared by pipeline/engine*.c (not an interface for stages). */
+#ifndef SCANLOD_PIPELINE_ENGINE_INTERNAL_H
+#define SCANLOD_PIPELINE_ENGINE_INTERNAL_H
+
+#include <limits.h>
+#include <stdint.h>
+
+#include "pipeline/config.h"
+#include "pipeline/engine.h"
+#include "pipeline/hash.h"
+#include "pipeline/queue.h"
+#include "pipeline/record.h"
+#include "pipeline/stage.h"
+
+#define SL_MAX_STAGES 16
+
+typedef struct sl_identity {
+    char host[64];
+    char boot[40];
+    long pid;
+    unsigned long long pid_start;
+    char job[96];
+} sl_identity;
+
+typedef struct sl_engine_counts {
+    uint64_t items;       /* items found by the scan */
+    uint64_t ran;         /* stage executions that committed */
+    uint64_t reused;      /* stage results found valid and kept */
+    uint64_t published;
+    uint64_t quarantined; /* newly quarantined in this run */
+    uint64_t bugs;        /* quarantined as a crash in our code, this run */
+    uint64_t transient;   /* failed transiently in this run */
+} sl_engine_counts;
+
+struct sl_engine {
+    sl_config *cfg;
+    const char *input, *work, *output, *logs;
+    int threads;
+    int64_t memory_limit_mb, item_timeout_s, lease_seconds;
+    int max_crashes;
+    const sl_stage *stages[SL_MAX_STAGES];
+    uint64_t config_hash[SL_MAX_STAGES];
+    int stage_count;
+    sl_identity self;
+    sl_engine_counts counts;
+    int stop;                /* storage failure: stop claiming */
+    sl_error storage_error;  /* why */
+    uint64_t items_total, items_settled; /* progress bar */
+};
+
+/* engine.c */
+void sl_identity_self(sl_identity *id);
+int sl_identity_alive(const sl_identity *self, const sl_ticket *t); /* 1 alive, 0 dead, -1 unknown */
+int sl_engine_path(char *buf, size_t size, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+int sl_artifact_dir(const sl_engine *e, int stage, const char *ticket, char *buf, size_t size);
+int sl_input_hash(sl_engine *e, const char *ticket, const char *source_rel, sl_hash *out,
+                  sl_error *err);
+int sl_remove_dir_contents(const char *dir, sl_error *err);
+double sl_now_seconds(void);
+
+/* engine_scan.c: bring one item's tickets in line with its keys from stage `from` on. */
+int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
+                        sl_error *err);
+
+/* engine_child.c: runs stage `s` for the claimed ticket; moves the ticket on. */
+int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_error *err);
+
+/* engine_work.c: leases of claimed tickets. */
+int sl_engine_lease_renew(sl_engine *e, const char *stage, const char *name, sl_ticket *t,
+                          sl_error *err);
+int sl_engine_lease_check(sl_engine *e, const char *stage, const char *name,
+                          const sl_ticket *t, sl_error *err);
+
+/* engine_gc.c */
+void sl_engine_gc(sl_engine *e);
+
+/* engine_publish.c */
+int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const char *source_rel,
+                      int force, sl_error *err);
+int sl_engine_publish_valid(sl_engine *e, const char *item, const char *ticket);
+
+#endif

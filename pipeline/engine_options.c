@@ -1,0 +1,54 @@
+/* The engine's own options ([run], [queue]) and the list of every option table. */
+#include "pipeline/config.h"
+#include "pipeline/stage.h"
+
+static const sl_option run_options[] = {
+    {"run", "input", SL_OPT_PATH, NULL, 0, 0, NULL,
+     "Folder tree of .ply files to convert, searched recursively; one file is one item, "
+     "its id the path relative to this folder without \".ply\". Never written to."},
+    {"run", "work", SL_OPT_PATH, NULL, 0, 0, NULL,
+     "Work directory: queues, intermediate artifacts and their commit records. Share it "
+     "between hosts to run workers on a cluster."},
+    {"run", "output", SL_OPT_PATH, NULL, 0, 0, NULL,
+     "Published results: one folder per item, replaced atomically."},
+    {"run", "logs", SL_OPT_PATH, "logs", 0, 0, NULL,
+     "Folder for the human log and the JSON-lines event log of each run (relative to the "
+     "current directory when left at the default)."},
+    {"run", "threads", SL_OPT_INT, "0", 0, 1024, NULL,
+     "OpenMP threads per item; 0 = all cores."},
+    {"run", "memory_limit_mb", SL_OPT_INT, "0", 0, 1 << 30, NULL,
+     "Address-space limit per item process in MiB (setrlimit); 0 = none. An item over it "
+     "fails as out of memory and is retried on the next run, never quarantined."},
+    {"run", "item_timeout_s", SL_OPT_INT, "0", 0, 30 * 86400, NULL,
+     "Wall-time limit of one stage of one item in seconds; 0 = none. A timed-out item counts "
+     "as a crash: retried once, then quarantined."},
+    {"run", "log_level", SL_OPT_ENUM, "info", 0, 0, "error|warn|info|debug",
+     "Least severe message written to the log files."},
+    SL_OPTION_END,
+};
+
+static const sl_option queue_options[] = {
+    {"queue", "lease_seconds", SL_OPT_INT, "600", 2, 7 * 86400, NULL,
+     "Lease of a claimed item; renewed every fifth of it while the item runs. Another host "
+     "reclaims an item whose lease expired (dead node); on the same host a dead owner is "
+     "seen at once. Keep it well above filesystem stalls (NFS attribute caches: 60 s)."},
+    {"queue", "max_crashes", SL_OPT_INT, "2", 1, 100, NULL,
+     "Crashes of our own code (segfault, abort, timeout) an item may cause before it is "
+     "quarantined and flagged as a bug."},
+    SL_OPTION_END,
+};
+
+const sl_option *const *sl_all_option_tables(void)
+{
+    static const sl_option *tables[2 + 32 + 1];
+    if (!tables[0]) {
+        int n = 0;
+        tables[n++] = run_options;
+        tables[n++] = queue_options;
+        for (const sl_stage *const *s = sl_stage_registry(); *s && n < 2 + 32; s++)
+            if ((*s)->options)
+                tables[n++] = (*s)->options;
+        tables[n] = NULL;
+    }
+    return tables;
+}

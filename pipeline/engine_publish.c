@@ -1,0 +1,203 @@
+/* Publication of a finished item under [run] output/ITEM/, atomic per item.
+ *
+ * The folder is assembled as a hidden sibling (`.NAME.publish.HOST.PID`), every file
+ * written durably, then swapped in with one rename (renameat2 RENAME_EXCHANGE when an
+ * older folder exists, whose remains are then deleted). A reader sees the old folder or
+ * the new one, never a mix. The publish record in WORK/artifacts/_publish/ITEM/ keys the
+ * publication on every stage's key, so unchanged items are not rewritten.
+ *
+ * Published: report.json (deterministic: counts from every stage) and timings.json
+ * (wall/CPU time and peak RSS per stage: differs between runs, so it is not in the
+ * record). Stages that produce user-facing files list them in their own folder (export).
+ */
+#include "pipeline/engine_internal.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "pipeline/atomicfile.h"
+#include "pipeline/io.h"
+#include "pipeline/json.h"
+#include "pipeline/log.h"
+
+static int publish_key(sl_engine *e, const char *ticket, sl_hash *key, sl_error *err)
+{
+    char text[SL_MAX_STAGES * 40 + 32] = "scanlod-publish 1\n";
+    for (int s = 0; s < e->stage_count; s++) {
+        char dir[PATH_MAX], path[PATH_MAX];
+        sl_artifact_dir(e, s, ticket, dir, sizeof dir);
+        sl_engine_path(path, sizeof path, "%s/%s", dir, SL_RECORD_FILE);
+        sl_record rec;
+        int rc = sl_record_read(path, &rec, err);
+        if (rc)
+            return rc;
+        char hex[SL_HASH_HEX_SIZE];
+        sl_hash_hex(rec.key, hex);
+        strcat(text, hex);
+        strcat(text, "\n");
+    }
+    *key = sl_hash_bytes(text, strlen(text));
+    return 0;
+}
+
+static void publish_paths(sl_engine *e, const char *item, const char *ticket, char *final_dir,
+                          char *record_dir)
+{
+    sl_engine_path(final_dir, PATH_MAX, "%s/%s", e->output, item);
+    sl_engine_path(record_dir, PATH_MAX, "%s/artifacts/_publish/%s", e->work, ticket);
+}
+
+int sl_engine_publish_valid(sl_engine *e, const char *item, const char *ticket)
+{
+    char final_dir[PATH_MAX], record_dir[PATH_MAX], record[PATH_MAX];
+    publish_paths(e, item, ticket, final_dir, record_dir);
+    sl_engine_path(record, sizeof record, "%s/%s", record_dir, SL_RECORD_FILE);
+    sl_hash key;
+    sl_error err;
+    sl_error_init(&err);
+    return publish_key(e, ticket, &key, &err) == 0 &&
+           sl_record_verify(record, final_dir, &key, NULL, &err) == 0;
+}
+
+/* report.json: every stage's report fragment under "stages"; timings.json likewise. */
+static int write_reports(sl_engine *e, const char *item, const char *ticket,
+                         const char *source_rel, const char *dir, sl_error *err)
+{
+    sl_json report, timings;
+    sl_json_init(&report, 1);
+    sl_json_init(&timings, 1);
+    sl_json_object_begin(&report, NULL);
+    sl_json_string(&report, "item", item);
+    sl_json_string(&report, "source", source_rel);
+    sl_json_object_begin(&report, "stages");
+    sl_json_object_begin(&timings, NULL);
+    sl_json_string(&timings, "item", item);
+    sl_json_string(&timings, "host", e->self.host);
+    sl_json_string(&timings, "run", sl_log_run_id());
+    sl_json_object_begin(&timings, "stages");
+    int rc = 0;
+    for (int s = 0; rc == 0 && s < e->stage_count; s++) {
+        char art[PATH_MAX], path[PATH_MAX];
+        char *text = NULL;
+        size_t size;
+        sl_artifact_dir(e, s, ticket, art, sizeof art);
+        sl_engine_path(path, sizeof path, "%s/report.json", art);
+        rc = sl_read_file(path, 16 << 20, &text, &size, err);
+        if (rc == 0)
+            sl_json_raw(&report, e->stages[s]->name, text);
+        free(text);
+        text = NULL;
+        sl_engine_path(path, sizeof path, "%s/_stats.json", art);
+        sl_error serr;
+        sl_error_init(&serr);
+        if (rc == 0 && sl_read_file(path, 1 << 20, &text, &size, &serr) == 0)
+            sl_json_raw(&timings, e->stages[s]->name, text);
+        free(text);
+    }
+    sl_json_object_end(&report);
+    sl_json_object_end(&report);
+    sl_json_object_end(&timings);
+    sl_json_object_end(&timings);
+    char path[PATH_MAX];
+    if (rc == 0 && (report.failed || timings.failed))
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, dir, "report too large");
+    if (rc == 0 && sl_engine_path(path, sizeof path, "%s/report.json", dir) == 0)
+        rc = sl_write_file_atomic(path, report.buf, report.len, err);
+    if (rc == 0 && sl_engine_path(path, sizeof path, "%s/timings.json", dir) == 0)
+        rc = sl_write_file_atomic(path, timings.buf, timings.len, err);
+    sl_json_release(&report);
+    sl_json_release(&timings);
+    return rc;
+}
+
+static int remove_tree(const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (!d)
+        return errno == ENOENT ? 0 : -1;
+    struct dirent *de;
+    while ((de = readdir(d))) {
+        if (!strcmp(de->d_name, ".") || !strcmp(de->d_name, ".."))
+            continue;
+        char path[PATH_MAX];
+        if (sl_engine_path(path, sizeof path, "%s/%s", dir, de->d_name))
+            continue;
+        struct stat st;
+        if (lstat(path, &st) == 0 && S_ISDIR(st.st_mode))
+            remove_tree(path);
+        else
+            unlink(path);
+    }
+    closedir(d);
+    return rmdir(dir);
+}
+
+/* Swaps `staged` in as `final_dir`. */
+static int swap_in(const char *staged, const char *final_dir, const char *parent, sl_error *err)
+{
+    if (sl_io_rename(staged, final_dir) == 0)
+        return sl_fsync_dir(parent, err);
+    if (errno != EEXIST && errno != ENOTEMPTY)
+        return sl_error_errno(err, errno, final_dir, "rename");
+    if (renameat2(AT_FDCWD, staged, AT_FDCWD, final_dir, RENAME_EXCHANGE) != 0)
+        return sl_error_errno(err, errno, final_dir, "rename (exchange)");
+    int rc = sl_fsync_dir(parent, err);
+    remove_tree(staged); /* now the previous publication */
+    return rc;
+}
+
+int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const char *source_rel,
+                      int force, sl_error *err)
+{
+    (void)force;
+    char final_dir[PATH_MAX], record_dir[PATH_MAX], staged[PATH_MAX], parent[PATH_MAX];
+    publish_paths(e, item, ticket, final_dir, record_dir);
+    snprintf(parent, sizeof parent, "%s", final_dir);
+    char *slash = strrchr(parent, '/');
+    const char *base = slash ? slash + 1 : parent;
+    if (slash)
+        *slash = '\0';
+    if (sl_engine_path(staged, sizeof staged, "%s/.%s.publish.%s.%ld", parent, base,
+                       e->self.host, e->self.pid))
+        return sl_error_set(err, SL_E_LIMIT, 0, item, "path too long");
+    sl_hash key;
+    int rc = publish_key(e, ticket, &key, err);
+    if (rc == 0)
+        rc = sl_mkdirs(parent, err);
+    if (rc == 0) {
+        remove_tree(staged); /* leftovers of a killed attempt by this pid */
+        rc = sl_mkdirs(staged, err);
+    }
+    if (rc == 0)
+        rc = write_reports(e, item, ticket, source_rel, staged, err);
+    if (rc == 0)
+        rc = sl_fsync_dir(staged, err);
+    /* The old record must not vouch for the new files, even for a moment. */
+    char record[PATH_MAX];
+    sl_engine_path(record, sizeof record, "%s/%s", record_dir, SL_RECORD_FILE);
+    if (rc == 0 && unlink(record) == 0)
+        rc = sl_fsync_dir(record_dir, err);
+    if (rc == 0)
+        rc = swap_in(staged, final_dir, parent, err);
+    if (rc) {
+        remove_tree(staged);
+        return rc;
+    }
+    static const char *const published[] = {"report.json", NULL};
+    rc = sl_mkdirs(record_dir, err);
+    if (rc == 0)
+        rc = sl_record_commit(record, final_dir, published, "_publish", 1, item, key, 0, NULL, err);
+    if (rc == 0) {
+        e->counts.published++;
+        e->items_settled++;
+        SL_LOG(SL_LOG_INFO, "publish", item, "published %s", final_dir);
+        sl_log_event("published", "publish", item, 0, NULL, NULL);
+    }
+    return rc;
+}

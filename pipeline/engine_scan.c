@@ -1,0 +1,232 @@
+/* Collection scan and reconciliation: make each item's tickets match its current keys.
+ *
+ * For every stage in order, the stage key is computed from the config section hash, the
+ * stage version and the upstream digest (the input's content hash for the first stage,
+ * the upstream record's outputs digest after that). A stage whose record verifies under
+ * that key is done; the first stage that is not gets a ready ticket (or keeps its
+ * quarantine, when the key is the one it was quarantined under). Items whose every stage
+ * is done are published if their publication is missing or stale.
+ */
+#include "pipeline/engine_internal.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+#include "pipeline/log.h"
+#include "pipeline/progress.h"
+
+#define MAX_TREE_DEPTH 64
+
+static void ticket_for(sl_ticket *t, const char *item, const char *source_rel, sl_hash key)
+{
+    sl_ticket_init(t);
+    snprintf(t->item, sizeof t->item, "%s", item);
+    snprintf(t->source, sizeof t->source, "%s", source_rel);
+    sl_hash_hex(key, t->key);
+}
+
+/* Rewrites a ticket in its current state with a new key, then moves it. */
+static int requeue(sl_engine *e, const char *stage, const char *name, int from, sl_ticket *t,
+                   sl_hash key, int reset, sl_error *err)
+{
+    sl_hash_hex(key, t->key);
+    if (reset) {
+        t->attempt = 0;
+        t->crashes = 0;
+        t->cls[0] = t->reason[0] = '\0';
+    }
+    int rc = sl_queue_put(e->work, stage, from, name, t, err);
+    if (rc == 0 && from != SL_STATE_READY)
+        rc = sl_queue_move(e->work, stage, name, from, SL_STATE_READY, err);
+    return rc == SL_E_BUSY ? 0 : rc;
+}
+
+static int upstream_digest(sl_engine *e, const char *name, const char *source_rel, int s,
+                           sl_hash *out, sl_error *err)
+{
+    if (s == 0)
+        return sl_input_hash(e, name, source_rel, out, err);
+    char dir[PATH_MAX], record[PATH_MAX];
+    sl_artifact_dir(e, s - 1, name, dir, sizeof dir);
+    sl_engine_path(record, sizeof record, "%s/%s", dir, SL_RECORD_FILE);
+    sl_record rec;
+    sl_error verr;
+    sl_error_init(&verr);
+    if (sl_record_verify(record, dir, NULL, &rec, &verr) != 0)
+        return SL_E_CORRUPT; /* upstream no longer valid: reconcile from the start */
+    *out = rec.outputs_digest;
+    return 0;
+}
+
+int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
+                        sl_error *err)
+{
+    char name[SL_TICKET_NAME_MAX + 1];
+    int rc = sl_ticket_name(item, name, sizeof name, err);
+    if (rc)
+        return rc;
+    sl_hash upstream;
+    rc = upstream_digest(e, name, source_rel, from, &upstream, err);
+    if (rc == SL_E_CORRUPT && from > 0)
+        return sl_engine_reconcile(e, item, source_rel, 0, err);
+    if (rc)
+        return rc;
+    for (int s = from; s < e->stage_count; s++) {
+        const char *stage = e->stages[s]->name;
+        sl_hash key = sl_stage_key(stage, e->stages[s]->version, e->config_hash[s], upstream);
+        int state = sl_queue_find(e->work, stage, name);
+        if (state == SL_STATE_CLAIMED)
+            return 0; /* a worker holds it; its lease decides */
+        char dir[PATH_MAX], record_path[PATH_MAX], ticket_path[PATH_MAX];
+        sl_artifact_dir(e, s, name, dir, sizeof dir);
+        sl_engine_path(record_path, sizeof record_path, "%s/%s", dir, SL_RECORD_FILE);
+        sl_record rec;
+        sl_error verr;
+        sl_error_init(&verr);
+        sl_ticket t;
+        if (sl_record_verify(record_path, dir, &key, &rec, &verr) == 0) {
+            if (state != SL_STATE_DONE) {
+                ticket_for(&t, item, source_rel, key);
+                rc = sl_queue_put(e->work, stage, SL_STATE_DONE, name, &t, err);
+                if (rc == 0 && state != SL_STATE_NONE) {
+                    sl_queue_path(ticket_path, sizeof ticket_path, e->work, stage, state, name);
+                    unlink(ticket_path);
+                }
+                if (rc)
+                    return rc;
+            }
+            e->counts.reused++;
+            upstream = rec.outputs_digest;
+            continue;
+        }
+        if (state == SL_STATE_NONE) {
+            ticket_for(&t, item, source_rel, key);
+            return sl_queue_put(e->work, stage, SL_STATE_READY, name, &t, err);
+        }
+        sl_queue_path(ticket_path, sizeof ticket_path, e->work, stage, state, name);
+        sl_error terr;
+        sl_error_init(&terr);
+        if (sl_ticket_read(ticket_path, &t, &terr) != 0)
+            ticket_for(&t, item, source_rel, key); /* torn ticket: start over */
+        char key_hex[SL_HASH_HEX_SIZE];
+        sl_hash_hex(key, key_hex);
+        int same_key = strcmp(t.key, key_hex) == 0;
+        snprintf(t.source, sizeof t.source, "%s", source_rel);
+        if (state == SL_STATE_QUARANTINE && same_key)
+            return 0; /* stays quarantined until its input, config or code changes */
+        if (state == SL_STATE_READY && same_key)
+            return 0;
+        return requeue(e, stage, name, state, &t, key, !same_key || state == SL_STATE_DONE, err);
+    }
+    if (sl_engine_publish_valid(e, item, name))
+        return 0;
+    return sl_engine_publish(e, item, name, source_rel, 1, err);
+}
+
+/* ---- input tree walk ------------------------------------------------------------- */
+
+static int has_ply_suffix(const char *name)
+{
+    size_t n = strlen(name);
+    return n > 4 && strcasecmp(name + n - 4, ".ply") == 0;
+}
+
+static int compare_strings(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static int scan_item(sl_engine *e, const char *rel, sl_error *err)
+{
+    char item[1024];
+    size_t n = strlen(rel);
+    snprintf(item, sizeof item, "%.*s", (int)(n - 4), rel);
+    e->counts.items++;
+    sl_error item_err;
+    sl_error_init(&item_err);
+    int rc = sl_engine_reconcile(e, item, rel, 0, &item_err);
+    if (rc == 0)
+        return 0;
+    sl_error_context(&item_err, NULL, item);
+    char line[1400];
+    SL_LOG(SL_LOG_ERROR, "scan", item, "%s", sl_error_format(&item_err, line, sizeof line));
+    sl_log_event("scan_error", "scan", item, 0, &item_err, NULL);
+    enum sl_error_class cls = sl_error_class_of(rc);
+    /* An unreadable input is that item's problem; an unwritable work dir is everyone's. */
+    if (cls == SL_CLASS_STORAGE && strncmp(item_err.file, e->work, strlen(e->work)) == 0) {
+        sl_error_merge(err, &item_err);
+        return rc;
+    }
+    if (cls == SL_CLASS_TRANSIENT)
+        e->counts.transient++;
+    return 0; /* one bad item never stops the scan */
+}
+
+static int walk(sl_engine *e, const char *rel_dir, int depth, sl_error *err)
+{
+    char dir_path[PATH_MAX];
+    sl_engine_path(dir_path, sizeof dir_path, "%s%s%s", e->input, rel_dir[0] ? "/" : "", rel_dir);
+    if (depth > MAX_TREE_DEPTH) {
+        SL_LOG(SL_LOG_WARN, "scan", NULL, "%s: deeper than %d levels, skipped", dir_path,
+               MAX_TREE_DEPTH);
+        return 0;
+    }
+    DIR *d = opendir(dir_path);
+    if (!d)
+        return sl_error_errno(err, errno, dir_path, "opendir");
+    char **names = NULL;
+    size_t count = 0, cap = 0;
+    struct dirent *de;
+    while ((de = readdir(d))) {
+        if (de->d_name[0] == '.')
+            continue;
+        if (count == cap) {
+            cap = cap ? cap * 2 : 64;
+            char **grown = realloc(names, cap * sizeof *names);
+            if (!grown)
+                break;
+            names = grown;
+        }
+        names[count++] = strdup(de->d_name);
+    }
+    closedir(d);
+    qsort(names, count, sizeof *names, compare_strings);
+    int rc = 0;
+    for (size_t i = 0; i < count; i++) {
+        char rel[PATH_MAX], full[PATH_MAX];
+        if (rc == 0 && !*sl_interrupt_flag() &&
+            sl_engine_path(rel, sizeof rel, "%s%s%s", rel_dir, rel_dir[0] ? "/" : "", names[i]) == 0 &&
+            sl_engine_path(full, sizeof full, "%s/%s", e->input, rel) == 0) {
+            struct stat st;
+            if (stat(full, &st) == 0 && S_ISDIR(st.st_mode))
+                rc = walk(e, rel, depth + 1, err);
+            else if (S_ISREG(st.st_mode) && has_ply_suffix(names[i]))
+                rc = scan_item(e, rel, err);
+        }
+        free(names[i]);
+    }
+    free(names);
+    return rc;
+}
+
+int sl_engine_scan(sl_engine *e, sl_error *err)
+{
+    double start = sl_now_seconds();
+    sl_engine_gc(e);
+    int rc = walk(e, "", 0, err);
+    char extra[128];
+    snprintf(extra, sizeof extra, "\"items\":%llu", (unsigned long long)e->counts.items);
+    sl_log_event("scan_end", "scan", NULL, sl_now_seconds() - start, rc ? err : NULL, extra);
+    SL_LOG(SL_LOG_INFO, "scan", NULL, "%llu items in %s", (unsigned long long)e->counts.items,
+           e->input);
+    if (rc && sl_error_class_of(rc) == SL_CLASS_STORAGE) {
+        e->stop = 1;
+        sl_error_merge(&e->storage_error, err);
+    }
+    return rc;
+}

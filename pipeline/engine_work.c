@@ -1,0 +1,202 @@
+/* The worker loop: claim ready tickets by rename, hold a lease while the item runs,
+ * reclaim tickets whose owner is gone (ARCHITECTURE section 3, leases and epochs).
+ *
+ * Liveness: on the same host (and boot) a claim whose pid is gone -- or belongs to a
+ * newer process -- is reclaimed at once; across hosts only an expired lease is, never a
+ * pid. Each claim bumps the ticket's epoch (the fencing token) and draws a fresh nonce;
+ * the committing worker checks both before it publishes anything.
+ */
+#include "pipeline/engine_internal.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "pipeline/log.h"
+#include "pipeline/progress.h"
+
+static void random_nonce(char out[33])
+{
+    unsigned char bytes[16];
+    FILE *f = fopen("/dev/urandom", "rb");
+    size_t n = f ? fread(bytes, 1, sizeof bytes, f) : 0;
+    if (f)
+        fclose(f);
+    if (n != sizeof bytes) { /* no urandom: time and pid are unique enough per claim */
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        sl_hash h = sl_hash_bytes(&ts, sizeof ts);
+        memcpy(bytes, &h, sizeof bytes);
+        bytes[0] ^= (unsigned char)getpid();
+    }
+    for (int i = 0; i < 16; i++)
+        snprintf(out + 2 * i, 3, "%02x", bytes[i]);
+}
+
+static void stamp_lease(const sl_engine *e, sl_ticket *t)
+{
+    snprintf(t->host, sizeof t->host, "%s", e->self.host);
+    snprintf(t->boot, sizeof t->boot, "%s", e->self.boot);
+    snprintf(t->job, sizeof t->job, "%s", e->self.job);
+    t->pid = e->self.pid;
+    t->pid_start = e->self.pid_start;
+    t->expires = (int64_t)sl_now_seconds() + e->lease_seconds;
+}
+
+/* Is the claimed ticket still ours (same nonce and epoch)? */
+static int lease_held(const sl_engine *e, const char *stage, const char *name, const sl_ticket *mine)
+{
+    char path[PATH_MAX];
+    sl_queue_path(path, sizeof path, e->work, stage, SL_STATE_CLAIMED, name);
+    sl_ticket now;
+    sl_error err;
+    sl_error_init(&err);
+    return sl_ticket_read(path, &now, &err) == 0 && now.epoch == mine->epoch &&
+           strcmp(now.nonce, mine->nonce) == 0;
+}
+
+int sl_engine_lease_renew(sl_engine *e, const char *stage, const char *name, sl_ticket *t,
+                          sl_error *err)
+{
+    if (!lease_held(e, stage, name, t))
+        return sl_error_set(err, SL_E_LEASE_LOST, 0, name, "lease lost to another worker");
+    stamp_lease(e, t);
+    return sl_queue_put(e->work, stage, SL_STATE_CLAIMED, name, t, err);
+}
+
+int sl_engine_lease_check(sl_engine *e, const char *stage, const char *name,
+                          const sl_ticket *t, sl_error *err)
+{
+    if (!lease_held(e, stage, name, t))
+        return sl_error_set(err, SL_E_LEASE_LOST, 0, name, "lease lost to another worker");
+    return 0;
+}
+
+/* A claimed ticket nobody can be working on any more goes back to ready. */
+static void reclaim_stale(sl_engine *e, int s)
+{
+    const char *stage = e->stages[s]->name;
+    char **names;
+    int count;
+    sl_error err;
+    sl_error_init(&err);
+    if (sl_queue_list(e->work, stage, SL_STATE_CLAIMED, &names, &count, &err) != 0)
+        return;
+    int64_t now = (int64_t)sl_now_seconds();
+    for (int i = 0; i < count; i++) {
+        char path[PATH_MAX];
+        sl_queue_path(path, sizeof path, e->work, stage, SL_STATE_CLAIMED, names[i]);
+        sl_ticket t;
+        sl_error terr;
+        sl_error_init(&terr);
+        int stale;
+        if (sl_ticket_read(path, &t, &terr) != 0) {
+            /* Torn or still being renamed in: judge by age alone. */
+            struct stat st;
+            stale = stat(path, &st) == 0 && st.st_ctime + e->lease_seconds < now;
+        } else {
+            int alive = sl_identity_alive(&e->self, &t);
+            stale = alive == 0 || (alive < 0 && t.expires > 0 && t.expires < now);
+            if (alive == 1 && t.pid == e->self.pid)
+                stale = 0;
+        }
+        if (!stale)
+            continue;
+        sl_error merr;
+        sl_error_init(&merr);
+        if (sl_queue_move(e->work, stage, names[i], SL_STATE_CLAIMED, SL_STATE_READY, &merr) == 0)
+            SL_LOG(SL_LOG_INFO, stage, t.item, "reclaimed from %s pid %ld (owner gone)", t.host,
+                   t.pid);
+    }
+    free(names);
+}
+
+/* Claims the first ready ticket of stage `s`; 1 claimed, 0 none, <0 error. */
+static int claim_one(sl_engine *e, int s, char *name, size_t name_size, sl_ticket *t,
+                     sl_error *err)
+{
+    const char *stage = e->stages[s]->name;
+    char **names;
+    int count;
+    int rc = sl_queue_list(e->work, stage, SL_STATE_READY, &names, &count, err);
+    if (rc)
+        return rc;
+    int claimed = 0;
+    for (int i = 0; i < count && !claimed; i++) {
+        sl_error merr;
+        sl_error_init(&merr);
+        rc = sl_queue_move(e->work, stage, names[i], SL_STATE_READY, SL_STATE_CLAIMED, &merr);
+        if (rc == SL_E_BUSY)
+            continue; /* another worker was first */
+        if (rc) {
+            sl_error_merge(err, &merr);
+            break;
+        }
+        char path[PATH_MAX];
+        sl_queue_path(path, sizeof path, e->work, stage, SL_STATE_CLAIMED, names[i]);
+        sl_error terr;
+        sl_error_init(&terr);
+        if (sl_ticket_read(path, t, &terr) != 0) {
+            unlink(path); /* unreadable ticket: the next scan recreates it */
+            continue;
+        }
+        t->epoch++;
+        t->attempt++;
+        random_nonce(t->nonce);
+        stamp_lease(e, t);
+        rc = sl_queue_put(e->work, stage, SL_STATE_CLAIMED, names[i], t, err);
+        if (rc)
+            break;
+        snprintf(name, name_size, "%s", names[i]);
+        claimed = 1;
+    }
+    free(names);
+    return rc ? rc : claimed;
+}
+
+int sl_engine_work(sl_engine *e, sl_error *err)
+{
+    double last_reclaim = 0;
+    for (;;) {
+        if (*sl_interrupt_flag() || e->stop)
+            break;
+        if (sl_now_seconds() - last_reclaim > 1.0) {
+            for (int s = 0; s < e->stage_count; s++)
+                reclaim_stale(e, s);
+            last_reclaim = sl_now_seconds();
+        }
+        /* Later stages first: finish items before starting new ones. */
+        int claimed = 0, rc = 0;
+        char name[SL_TICKET_NAME_MAX + 1];
+        sl_ticket t;
+        int s;
+        for (s = e->stage_count - 1; s >= 0 && !claimed; s--) {
+            rc = claim_one(e, s, name, sizeof name, &t, err);
+            if (rc < 0)
+                break;
+            claimed = rc;
+            if (claimed)
+                break;
+        }
+        if (rc < 0) {
+            if (sl_error_class_of(rc) == SL_CLASS_STORAGE) {
+                e->stop = 1;
+                sl_error_merge(&e->storage_error, err);
+            }
+            return rc;
+        }
+        if (!claimed)
+            break;
+        rc = sl_engine_process(e, s, name, &t, err);
+        if (rc && sl_error_class_of(rc) == SL_CLASS_STORAGE) {
+            e->stop = 1;
+            sl_error_merge(&e->storage_error, err);
+            return rc;
+        }
+    }
+    return 0;
+}

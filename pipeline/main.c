@@ -1,0 +1,52 @@
+/* scanlod: scan archives to level-of-detail models. Dispatches to pipeline/cmd_*.c. */
+#include <stdio.h>
+#include <string.h>
+
+#include "pipeline/commands.h"
+#include "pipeline/error.h"
+
+typedef struct command {
+    const char *name;
+    int (*fn)(int argc, char **argv);
+    const char *summary;
+} command;
+
+static const command commands[] = {
+    {"run", sl_cmd_run, "convert a whole collection, resumably"},
+    {"worker", sl_cmd_worker, "one worker pulling from the shared queues (cluster)"},
+    {"status", sl_cmd_status, "per stage: ready / claimed / done / failed / quarantined"},
+    {"verify", sl_cmd_verify, "check every commit record against its files"},
+    {"inspect", sl_cmd_inspect, "what a file holds, validated"},
+    {"compare", sl_cmd_compare, "Hausdorff and RMS distance between two meshes"},
+    {"config-reference", sl_cmd_config_reference, "print the commented reference config"},
+};
+
+static void usage(FILE *out)
+{
+    fprintf(out, "usage: scanlod [--version] [--help] COMMAND [ARGS]\n\ncommands:\n");
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        fprintf(out, "  %-17s %s\n", commands[i].name, commands[i].summary);
+    fprintf(out, "\n`scanlod COMMAND --help` for each; docs/ for the design.\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return SL_EXIT_USAGE;
+    }
+    if (!strcmp(argv[1], "--version") || !strcmp(argv[1], "version")) {
+        printf("scanlod %s\n", SCANLOD_VERSION);
+        return SL_EXIT_OK;
+    }
+    if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
+        usage(stdout);
+        return SL_EXIT_OK;
+    }
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        if (!strcmp(argv[1], commands[i].name))
+            return commands[i].fn(argc - 1, argv + 1);
+    fprintf(stderr, "scanlod: unknown command '%s'\n", argv[1]);
+    usage(stderr);
+    return SL_EXIT_USAGE;
+}

@@ -1,0 +1,250 @@
+/* Directory-per-state queues (see queue.h). */
+#include "pipeline/queue.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <inttypes.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "pipeline/atomicfile.h"
+#include "pipeline/io.h"
+
+static const char *const state_names[SL_STATE_COUNT] = {"ready", "claimed", "done", "failed",
+                                                        "quarantine"};
+
+const char *sl_queue_state_name(int state)
+{
+    return state >= 0 && state < SL_STATE_COUNT ? state_names[state] : "none";
+}
+
+void sl_ticket_init(sl_ticket *t)
+{
+    memset(t, 0, sizeof *t);
+}
+
+int sl_ticket_name(const char *item, char *name, size_t size, sl_error *err)
+{
+    size_t n = 0;
+    for (const char *p = item; *p; p++) {
+        const char *esc = NULL;
+        if (*p == '%')
+            esc = "%25";
+        else if (*p == '/')
+            esc = "%2F";
+        else if (*p == '.' && p == item)
+            esc = "%2E";
+        size_t add = esc ? 3 : 1;
+        if (n + add >= size || n + add > SL_TICKET_NAME_MAX)
+            return sl_error_set(err, SL_E_LIMIT, 0, item, "item id too long for a ticket name");
+        if (esc)
+            memcpy(name + n, esc, 3);
+        else
+            name[n] = *p;
+        n += add;
+    }
+    name[n] = '\0';
+    return 0;
+}
+
+int sl_queue_path(char *buf, size_t size, const char *work, const char *stage, int state,
+                  const char *name)
+{
+    int n = name ? snprintf(buf, size, "%s/queue/%s/%s/%s", work, stage, state_names[state], name)
+                 : snprintf(buf, size, "%s/queue/%s/%s", work, stage, state_names[state]);
+    return n < 0 || (size_t)n >= size ? -1 : 0;
+}
+
+int sl_queue_create(const char *work, const char *stage, sl_error *err)
+{
+    char path[PATH_MAX];
+    for (int s = 0; s < SL_STATE_COUNT; s++) {
+        sl_queue_path(path, sizeof path, work, stage, s, NULL);
+        int rc = sl_mkdirs(path, err);
+        if (rc)
+            return rc;
+    }
+    return 0;
+}
+
+int sl_queue_find(const char *work, const char *stage, const char *name)
+{
+    char path[PATH_MAX];
+    struct stat st;
+    for (int s = 0; s < SL_STATE_COUNT; s++) {
+        if (sl_queue_path(path, sizeof path, work, stage, s, name) == 0 && stat(path, &st) == 0)
+            return s;
+    }
+    return SL_STATE_NONE;
+}
+
+int sl_queue_move(const char *work, const char *stage, const char *name, int from, int to,
+                  sl_error *err)
+{
+    char src[PATH_MAX], dst[PATH_MAX];
+    if (sl_queue_path(src, sizeof src, work, stage, from, name) ||
+        sl_queue_path(dst, sizeof dst, work, stage, to, name))
+        return sl_error_set(err, SL_E_STORAGE, ENAMETOOLONG, name, "queue path too long");
+    if (sl_io_rename(src, dst) != 0) {
+        if (errno == ENOENT)
+            return SL_E_BUSY;
+        return sl_error_errno(err, errno, src, "rename");
+    }
+    char dir[PATH_MAX];
+    sl_queue_path(dir, sizeof dir, work, stage, to, NULL);
+    int rc = sl_fsync_dir(dir, err);
+    if (rc == 0) {
+        sl_queue_path(dir, sizeof dir, work, stage, from, NULL);
+        rc = sl_fsync_dir(dir, err);
+    }
+    return rc;
+}
+
+int sl_queue_put(const char *work, const char *stage, int state, const char *name,
+                 const sl_ticket *t, sl_error *err)
+{
+    char path[PATH_MAX];
+    if (sl_queue_path(path, sizeof path, work, stage, state, name))
+        return sl_error_set(err, SL_E_STORAGE, ENAMETOOLONG, name, "queue path too long");
+    return sl_ticket_write(path, t, err);
+}
+
+static int compare_names(const void *a, const void *b)
+{
+    return strcmp(*(const char *const *)a, *(const char *const *)b);
+}
+
+int sl_queue_list(const char *work, const char *stage, int state, char ***names, int *count,
+                  sl_error *err)
+{
+    *names = NULL;
+    *count = 0;
+    char path[PATH_MAX];
+    sl_queue_path(path, sizeof path, work, stage, state, NULL);
+    DIR *dir = opendir(path);
+    if (!dir) {
+        if (errno == ENOENT)
+            return 0;
+        return sl_error_errno(err, errno, path, "opendir");
+    }
+    size_t cap = 0, n = 0, text = 0;
+    char **list = NULL;
+    struct dirent *de;
+    while ((de = readdir(dir))) {
+        if (de->d_name[0] == '.') /* ".", "..", temps, NFS silly-renames */
+            continue;
+        if (n == cap) {
+            cap = cap ? cap * 2 : 64;
+            char **grown = realloc(list, cap * sizeof *list);
+            if (!grown) {
+                for (size_t i = 0; i < n; i++)
+                    free(list[i]);
+                free(list);
+                closedir(dir);
+                return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+            }
+            list = grown;
+        }
+        list[n] = strdup(de->d_name);
+        text += strlen(de->d_name) + 1;
+        n++;
+    }
+    closedir(dir);
+    qsort(list, n, sizeof *list, compare_names);
+    /* One block: pointer array followed by the strings, so the caller frees once. */
+    char **block = malloc(n * sizeof *block + text + 1);
+    if (!block) {
+        for (size_t i = 0; i < n; i++)
+            free(list[i]);
+        free(list);
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    }
+    char *p = (char *)(block + n);
+    for (size_t i = 0; i < n; i++) {
+        size_t len = strlen(list[i]) + 1;
+        memcpy(p, list[i], len);
+        block[i] = p;
+        p += len;
+        free(list[i]);
+    }
+    free(list);
+    *names = block;
+    *count = (int)n;
+    return 0;
+}
+
+/* ---- ticket text: "key=value" lines, closed by "end" (a torn ticket is not trusted) */
+
+static void field(char *dst, size_t size, const char *value)
+{
+    snprintf(dst, size, "%s", value);
+}
+
+int sl_ticket_read(const char *path, sl_ticket *t, sl_error *err)
+{
+    sl_ticket_init(t);
+    char *text = NULL;
+    size_t size = 0;
+    int rc = sl_read_file(path, 64 * 1024, &text, &size, err);
+    if (rc)
+        return rc;
+    int complete = 0;
+    for (char *line = strtok(text, "\n"); line; line = strtok(NULL, "\n")) {
+        if (strcmp(line, "end") == 0) {
+            complete = 1;
+            break;
+        }
+        char *eq = strchr(line, '=');
+        if (!eq)
+            continue;
+        *eq = '\0';
+        const char *k = line, *v = eq + 1;
+        if (!strcmp(k, "item")) field(t->item, sizeof t->item, v);
+        else if (!strcmp(k, "source")) field(t->source, sizeof t->source, v);
+        else if (!strcmp(k, "key")) field(t->key, sizeof t->key, v);
+        else if (!strcmp(k, "attempt")) t->attempt = atoi(v);
+        else if (!strcmp(k, "crashes")) t->crashes = atoi(v);
+        else if (!strcmp(k, "epoch")) t->epoch = strtoull(v, NULL, 10);
+        else if (!strcmp(k, "host")) field(t->host, sizeof t->host, v);
+        else if (!strcmp(k, "boot")) field(t->boot, sizeof t->boot, v);
+        else if (!strcmp(k, "pid")) t->pid = atol(v);
+        else if (!strcmp(k, "pid_start")) t->pid_start = strtoull(v, NULL, 10);
+        else if (!strcmp(k, "job")) field(t->job, sizeof t->job, v);
+        else if (!strcmp(k, "nonce")) field(t->nonce, sizeof t->nonce, v);
+        else if (!strcmp(k, "expires")) t->expires = strtoll(v, NULL, 10);
+        else if (!strcmp(k, "class")) field(t->cls, sizeof t->cls, v);
+        else if (!strcmp(k, "reason")) field(t->reason, sizeof t->reason, v);
+    }
+    free(text);
+    if (!complete || !t->item[0])
+        return sl_error_set(err, SL_E_CORRUPT, 0, path, "torn or malformed ticket");
+    return 0;
+}
+
+static void one_line(const char *src, char *dst, size_t size)
+{
+    size_t n = 0;
+    for (; *src && n + 1 < size; src++)
+        dst[n++] = (*src == '\n' || *src == '\r') ? ' ' : *src;
+    dst[n] = '\0';
+}
+
+int sl_ticket_write(const char *path, const sl_ticket *t, sl_error *err)
+{
+    char reason[sizeof t->reason];
+    one_line(t->reason, reason, sizeof reason);
+    char text[4096 + sizeof t->item + sizeof t->source];
+    int n = snprintf(text, sizeof text,
+                     "item=%s\nsource=%s\nkey=%s\nattempt=%d\ncrashes=%d\nepoch=%" PRIu64
+                     "\nhost=%s\nboot=%s\npid=%ld\npid_start=%llu\njob=%s\nnonce=%s\n"
+                     "expires=%" PRId64 "\nclass=%s\nreason=%s\nend\n",
+                     t->item, t->source, t->key, t->attempt, t->crashes, t->epoch, t->host,
+                     t->boot, t->pid, t->pid_start, t->job, t->nonce, t->expires, t->cls,
+                     reason);
+    if (n < 0 || (size_t)n >= sizeof text)
+        return sl_error_set(err, SL_E_INTERNAL, 0, path, "ticket too large");
+    return sl_write_file_atomic(path, text, (size_t)n, err);
+}

@@ -1,0 +1,75 @@
+/* On-disk queues (ARCHITECTURE section 3): one queue per stage under the work dir,
+ *   WORK/queue/<stage>/{ready,claimed,done,failed,quarantine}/<ticket>
+ * a state is a directory, a transition is one rename followed by an fsync of both
+ * directories (Maildir). One small text ticket per item per stage. The ticket of a claimed
+ * item carries the lease (host, boot id, pid + its start time, job id, epoch, expiry,
+ * nonce), rewritten atomically on renewal.
+ *
+ * Ticket names are the item id with '%', '/' and a leading '.' escaped (%25, %2F, %2E),
+ * so `bunny/bun000` is `bunny%2Fbun000`; the item id itself is also inside the ticket.
+ */
+#ifndef SCANLOD_PIPELINE_QUEUE_H
+#define SCANLOD_PIPELINE_QUEUE_H
+
+#include <stdint.h>
+
+#include "pipeline/error.h"
+
+enum sl_queue_state {
+    SL_STATE_READY = 0,
+    SL_STATE_CLAIMED,
+    SL_STATE_DONE,
+    SL_STATE_FAILED,
+    SL_STATE_QUARANTINE,
+    SL_STATE_COUNT,
+    SL_STATE_NONE = -1
+};
+
+const char *sl_queue_state_name(int state); /* "ready", ... */
+
+#define SL_TICKET_NAME_MAX 240
+
+typedef struct sl_ticket {
+    char item[1024];      /* item id */
+    char source[1024];    /* input path relative to [run] input */
+    char key[33];         /* stage key (hex) the ticket belongs to */
+    int attempt;          /* claims so far */
+    int crashes;          /* crashes in our own code so far */
+    uint64_t epoch;       /* fencing token, bumped by every reclaim */
+    char host[64];
+    char boot[40];        /* kernel boot id: pids are only comparable within one boot */
+    long pid;
+    unsigned long long pid_start; /* /proc/<pid>/stat starttime, against pid reuse */
+    char job[96];         /* Slurm job/array/restart ids, "" outside Slurm */
+    char nonce[33];       /* per-claim random id */
+    int64_t expires;      /* lease expiry, unix seconds; 0 = none */
+    char cls[16];         /* failed/quarantine: badinput, transient, bug */
+    char reason[768];     /* failed/quarantine: the error line */
+} sl_ticket;
+
+void sl_ticket_init(sl_ticket *t);
+int sl_ticket_read(const char *path, sl_ticket *t, sl_error *err);
+int sl_ticket_write(const char *path, const sl_ticket *t, sl_error *err); /* atomic */
+
+/* Escapes an item id to a ticket name; SL_E_LIMIT if it does not fit. */
+int sl_ticket_name(const char *item, char *name, size_t size, sl_error *err);
+
+/* WORK/queue/<stage>/<state>[/<name>] */
+int sl_queue_path(char *buf, size_t size, const char *work, const char *stage, int state,
+                  const char *name);
+/* Creates every state directory of `stage`. */
+int sl_queue_create(const char *work, const char *stage, sl_error *err);
+/* Which state holds the ticket (SL_STATE_NONE if none). */
+int sl_queue_find(const char *work, const char *stage, const char *name);
+/* rename + fsync of both directories. Returns SL_E_BUSY if the ticket is no longer in
+ * `from` (another worker moved it first). */
+int sl_queue_move(const char *work, const char *stage, const char *name, int from, int to,
+                  sl_error *err);
+/* Writes a new ticket straight into `state` (atomic). */
+int sl_queue_put(const char *work, const char *stage, int state, const char *name,
+                 const sl_ticket *t, sl_error *err);
+/* Ticket names in a state directory, sorted; *names is one malloc'd block. */
+int sl_queue_list(const char *work, const char *stage, int state, char ***names, int *count,
+                  sl_error *err);
+
+#endif
