@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Builds scanlod and converts the bundled demo collection (tests/data/scans), then shows
+# the queue status and one item's report. Safe to rerun: the second run does no work.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+"$root/scripts/build.sh" "$root/build"
+cd "$root"
+status=0
+build/scanlod run config/demo.ini || status=$?
+build/scanlod status config/demo.ini
+echo "--- build/demo/output/cow/report.json"
+cat build/demo/output/cow/report.json
+exit $status

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Crash safety (reliability T1): a run over 8 items is killed with SIGKILL at 24 random
+# moments; after every kill no record may vouch for a file that does not match it
+# (`scanlod verify`), and no published item may differ from a clean run's. Resumed to
+# the end, artifacts and publications are byte-identical to the clean run.
+# SCANLOD_CRASH_KILLS overrides the number of kills (nightly: 200).
+source "$(dirname "$0")/../lib.sh"
+kills=${SCANLOD_CRASH_KILLS:-24}
+
+mkdir -p "$TMP/in/nested"
+i=0
+for f in "$SCANS"/*.ply; do
+  cp "$f" "$TMP/in/item$i.ply"; i=$((i + 1))
+done
+cp "$SCANS/cow.ply" "$TMP/in/nested/cow.ply"
+cp "$SCANS/fandisk.ply" "$TMP/in/nested/fandisk.ply"
+if [ -n "${SCANLOD_SHARED_DATA:-}" ] && [ -f "$SCANLOD_SHARED_DATA/bun_zipper.ply" ]; then
+  cp "$SCANLOD_SHARED_DATA/bun_zipper.ply" "$TMP/in/nested/bunny.ply" # a slower item
+fi
+items=$(find "$TMP/in" -name '*.ply' | wc -l)
+check "at least 6 items ($items)" [ "$items" -ge 6 ]
+
+write_config "$TMP/ref.ini" "$TMP/in" "$TMP/ref-work" "$TMP/ref-out"
+start=$(date +%s%N)
+run_scanlod run "$TMP/ref.ini" -q
+clean_ns=$(( $(date +%s%N) - start ))
+check "clean run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
+ref=$(tree_digest "$TMP/ref-work" "$TMP/ref-out")
+
+write_config "$TMP/kill.ini" "$TMP/in" "$TMP/work" "$TMP/out"
+bad_publications=0
+unverified=0
+for k in $(seq 1 "$kills"); do
+  # Uniform over the clean run's duration: early kills land in the scan, late ones in
+  # commits and publication.
+  delay_ms=$(( (RANDOM * 32768 + RANDOM) % (clean_ns / 1000000 + 1) ))
+  "$SCANLOD" run "$TMP/kill.ini" -q >/dev/null 2>&1 &
+  pid=$!
+  sleep "$(printf '0.%03d' "$delay_ms")" 2>/dev/null || sleep 0
+  [ "$delay_ms" -ge 1000 ] && sleep $((delay_ms / 1000))
+  kill -9 "$pid" 2>/dev/null || true
+  wait "$pid" 2>/dev/null || true
+  # Every published report must be complete and equal to the clean run's.
+  while IFS= read -r -d '' f; do
+    rel=${f#"$TMP/out/"}
+    cmp -s "$f" "$TMP/ref-out/$rel" || { bad_publications=$((bad_publications + 1)); echo "differs after kill $k: $rel" >&2; }
+  done < <(find "$TMP/out" -name report.json ! -path '*/.*' -print0 2>/dev/null)
+  run_scanlod verify "$TMP/kill.ini"
+  [ "$rc" -eq 0 ] || { unverified=$((unverified + 1)); echo "verify after kill $k: $out $err" >&2; }
+done
+check "no published report ever differed from the clean run ($bad_publications)" [ "$bad_publications" -eq 0 ]
+check "every record verified after every kill ($unverified failures)" [ "$unverified" -eq 0 ]
+
+run_scanlod run "$TMP/kill.ini" -q
+check "resume after $kills kills exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
+check "resumed artifacts byte-identical to the clean run" [ "$ref" = "$(tree_digest "$TMP/work" "$TMP/out")" ]
+leftovers=$(find "$TMP/work" "$TMP/out" -name '.*' ! -name '.' | wc -l)
+check "no temp files left behind after the resume ($leftovers)" [ "$leftovers" -eq 0 ]
+finish

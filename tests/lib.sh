@@ -1,0 +1,53 @@
+# Shared helpers for the end-to-end shell tests (sourced). Each test gets:
+#   SCANLOD            the binary under test
+#   SCANLOD_SOURCE_DIR the repository
+#   SCANLOD_SHARED_DATA ../shared/data when present, else empty
+set -euo pipefail
+: "${SCANLOD:?SCANLOD must name the scanlod binary}"
+: "${SCANLOD_SOURCE_DIR:?}"
+SCANS="$SCANLOD_SOURCE_DIR/tests/data/scans"
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/scanlod-test.XXXXXX")
+cleanup_hooks=()
+cleanup() {
+  for h in "${cleanup_hooks[@]}"; do eval "$h" || true; done
+  rm -rf "$TMP"
+}
+trap cleanup EXIT
+passed=0
+failed=0
+
+check() { # check "description" command...
+  local what=$1; shift
+  if "$@"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "FAIL: $what" >&2; fi
+}
+
+finish() {
+  echo "$passed passed, $failed failed"
+  [ "$failed" -eq 0 ]
+}
+
+# write_config FILE INPUT WORK OUTPUT [extra lines...]
+write_config() {
+  local file=$1 input=$2 work=$3 output=$4; shift 4
+  { echo "[run]"; echo "input = $input"; echo "work = $work"; echo "output = $output"
+    echo "logs = $TMP/logs"; printf '%s\n' "$@"; } >"$file"
+}
+
+# run_scanlod CMD CONFIG [args...]: sets $rc and $out (stdout), $err (stderr file)
+run_scanlod() {
+  local errfile="$TMP/stderr.$RANDOM"
+  set +e
+  out=$("$SCANLOD" "$@" 2>"$errfile")
+  rc=$?
+  set -e
+  err=$(cat "$errfile")
+}
+
+# Deterministic content of a work dir + output dir: every artifact and published file,
+# except the per-run timing files, as "path hash" lines.
+tree_digest() { # tree_digest WORK OUTPUT
+  (cd "$1" && find artifacts -type f ! -name '_stats.json' ! -name '.*' -print0 | sort -z |
+     xargs -0 -r sha256sum)
+  (cd "$2" && find . -type f ! -name 'timings.json' ! -path '*/.*' -print0 | sort -z |
+     xargs -0 -r sha256sum)
+}
