@@ -20,7 +20,10 @@
 
 #include <stdint.h>
 
+#include "geometry/mesh.h"
+#include "geometry/ply.h"
 #include "pipeline/error.h"
+#include "pipeline/progress.h"
 #include "pipeline/stage.h"
 
 #define SL_POINTSET_FILE "points.slpts"
@@ -47,6 +50,62 @@ enum sl_normal_source {
     SL_NORMALS_RANGE_GRID = 4   /* faces from the scanner grid */
 };
 const char *sl_normal_source_name(uint32_t source);
+
+/* The resolved [range] section (options: stages/range/range_stage.c). */
+typedef struct sl_range_config {
+    int normals_from_file;         /* [range] normals = file: the file's vertex normals */
+    uint32_t knn;                  /* neighbours for PCA normals and their propagation */
+    double grid_max_edge_factor;   /* grid triangles with an edge longer than this times the
+                                      median grid-neighbour distance are skipped */
+    int range_images;              /* also write six axis-aligned range images (EXR) */
+    int range_image_size;          /* their width = height, pixels */
+    sl_ply_limits limits;          /* PLY reader limits */
+    double max_nonfinite_fraction; /* above this fraction of non-finite vertices: bad input */
+    int colors;                    /* 0: none; 1: auto (vertex colours, else texture) */
+} sl_range_config;
+
+sl_range_config sl_range_default_config(void);
+
+/* What the stage saw and did; every dropped element is counted by reason. For meshes
+ * input_vertices = points + welded + unreferenced + nonfinite_vertices. */
+typedef struct sl_range_counts {
+    uint64_t input_vertices, input_faces;
+    uint64_t points;
+    uint64_t welded;               /* finite vertices merged into an identical earlier one */
+    uint64_t unreferenced;         /* finite, not welded, used by no kept face (meshes) */
+    uint64_t nonfinite_vertices;   /* a NaN/Inf coordinate */
+    uint64_t nonfinite_faces;      /* faces dropped because a corner is non-finite */
+    uint64_t degenerate_faces;     /* repeated corner after welding, or zero area */
+    uint64_t polygons_triangulated;/* by the reader (fan) */
+    uint64_t grid_triangles;       /* triangles made along the scanner grid */
+    uint64_t grid_long_edges;      /* grid triangles skipped: an edge > grid_max_edge */
+    double grid_max_edge;          /* world units; 0 when no grid */
+    int grid_flipped;              /* grid winding flipped to face the scanner */
+    uint64_t normal_fallbacks;     /* file normal zero/non-finite (or zero face-normal sum) */
+    uint64_t pca_components;       /* connected components of the kNN graph (propagation) */
+    uint64_t texture_warnings;     /* texture missing or unreadable, or no texcoords */
+    char texture_warning[320];     /* the first such warning, "" if none */
+    uint64_t colors_unsampled;     /* points that got no colour sample (grey) */
+    uint32_t normal_source;        /* enum sl_normal_source */
+    const char *color_source;      /* "none", "vertex", "texture" */
+} sl_range_counts;
+
+/* The stage's work on an in-memory mesh: `mesh` is consumed (its arrays may be changed or
+ * taken; release it afterwards as usual). Textures named by mesh->texture_file are looked
+ * up in `texture_dir` (NULL: no texture). OUT: *out (release with sl_pointset_release),
+ * *counts, and when `triangles` is not NULL the kept triangles in point indices
+ * (*triangles malloc'd, 3 * *triangle_count; NULL for point clouds). Returns 0,
+ * SL_E_BADINPUT (nothing usable, too many non-finite vertices), SL_E_NOMEM or
+ * SL_E_INTERRUPTED. */
+int sl_range_points_from_mesh(const sl_range_config *cfg, sl_mesh *mesh, const char *texture_dir,
+                              sl_pointset *out, sl_range_counts *counts, uint32_t **triangles,
+                              uint64_t *triangle_count, sl_progress *progress, sl_error *err);
+
+/* Writes the six range images (docs/range-stage.md) of `ps` into `dir`; `triangles`
+ * (point indices, may be NULL) are rasterised, else points are splatted. */
+int sl_range_images_write(const char *dir, const sl_pointset *ps, const uint32_t *triangles,
+                          uint64_t triangle_count, int size, sl_progress *progress,
+                          sl_error *err);
 
 int sl_pointset_write(const char *path, const sl_pointset *ps, sl_error *err);
 /* Validates magic, versions, sizes (against the file size) and checksum. */

@@ -1,0 +1,193 @@
+/* The oriented point set artifact `points.slpts` (format: docs/formats.md and
+ * docs/range-stage.md), in the envelope of pipeline/artifact.h with magic "SLPOINTS".
+ *
+ * Body, little-endian:
+ *   0   u64  count
+ *   8   u32  flags (bit 0: colours present; other bits must be 0)
+ *   12  6xf32 bbox min xyz, max xyz
+ *   36  f64  mean_spacing
+ *   44  u32  normal_source (enum sl_normal_source)
+ *   48  f32  positions[3 * count]
+ *       f32  normals[3 * count]
+ *       u8   colours[4 * count] RGBA (only with flag bit 0)
+ * The reader checks that the body size is exactly what count and flags imply (overflow-
+ * checked) before it allocates anything.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "pipeline/artifact.h"
+#include "stages/range/range.h"
+
+#define POINTSET_MAGIC "SLPOINTS"
+#define POINTSET_HEAD 48u
+#define POINTSET_HAS_COLORS 1u
+#define POINTSET_MAX_BODY (1ull << 40)
+
+static int host_is_little_endian(void)
+{
+    const uint16_t one = 1;
+    return *(const unsigned char *)&one == 1;
+}
+
+static void put_f32(unsigned char *p, float f)
+{
+    uint32_t bits;
+    memcpy(&bits, &f, sizeof bits);
+    sl_put_u32(p, bits);
+}
+
+static float get_f32(const unsigned char *p)
+{
+    uint32_t bits = sl_get_u32(p);
+    float f;
+    memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
+/* Floats as LE bytes: the array itself on LE hosts, else a converted copy in *copy. */
+static const void *le_floats(const float *v, uint64_t n, unsigned char **copy)
+{
+    *copy = NULL;
+    if (host_is_little_endian())
+        return v;
+    *copy = malloc(4 * n + 1);
+    if (*copy)
+        for (uint64_t i = 0; i < n; i++)
+            put_f32(*copy + 4 * i, v[i]);
+    return *copy;
+}
+
+static uint64_t body_size(uint64_t count, int colors)
+{
+    return POINTSET_HEAD + count * (24u + (colors ? 4u : 0u));
+}
+
+int sl_pointset_write(const char *path, const sl_pointset *ps, sl_error *err)
+{
+    int colors = ps->colors != NULL;
+    unsigned char head[POINTSET_HEAD];
+    sl_put_u64(head, ps->count);
+    sl_put_u32(head + 8, colors ? POINTSET_HAS_COLORS : 0u);
+    for (int k = 0; k < 3; k++) {
+        put_f32(head + 12 + 4 * k, ps->bbox_min[k]);
+        put_f32(head + 24 + 4 * k, ps->bbox_max[k]);
+    }
+    uint64_t spacing_bits;
+    memcpy(&spacing_bits, &ps->mean_spacing, sizeof spacing_bits);
+    sl_put_u64(head + 36, spacing_bits);
+    sl_put_u32(head + 44, ps->normal_source);
+
+    unsigned char *pos_copy, *nrm_copy;
+    const void *pos = le_floats(ps->positions, 3 * ps->count, &pos_copy);
+    const void *nrm = le_floats(ps->normals, 3 * ps->count, &nrm_copy);
+    int rc;
+    if (!pos || !nrm) {
+        rc = sl_error_set(err, SL_E_NOMEM, 0, path, "out of memory");
+    } else {
+        sl_artifact_part parts[4] = {
+            {head, sizeof head},
+            {pos, (size_t)(12 * ps->count)},
+            {nrm, (size_t)(12 * ps->count)},
+            {ps->colors, colors ? (size_t)(4 * ps->count) : 0},
+        };
+        rc = sl_artifact_write(path, POINTSET_MAGIC, SL_POINTSET_FORMAT_VERSION,
+                               sl_range_stage.version, parts, colors ? 4 : 3, err);
+    }
+    free(pos_copy);
+    free(nrm_copy);
+    return rc;
+}
+
+static int corrupt(sl_error *err, const char *path, const char *what)
+{
+    return sl_error_set(err, SL_E_CORRUPT, 0, path, "point set: %s", what);
+}
+
+/* Checks the fixed head against the body size; OUT: count, colors. */
+static int check_head(const unsigned char *body, uint64_t size, const char *path,
+                      uint64_t *count, int *colors, sl_error *err)
+{
+    if (size < POINTSET_HEAD)
+        return corrupt(err, path, "body shorter than its header");
+    uint64_t n = sl_get_u64(body);
+    uint32_t flags = sl_get_u32(body + 8);
+    if (flags & ~POINTSET_HAS_COLORS)
+        return corrupt(err, path, "unknown flags");
+    *colors = (flags & POINTSET_HAS_COLORS) != 0;
+    uint64_t per_point = 24u + (*colors ? 4u : 0u);
+    if (n > (size - POINTSET_HEAD) / per_point || body_size(n, *colors) != size)
+        return corrupt(err, path, "point count disagrees with the body size");
+    if (sl_get_u32(body + 44) > SL_NORMALS_RANGE_GRID)
+        return corrupt(err, path, "unknown normal source");
+    *count = n;
+    return SL_OK;
+}
+
+int sl_pointset_read(const char *path, sl_pointset *out, sl_error *err)
+{
+    memset(out, 0, sizeof *out);
+    void *raw = NULL;
+    uint64_t size = 0;
+    int rc = sl_artifact_read(path, POINTSET_MAGIC, SL_POINTSET_FORMAT_VERSION, POINTSET_MAX_BODY,
+                              &raw, &size, NULL, err);
+    if (rc != SL_OK)
+        return rc;
+    const unsigned char *body = raw;
+    uint64_t n = 0;
+    int colors = 0;
+    if ((rc = check_head(body, size, path, &n, &colors, err)) != SL_OK) {
+        free(raw);
+        return rc;
+    }
+    out->count = n;
+    for (int k = 0; k < 3; k++) {
+        out->bbox_min[k] = get_f32(body + 12 + 4 * k);
+        out->bbox_max[k] = get_f32(body + 24 + 4 * k);
+    }
+    uint64_t spacing_bits = sl_get_u64(body + 36);
+    memcpy(&out->mean_spacing, &spacing_bits, sizeof out->mean_spacing);
+    out->normal_source = sl_get_u32(body + 44);
+    out->positions = malloc(12 * n + 1);
+    out->normals = malloc(12 * n + 1);
+    out->colors = colors ? malloc(4 * n + 1) : NULL;
+    if (!out->positions || !out->normals || (colors && !out->colors)) {
+        free(raw);
+        sl_pointset_release(out);
+        return sl_error_set(err, SL_E_NOMEM, 0, path, "out of memory (%llu points)",
+                            (unsigned long long)n);
+    }
+    const unsigned char *p = body + POINTSET_HEAD;
+    for (uint64_t i = 0; i < 3 * n; i++)
+        out->positions[i] = get_f32(p + 4 * i);
+    p += 12 * n;
+    for (uint64_t i = 0; i < 3 * n; i++)
+        out->normals[i] = get_f32(p + 4 * i);
+    p += 12 * n;
+    if (colors)
+        memcpy(out->colors, p, 4 * n);
+    free(raw);
+    return SL_OK;
+}
+
+void sl_pointset_release(sl_pointset *ps)
+{
+    if (!ps)
+        return;
+    free(ps->positions);
+    free(ps->normals);
+    free(ps->colors);
+    memset(ps, 0, sizeof *ps);
+}
+
+const char *sl_normal_source_name(uint32_t source)
+{
+    switch (source) {
+    case SL_NORMALS_FACES: return "faces";
+    case SL_NORMALS_FILE: return "file";
+    case SL_NORMALS_PCA_VIEWPOINT: return "pca-viewpoint";
+    case SL_NORMALS_PCA_PROPAGATED: return "pca-propagated";
+    case SL_NORMALS_RANGE_GRID: return "range-grid";
+    }
+    return "unknown";
+}

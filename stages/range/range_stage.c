@@ -1,0 +1,181 @@
+/* The range stage's registry entry: options of section [range], configure, run, report.
+ * The work itself: range_points.c (what applies) and the files it calls.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "geometry/ply.h"
+#include "stages/range/range.h"
+
+static const sl_option range_options[] = {
+    {"range", "normals", SL_OPT_ENUM, "faces", 0, 0, "faces|file",
+     "Point normals: 'faces' = area-weighted mean of the adjacent face normals (paper 1 "
+     "section 4; PCA for point clouds); 'file' = the file's vertex normals, falling back to "
+     "'faces' (counted) where a file normal is missing, zero or non-finite."},
+    {"range", "knn", SL_OPT_INT, "12", 3, 256, NULL,
+     "Neighbours used for PCA normals of point clouds without faces and for the spanning "
+     "tree that orients them."},
+    {"range", "grid_max_edge_factor", SL_OPT_DOUBLE, "4", 1, 1000, NULL,
+     "Raw range scans: grid triangles with an edge longer than this many times the median "
+     "distance between grid neighbours are skipped (they span depth jumps, not surface)."},
+    {"range", "range_images", SL_OPT_BOOL, "false", 0, 0, NULL,
+     "Also write six orthographic range images (depth + normal, one per axis direction) "
+     "as EXR files into the artifact directory."},
+    {"range", "range_image_size", SL_OPT_INT, "512", 16, 8192, NULL,
+     "Width and height in pixels of each range image."},
+    {"range", "max_vertices", SL_OPT_INT, "2147483648", 1, 4294967294.0, NULL,
+     "Inputs declaring more vertices are refused (limit error, item quarantined)."},
+    {"range", "max_faces", SL_OPT_INT, "2147483648", 1, 1099511627776.0, NULL,
+     "Inputs declaring more faces are refused (limit error, item quarantined)."},
+    {"range", "max_header_bytes", SL_OPT_INT, "1048576", 1024, 1073741824.0, NULL,
+     "Longest PLY header accepted, in bytes."},
+    {"range", "max_nonfinite_fraction", SL_OPT_DOUBLE, "0.5", 0, 1, NULL,
+     "Single NaN/Inf vertices are dropped and counted; a file where more than this fraction "
+     "of vertices is non-finite is garbage (often the wrong endianness) and is refused."},
+    {"range", "colors", SL_OPT_ENUM, "auto", 0, 0, "auto|none",
+     "Point colours: 'auto' = vertex colours, else sampled from the texture image named "
+     "by 'comment TextureFile' (a missing texture is a warning); 'none' = no colours."},
+    SL_OPTION_END,
+};
+
+sl_range_config sl_range_default_config(void)
+{
+    sl_range_config c;
+    memset(&c, 0, sizeof c);
+    c.normals_from_file = 0;
+    c.knn = 12;
+    c.grid_max_edge_factor = 4.0;
+    c.range_images = 0;
+    c.range_image_size = 512;
+    c.limits = sl_ply_default_limits();
+    c.max_nonfinite_fraction = 0.5;
+    c.colors = 1;
+    return c;
+}
+
+static int range_configure(const sl_config *cfg, void **stage_config, sl_error *err)
+{
+    sl_range_config *c = malloc(sizeof *c);
+    if (!c)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory");
+    *c = sl_range_default_config();
+    c->normals_from_file = strcmp(sl_config_string(cfg, "range", "normals"), "file") == 0;
+    c->knn = (uint32_t)sl_config_int(cfg, "range", "knn");
+    c->grid_max_edge_factor = sl_config_double(cfg, "range", "grid_max_edge_factor");
+    c->range_images = sl_config_bool(cfg, "range", "range_images");
+    c->range_image_size = (int)sl_config_int(cfg, "range", "range_image_size");
+    c->limits.max_vertices = (uint64_t)sl_config_int(cfg, "range", "max_vertices");
+    c->limits.max_faces = (uint64_t)sl_config_int(cfg, "range", "max_faces");
+    c->limits.max_header_bytes = (uint64_t)sl_config_int(cfg, "range", "max_header_bytes");
+    c->max_nonfinite_fraction = sl_config_double(cfg, "range", "max_nonfinite_fraction");
+    c->colors = strcmp(sl_config_string(cfg, "range", "colors"), "none") != 0;
+    *stage_config = c;
+    return SL_OK;
+}
+
+static void range_release_config(void *stage_config)
+{
+    free(stage_config);
+}
+
+static void report_counts(sl_json *j, const sl_range_counts *c, const sl_pointset *ps,
+                          int range_images)
+{
+    sl_json_u64(j, "input_vertices", c->input_vertices);
+    sl_json_u64(j, "input_faces", c->input_faces);
+    sl_json_u64(j, "points", c->points);
+    sl_json_u64(j, "welded", c->welded);
+    sl_json_object_begin(j, "dropped");
+    sl_json_u64(j, "unreferenced_vertices", c->unreferenced);
+    sl_json_u64(j, "nonfinite_vertices", c->nonfinite_vertices);
+    sl_json_u64(j, "nonfinite_faces", c->nonfinite_faces);
+    sl_json_u64(j, "degenerate_faces", c->degenerate_faces);
+    sl_json_u64(j, "grid_long_edge_triangles", c->grid_long_edges);
+    sl_json_object_end(j);
+    sl_json_u64(j, "polygons_triangulated", c->polygons_triangulated);
+    sl_json_u64(j, "grid_triangles", c->grid_triangles);
+    sl_json_double(j, "grid_max_edge", c->grid_max_edge);
+    sl_json_string(j, "normal_source", sl_normal_source_name(c->normal_source));
+    sl_json_u64(j, "normal_fallbacks", c->normal_fallbacks);
+    sl_json_u64(j, "pca_components", c->pca_components);
+    sl_json_string(j, "color_source", c->color_source);
+    sl_json_u64(j, "texture_warnings", c->texture_warnings);
+    sl_json_string(j, "texture_warning", c->texture_warnings ? c->texture_warning : NULL);
+    sl_json_u64(j, "colors_unsampled", c->colors_unsampled);
+    sl_json_array_begin(j, "bbox_min");
+    for (int k = 0; k < 3; k++)
+        sl_json_double(j, NULL, ps->bbox_min[k]);
+    sl_json_array_end(j);
+    sl_json_array_begin(j, "bbox_max");
+    for (int k = 0; k < 3; k++)
+        sl_json_double(j, NULL, ps->bbox_max[k]);
+    sl_json_array_end(j);
+    sl_json_double(j, "mean_spacing", ps->mean_spacing);
+    sl_json_bool(j, "range_images", range_images);
+}
+
+/* The directory part of `path` ("." when there is none). */
+static void directory_of(const char *path, char *dir, size_t size)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        snprintf(dir, size, ".");
+    else if (slash == path)
+        snprintf(dir, size, "/");
+    else
+        snprintf(dir, size, "%.*s", (int)(slash - path), path);
+}
+
+static int range_run(const void *stage_config, const sl_stage_io *io, sl_error *err)
+{
+    const sl_range_config *cfg = stage_config;
+    sl_mesh mesh;
+    sl_mesh_init(&mesh);
+    int rc = sl_ply_read(io->source_path, &cfg->limits, &mesh, NULL, io->progress, err);
+    if (rc != SL_OK) {
+        sl_mesh_release(&mesh);
+        return rc;
+    }
+    char dir[1024], path[1100];
+    directory_of(io->source_path, dir, sizeof dir);
+    sl_pointset ps;
+    sl_range_counts counts;
+    uint32_t *triangles = NULL;
+    uint64_t triangle_count = 0;
+    rc = sl_range_points_from_mesh(cfg, &mesh, dir, &ps, &counts,
+                                   cfg->range_images ? &triangles : NULL, &triangle_count,
+                                   io->progress, err);
+    sl_mesh_release(&mesh);
+    if (rc != SL_OK) {
+        if (!err->file[0])
+            snprintf(err->file, sizeof err->file, "%s", io->source_path);
+        return rc;
+    }
+    if (sl_progress_step(io->progress, "write", 0.9)) {
+        rc = SL_E_INTERRUPTED;
+        goto done;
+    }
+    snprintf(path, sizeof path, "%s/%s", io->out_dir, SL_POINTSET_FILE);
+    if ((rc = sl_pointset_write(path, &ps, err)) != SL_OK)
+        goto done;
+    if (cfg->range_images &&
+        (rc = sl_range_images_write(io->out_dir, &ps, triangles, triangle_count,
+                                    cfg->range_image_size, io->progress, err)) != SL_OK)
+        goto done;
+    report_counts(io->report, &counts, &ps, cfg->range_images);
+done:
+    free(triangles);
+    sl_pointset_release(&ps);
+    return rc;
+}
+
+const sl_stage sl_range_stage = {
+    .name = "range",
+    .description = "PLY mesh or point cloud -> oriented, coloured point set (paper 1 section 4)",
+    .version = 1,
+    .options = range_options,
+    .configure = range_configure,
+    .release_config = range_release_config,
+    .run = range_run,
+};

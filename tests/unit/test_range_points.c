@@ -1,0 +1,356 @@
+/* Range stage on meshes built in memory: exact drop/weld counts, face normals, file
+ * normal fallback, grid triangulation and its orientation, PCA normals on spheres
+ * (propagated and viewpoint), texture sampling, point set round trip and corruption. */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "shim/oiio_shim.h"
+#include "stages/range/range.h"
+#include "tests/check.h"
+
+static float *copy_floats(const float *src, size_t n)
+{
+    float *p = malloc(n * sizeof *p);
+    memcpy(p, src, n * sizeof *p);
+    return p;
+}
+
+static int run(sl_range_config *cfg, sl_mesh *m, const char *dir, sl_pointset *ps,
+               sl_range_counts *c)
+{
+    sl_error err;
+    sl_error_init(&err);
+    int rc = sl_range_points_from_mesh(cfg, m, dir, ps, c, NULL, NULL, NULL, &err);
+    if (rc != SL_OK)
+        fprintf(stderr, "  (range: %s: %s)\n", sl_error_name(rc), err.message);
+    return rc;
+}
+
+static double angle_deg(const float *a, const double *b)
+{
+    double la = sqrt((double)a[0] * a[0] + (double)a[1] * a[1] + (double)a[2] * a[2]);
+    double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    double c = (a[0] * b[0] + a[1] * b[1] + a[2] * b[2]) / (la * lb);
+    return acos(c > 1 ? 1 : c < -1 ? -1 : c) * 180.0 / 3.14159265358979;
+}
+
+/* Vertices 4 and 7 weld (7 by -0.0 == +0.0), 5 is NaN, 6 and 8 end up unreferenced;
+ * faces: 2 kept + 1 kept after weld, 1 non-finite, 3 degenerate. */
+static void build_defect_mesh(sl_mesh *m)
+{
+    const float v[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0, 0, 0, 0,
+                       NAN, 0, 0, 5, 5, 5, -0.0f, 1, 0, 2, 0, 0, 0, 0, 1};
+    const uint32_t t[] = {0, 1, 2, 1, 3, 7, 0, 1, 5, 4, 0, 9, 0, 1, 8, 2, 2, 3, 0, 2, 9};
+    sl_mesh_init(m);
+    m->vertex_count = 10;
+    m->positions = copy_floats(v, 30);
+    m->triangle_count = 7;
+    m->triangles = malloc(sizeof t);
+    memcpy(m->triangles, t, sizeof t);
+    m->colors = calloc(40, 1);
+    for (int i = 0; i < 10; i++)
+        m->colors[4 * i + 3] = 255;
+    memcpy(m->colors + 16, "\xc8\x64\x32\xff", 4); /* vertex 4, welded into vertex 0 */
+}
+
+static void test_defects(void)
+{
+    sl_range_config cfg = sl_range_default_config();
+    sl_mesh m;
+    sl_pointset ps;
+    sl_range_counts c;
+    build_defect_mesh(&m);
+    CHECK(run(&cfg, &m, NULL, &ps, &c) == SL_OK);
+    CHECK_EQ_U64(c.points, 5);
+    CHECK_EQ_U64(c.welded, 2);
+    CHECK_EQ_U64(c.unreferenced, 2);
+    CHECK_EQ_U64(c.nonfinite_vertices, 1);
+    CHECK_EQ_U64(c.nonfinite_faces, 1);
+    CHECK_EQ_U64(c.degenerate_faces, 3);
+    CHECK_EQ_U64(c.input_vertices, c.points + c.welded + c.unreferenced + c.nonfinite_vertices);
+    CHECK(c.normal_source == SL_NORMALS_FACES);
+    /* Point 0 (vertex 0) touches a +z face and a +x face of equal area. */
+    CHECK_NEAR(ps.normals[0], sqrt(0.5), 1e-6);
+    CHECK_NEAR(ps.normals[1], 0.0, 1e-6);
+    CHECK_NEAR(ps.normals[2], sqrt(0.5), 1e-6);
+    CHECK_NEAR(ps.normals[3 * 3 + 2], 1.0, 1e-6); /* point 3 = vertex 3: +z only */
+    CHECK_NEAR(ps.positions[3 * 4 + 2], 1.0, 0);  /* point 4 = vertex 9 */
+    /* Welded colours average: (0,0,0) and (200,100,50). */
+    CHECK(ps.colors && ps.colors[0] == 100 && ps.colors[1] == 50 && ps.colors[2] == 25);
+    CHECK(strcmp(c.color_source, "vertex") == 0);
+    CHECK(ps.bbox_min[0] == 0.0f && ps.bbox_max[0] == 1.0f && ps.bbox_max[2] == 1.0f);
+    sl_pointset_release(&ps);
+    sl_mesh_release(&m);
+
+    /* More than half the vertices non-finite: garbage, refused. */
+    build_defect_mesh(&m);
+    for (int i = 0; i < 6; i++)
+        m.positions[3 * i + 1] = INFINITY;
+    CHECK(run(&cfg, &m, NULL, &ps, &c) == SL_E_BADINPUT);
+    sl_mesh_release(&m);
+    /* Only degenerate faces: nothing usable. */
+    build_defect_mesh(&m);
+    m.triangle_count = 1;
+    m.triangles[0] = m.triangles[1] = 0;
+    CHECK(run(&cfg, &m, NULL, &ps, &c) == SL_E_BADINPUT);
+    sl_mesh_release(&m);
+}
+
+static void test_file_normals(void)
+{
+    sl_range_config cfg = sl_range_default_config();
+    cfg.normals_from_file = 1;
+    sl_mesh m;
+    sl_pointset ps;
+    sl_range_counts c;
+    build_defect_mesh(&m);
+    m.normals = calloc(30, sizeof(float));
+    for (int i = 0; i < 10; i++)
+        m.normals[3 * i] = 2.0f; /* not unit length: normalised */
+    m.normals[3 * 3] = 0.0f;     /* vertex 3: zero -> falls back to its face normal */
+    CHECK(run(&cfg, &m, NULL, &ps, &c) == SL_OK);
+    CHECK(c.normal_source == SL_NORMALS_FILE);
+    CHECK_EQ_U64(c.normal_fallbacks, 1);
+    CHECK_NEAR(ps.normals[0], 1.0, 1e-6);
+    CHECK_NEAR(ps.normals[3 * 3 + 2], 1.0, 1e-6);
+    sl_pointset_release(&ps);
+    sl_mesh_release(&m);
+}
+
+/* 4 x 4 samples on z = 0 at (x, y) = (col, flip ? -row : row); sample (0,0) missing,
+ * sample (3,3) lifted by 100 (a depth jump). */
+static void build_grid(sl_mesh *m, int flip)
+{
+    sl_mesh_init(m);
+    m->grid_cols = m->grid_rows = 4;
+    m->grid_index = malloc(16 * sizeof *m->grid_index);
+    m->positions = malloc(16 * 3 * sizeof(float));
+    uint32_t n = 0;
+    for (int r = 0; r < 4; r++)
+        for (int col = 0; col < 4; col++) {
+            if (r == 0 && col == 0) {
+                m->grid_index[r * 4 + col] = -1;
+                continue;
+            }
+            m->positions[3 * n] = (float)col;
+            m->positions[3 * n + 1] = (float)(flip ? -r : r);
+            m->positions[3 * n + 2] = (r == 3 && col == 3) ? 100.0f : 0.0f;
+            m->grid_index[r * 4 + col] = n++;
+        }
+    m->vertex_count = n;
+}
+
+static void test_grid(void)
+{
+    sl_range_config cfg = sl_range_default_config();
+    for (int flip = 0; flip < 3; flip++) {
+        sl_mesh m;
+        sl_pointset ps;
+        sl_range_counts c;
+        build_grid(&m, flip == 1);
+        if (flip == 2) { /* scanner stated below the plane: normals face -z */
+            m.has_viewpoint = 1;
+            m.viewpoint[2] = -10;
+        }
+        CHECK(run(&cfg, &m, NULL, &ps, &c) == SL_OK);
+        CHECK_EQ_U64(c.grid_triangles, 16);
+        CHECK_EQ_U64(c.grid_long_edges, 1);
+        CHECK_NEAR(c.grid_max_edge, 4.0, 1e-9);
+        CHECK_EQ_U64(c.points, 14);
+        CHECK_EQ_U64(c.unreferenced, 1);
+        CHECK(c.normal_source == SL_NORMALS_RANGE_GRID);
+        CHECK(c.grid_flipped == (flip != 0));
+        int facing = 0;
+        for (uint64_t i = 0; i < ps.count; i++)
+            facing += ps.normals[3 * i + 2] == (flip == 2 ? -1.0f : 1.0f);
+        CHECK_EQ_U64(facing, ps.count);
+        sl_pointset_release(&ps);
+        sl_mesh_release(&m);
+    }
+}
+
+/* Fibonacci sphere of radius r around `centre`, appended at positions[3 * first]. */
+static void sphere_points(float *positions, int first, int n, const double centre[3], double r)
+{
+    for (int i = 0; i < n; i++) {
+        double z = 1.0 - (2.0 * i + 1.0) / n, rho = sqrt(1.0 - z * z);
+        double phi = i * 2.39996322972865332;
+        double p[3] = {rho * cos(phi), rho * sin(phi), z};
+        for (int k = 0; k < 3; k++)
+            positions[3 * (first + i) + k] = (float)(centre[k] + r * p[k]);
+    }
+}
+
+static void check_outward(const sl_pointset *ps, const double centre[3], uint64_t first,
+                          uint64_t n, double tolerance_deg, const char *what)
+{
+    uint64_t bad = 0;
+    double worst = 0;
+    for (uint64_t i = first; i < first + n; i++) {
+        double out[3];
+        for (int k = 0; k < 3; k++)
+            out[k] = ps->positions[3 * i + k] - centre[k];
+        double a = angle_deg(ps->normals + 3 * i, out);
+        worst = a > worst ? a : worst;
+        bad += a > tolerance_deg;
+    }
+    CHECK_MSG(bad == 0, "%s: %llu of %llu normals off by more than %g deg (worst %.2f)", what,
+              (unsigned long long)bad, (unsigned long long)n, tolerance_deg, worst);
+}
+
+static void test_pca_spheres(void)
+{
+    sl_range_config cfg = sl_range_default_config();
+    const double c0[3] = {-3, 0.5, 0}, c1[3] = {3, 0, 0.25};
+    sl_mesh m;
+    sl_pointset ps;
+    sl_range_counts c;
+    sl_mesh_init(&m);
+    m.vertex_count = 6000;
+    m.positions = malloc(3 * 6000 * sizeof(float));
+    sphere_points(m.positions, 0, 4000, c0, 1.0);
+    sphere_points(m.positions, 4000, 2000, c1, 0.5);
+    CHECK(run(&cfg, &m, NULL, &ps, &c) == SL_OK);
+    CHECK(c.normal_source == SL_NORMALS_PCA_PROPAGATED);
+    CHECK_EQ_U64(c.pca_components, 2);
+    check_outward(&ps, c0, 0, 4000, 5.0, "sphere 1 (propagated)");
+    check_outward(&ps, c1, 4000, 2000, 5.0, "sphere 2 (propagated)");
+    sl_pointset_release(&ps);
+    sl_mesh_release(&m);
+
+    /* The half facing a stated viewpoint: every normal faces it. */
+    sl_mesh_init(&m);
+    m.positions = malloc(3 * 4000 * sizeof(float));
+    sphere_points(m.positions, 0, 4000, c0, 1.0);
+    /* The cap z > 0.1 (generated from z = 1 down), all of it visible from the viewpoint. */
+    m.vertex_count = 1800;
+    m.has_viewpoint = 1;
+    m.viewpoint[0] = c0[0], m.viewpoint[1] = c0[1], m.viewpoint[2] = 100;
+    CHECK(run(&cfg, &m, NULL, &ps, &c) == SL_OK);
+    CHECK(c.normal_source == SL_NORMALS_PCA_VIEWPOINT);
+    check_outward(&ps, c0, 0, 1800, 5.0, "cap (viewpoint)");
+    sl_pointset_release(&ps);
+    sl_mesh_release(&m);
+}
+
+static void make_temp_dir(char *dir, size_t size)
+{
+    snprintf(dir, size, "%s/scanlod-test-range-XXXXXX", getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
+    if (!mkdtemp(dir))
+        dir[0] = 0;
+}
+
+/* 2 x 2 texture: red, green (top row), blue, white (bottom row). */
+static void test_texture(const char *dir)
+{
+    const float px[] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+    char path[1100];
+    sl_error err;
+    sl_error_init(&err);
+    snprintf(path, sizeof path, "%s/tex.png", dir);
+    CHECK(sl_image_write(path, 2, 2, 3, px, &err) == SL_OK);
+    sl_range_config cfg = sl_range_default_config();
+    for (int per_face = 0; per_face < 3; per_face++) {
+        sl_mesh m;
+        sl_pointset ps;
+        sl_range_counts c;
+        const float v[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+        const float uv[] = {0.25f, 0.75f, 0.5f, 0.5f, 0.75f, 0.25f};
+        sl_mesh_init(&m);
+        m.vertex_count = 3;
+        m.positions = copy_floats(v, 9);
+        m.triangle_count = 1;
+        m.triangles = calloc(3, sizeof(uint32_t));
+        m.triangles[1] = 1, m.triangles[2] = 2;
+        if (per_face == 1)
+            m.face_texcoords = copy_floats(uv, 6);
+        else
+            m.texcoords = copy_floats(uv, 6);
+        snprintf(m.texture_file, sizeof m.texture_file, per_face == 2 ? "missing.png" : "tex.png");
+        CHECK(run(&cfg, &m, dir, &ps, &c) == SL_OK);
+        if (per_face == 2) {
+            CHECK_EQ_U64(c.texture_warnings, 1);
+            CHECK(ps.colors == NULL && strcmp(c.color_source, "none") == 0);
+        } else {
+            CHECK(strcmp(c.color_source, "texture") == 0 && ps.colors);
+            /* (0.25, 0.75) is the centre of the top-left texel; (0.5, 0.5) the mean of all
+             * four; (0.75, 0.25) the bottom-right one. */
+            CHECK(ps.colors && memcmp(ps.colors, "\xff\x00\x00\xff", 4) == 0);
+            CHECK(ps.colors && memcmp(ps.colors + 4, "\x80\x80\x80\xff", 4) == 0);
+            CHECK(ps.colors && memcmp(ps.colors + 8, "\xff\xff\xff\xff", 4) == 0);
+        }
+        sl_pointset_release(&ps);
+        sl_mesh_release(&m);
+    }
+    unlink(path);
+}
+
+static void test_pointset_file(const char *dir)
+{
+    sl_range_config cfg = sl_range_default_config();
+    sl_mesh m;
+    sl_pointset ps, back;
+    sl_range_counts c;
+    sl_error err;
+    sl_error_init(&err);
+    build_defect_mesh(&m);
+    CHECK(run(&cfg, &m, NULL, &ps, &c) == SL_OK);
+    char path[1100];
+    snprintf(path, sizeof path, "%s/%s", dir, SL_POINTSET_FILE);
+    CHECK(sl_pointset_write(path, &ps, &err) == SL_OK);
+    CHECK(sl_pointset_read(path, &back, &err) == SL_OK);
+    CHECK(back.count == ps.count && back.normal_source == ps.normal_source);
+    CHECK(memcmp(back.positions, ps.positions, 12 * ps.count) == 0);
+    CHECK(memcmp(back.normals, ps.normals, 12 * ps.count) == 0);
+    CHECK(back.colors && memcmp(back.colors, ps.colors, 4 * ps.count) == 0);
+    CHECK(memcmp(back.bbox_min, ps.bbox_min, 12) == 0 && memcmp(back.bbox_max, ps.bbox_max, 12) == 0);
+    CHECK(memcmp(&back.mean_spacing, &ps.mean_spacing, sizeof(double)) == 0);
+    sl_pointset_release(&back);
+
+    /* One flipped byte anywhere (header or body) is refused as corrupt. */
+    FILE *f = fopen(path, "r+b");
+    long offsets[] = {3, 40, 100};
+    for (int i = 0; i < 3 && f; i++) {
+        unsigned char b;
+        fseek(f, offsets[i], SEEK_SET);
+        CHECK(fread(&b, 1, 1, f) == 1);
+        b ^= 0x10;
+        fseek(f, offsets[i], SEEK_SET);
+        fwrite(&b, 1, 1, f);
+        fflush(f);
+        sl_error_init(&err);
+        CHECK_MSG(sl_pointset_read(path, &back, &err) == SL_E_CORRUPT, "flip at %ld: %s",
+                  offsets[i], err.message);
+        fseek(f, offsets[i], SEEK_SET);
+        b ^= 0x10;
+        fwrite(&b, 1, 1, f);
+        fflush(f);
+    }
+    if (f)
+        fclose(f);
+    sl_error_init(&err);
+    CHECK(truncate(path, 60) == 0);
+    CHECK(sl_pointset_read(path, &back, &err) == SL_E_CORRUPT);
+    unlink(path);
+    sl_pointset_release(&ps);
+    sl_mesh_release(&m);
+}
+
+int main(void)
+{
+    char dir[512];
+    make_temp_dir(dir, sizeof dir);
+    CHECK(dir[0] != 0);
+    test_defects();
+    test_file_normals();
+    test_grid();
+    test_pca_spheres();
+    test_texture(dir);
+    test_pointset_file(dir);
+    rmdir(dir);
+    return check_report();
+}
