@@ -31,6 +31,7 @@
 #include <unistd.h>
 
 #include "pipeline/atomicfile.h"
+#include "pipeline/io.h"
 #include "pipeline/json.h"
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
@@ -107,6 +108,7 @@ static void child_main(sl_engine *e, int s, const char *item, const char *source
     prctl(PR_SET_PDEATHSIG, SIGKILL);
     if (getppid() != parent)
         _exit(SL_EXIT_TEMPFAIL);
+    sl_io_fault_enter_child();
 #ifndef SCANLOD_SANITIZED /* ASan reserves terabytes of address space */
     if (e->memory_limit_mb > 0) {
         struct rlimit rl = {(rlim_t)e->memory_limit_mb << 20, (rlim_t)e->memory_limit_mb << 20};
@@ -218,7 +220,7 @@ static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, s
     if (rc == 0) {
         sl_engine_path(path, sizeof path, "%s/%s", out_dir, SL_RECORD_FILE);
         rc = sl_record_commit(path, out_dir, NULL, stage->name, stage->version, t->item, key,
-                              t->epoch, NULL, err);
+                              NULL, err);
     }
     if (rc == 0) {
         sl_hash_hex(key, t->key);

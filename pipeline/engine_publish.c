@@ -192,7 +192,7 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
     static const char *const published[] = {"report.json", NULL};
     rc = sl_mkdirs(record_dir, err);
     if (rc == 0)
-        rc = sl_record_commit(record, final_dir, published, "_publish", 1, item, key, 0, NULL, err);
+        rc = sl_record_commit(record, final_dir, published, "_publish", 1, item, key, NULL, err);
     if (rc == 0) {
         e->counts.published++;
         e->items_settled++;

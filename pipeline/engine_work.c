@@ -158,6 +158,21 @@ static int claim_one(sl_engine *e, int s, char *name, size_t name_size, sl_ticke
     return rc ? rc : claimed;
 }
 
+static int claims_outstanding(const sl_engine *e)
+{
+    for (int s = 0; s < e->stage_count; s++) {
+        char **names;
+        int count = 0;
+        sl_error err;
+        sl_error_init(&err);
+        if (sl_queue_list(e->work, e->stages[s]->name, SL_STATE_CLAIMED, &names, &count, &err) == 0)
+            free(names);
+        if (count > 0)
+            return 1;
+    }
+    return 0;
+}
+
 int sl_engine_work(sl_engine *e, sl_error *err)
 {
     double last_reclaim = 0;
@@ -189,8 +204,16 @@ int sl_engine_work(sl_engine *e, sl_error *err)
             }
             return rc;
         }
-        if (!claimed)
-            break;
+        if (!claimed) {
+            /* Others still hold claims: their items may still fail back to ready or
+             * enqueue a next stage, and the exit code should describe the finished
+             * collection, so wait for them (a dead owner is reclaimed above). */
+            if (!claims_outstanding(e))
+                break;
+            struct timespec pause = {0, 250 * 1000 * 1000};
+            nanosleep(&pause, NULL);
+            continue;
+        }
         rc = sl_engine_process(e, s, name, &t, err);
         if (rc && sl_error_class_of(rc) == SL_CLASS_STORAGE) {
             e->stop = 1;

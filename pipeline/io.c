@@ -21,8 +21,12 @@ static struct {
     int op;        /* -1: no fault */
     long at;       /* 1-based call index */
     int err;       /* errno to inject, 0 = crash */
+    int scope;     /* SCOPE_* bits: which processes inject */
+    int armed;     /* this process injects */
     atomic_long calls[OP_COUNT];
-} fault = {0, -1, 0, 0, {0}};
+} fault = {0, -1, 0, 0, 0, 0, {0}};
+
+enum { SCOPE_PARENT = 1, SCOPE_CHILD = 2 };
 
 static int errno_from_name(const char *name)
 {
@@ -61,6 +65,19 @@ void sl_io_fault_init(void)
     fault.err = strcmp(what, "crash") == 0 ? 0 : errno_from_name(what);
     if (fault.err < 0 || at <= 0)
         fault.op = -1;
+    const char *scope = getenv("SCANLOD_FAULT_SCOPE");
+    fault.scope = !scope || !strcmp(scope, "all") ? SCOPE_PARENT | SCOPE_CHILD
+                  : !strcmp(scope, "child")       ? SCOPE_CHILD
+                                                  : SCOPE_PARENT;
+    fault.armed = (fault.scope & SCOPE_PARENT) != 0;
+}
+
+void sl_io_fault_enter_child(void)
+{
+    sl_io_fault_init();
+    fault.armed = (fault.scope & SCOPE_CHILD) != 0;
+    for (int i = 0; i < OP_COUNT; i++)
+        atomic_store(&fault.calls[i], 0);
 }
 
 /* Returns 0 to go on, or an errno to fail with; crashes the process for "crash". */
@@ -68,7 +85,7 @@ static int inject(enum io_op op)
 {
     if (!fault.initialised)
         sl_io_fault_init();
-    if (fault.op < 0)
+    if (fault.op < 0 || !fault.armed)
         return 0;
     long n = atomic_fetch_add(&fault.calls[op], 1) + 1;
     long any = atomic_fetch_add(&fault.calls[OP_ANY], 1) + 1;

@@ -18,7 +18,11 @@ int sl_io_rename(const char *from, const char *to);
 int sl_io_unlink(const char *path);
 int sl_io_mkdir(const char *path, mode_t mode);
 
-/* Reads SCANLOD_FAULT once; called by the engine at start (also lazily). */
+/* Reads SCANLOD_FAULT once; called by the engine at start (also lazily).
+ * SCANLOD_FAULT_SCOPE = all (default) | parent | child picks the processes that inject:
+ * the engine's own process, or each per-item stage process. */
 void sl_io_fault_init(void);
+/* Called first thing in a per-item child: restarts the counts for this process. */
+void sl_io_fault_enter_child(void);
 
 #endif

@@ -77,7 +77,7 @@ static sl_hash digest_outputs(const sl_record *r)
 
 int sl_record_commit(const char *record_path, const char *dir, const char *const *names,
                      const char *stage, uint32_t stage_version, const char *item, sl_hash key,
-                     uint64_t epoch, sl_record *out, sl_error *err)
+                     sl_record *out, sl_error *err)
 {
     sl_record *r = calloc(1, sizeof *r);
     if (!r)
@@ -107,7 +107,6 @@ int sl_record_commit(const char *record_path, const char *dir, const char *const
     snprintf(r->item, sizeof r->item, "%s", item);
     r->stage_version = stage_version;
     r->key = key;
-    r->epoch = epoch;
     r->outputs_digest = digest_outputs(r);
 
     sl_atomic_file f;
@@ -117,8 +116,8 @@ int sl_record_commit(const char *record_path, const char *dir, const char *const
         sl_hash_hex(r->key, key_hex);
         sl_hash_hex(r->outputs_digest, digest_hex);
         rc = sl_atomic_printf(&f, err, "format=scanlod-record 1\nstage=%s\nstage_version=%u\n"
-                              "item=%s\nkey=%s\nepoch=%" PRIu64 "\n",
-                              r->stage, r->stage_version, r->item, key_hex, r->epoch);
+                              "item=%s\nkey=%s\n",
+                              r->stage, r->stage_version, r->item, key_hex);
         for (int i = 0; rc == 0 && i < r->output_count; i++) {
             char hex[SL_HASH_HEX_SIZE];
             sl_hash_hex(r->outputs[i].hash, hex);
@@ -158,8 +157,6 @@ static int parse_record(char *text, sl_record *r)
             snprintf(r->item, sizeof r->item, "%s", v);
         else if (!strcmp(k, "key"))
             have_key = sl_hash_parse(v, &r->key) == 0;
-        else if (!strcmp(k, "epoch"))
-            r->epoch = strtoull(v, NULL, 10);
         else if (!strcmp(k, "outputs_digest"))
             have_digest = sl_hash_parse(v, &r->outputs_digest) == 0;
         else if (!strcmp(k, "output")) {

@@ -4,7 +4,8 @@
  * output file with its size and XXH3-128 hash; `outputs_digest` (hash of those lines) is
  * what the next stage's key chains on, so identical outputs never trigger downstream work.
  *
- * Text format (docs/formats.md): "k=v" lines, "output=NAME SIZE HASH" per file, "end".
+ * Nothing run-specific (epoch, host, time) is in a record: a retried or duplicated run
+ * writes the same bytes. Text format (docs/formats.md): "k=v" lines, "output=NAME SIZE HASH" per file, "end".
  */
 #ifndef SCANLOD_PIPELINE_RECORD_H
 #define SCANLOD_PIPELINE_RECORD_H
@@ -29,7 +30,6 @@ typedef struct sl_record {
     char item[1024];
     sl_hash key;
     sl_hash outputs_digest;
-    uint64_t epoch;
     int output_count;
     sl_record_output outputs[SL_RECORD_MAX_OUTPUTS];
 } sl_record;
@@ -42,7 +42,7 @@ sl_hash sl_stage_key(const char *stage, uint32_t stage_version, uint64_t config_
  * record) in `dir` and writes the record at `record_path` durably. `out` may be NULL. */
 int sl_record_commit(const char *record_path, const char *dir, const char *const *names,
                      const char *stage, uint32_t stage_version, const char *item, sl_hash key,
-                     uint64_t epoch, sl_record *out, sl_error *err);
+                     sl_record *out, sl_error *err);
 
 /* Parses a record without checking its outputs (cheap; for keys already verified). */
 int sl_record_read(const char *record_path, sl_record *out, sl_error *err);

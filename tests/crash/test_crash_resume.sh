@@ -30,6 +30,7 @@ ref=$(tree_digest "$TMP/ref-work" "$TMP/ref-out")
 write_config "$TMP/kill.ini" "$TMP/in" "$TMP/work" "$TMP/out"
 bad_publications=0
 unverified=0
+done_at_kill=()
 for k in $(seq 1 "$kills"); do
   # Uniform over the clean run's duration: early kills land in the scan, late ones in
   # commits and publication.
@@ -40,6 +41,7 @@ for k in $(seq 1 "$kills"); do
   [ "$delay_ms" -ge 1000 ] && sleep $((delay_ms / 1000))
   kill -9 "$pid" 2>/dev/null || true
   wait "$pid" 2>/dev/null || true
+  done_at_kill+=("$(find "$TMP/work/queue" -path '*/done/*' -type f 2>/dev/null | wc -l)")
   # Every published report must be complete and equal to the clean run's.
   while IFS= read -r -d '' f; do
     rel=${f#"$TMP/out/"}
@@ -48,6 +50,7 @@ for k in $(seq 1 "$kills"); do
   run_scanlod verify "$TMP/kill.ini"
   [ "$rc" -eq 0 ] || { unverified=$((unverified + 1)); echo "verify after kill $k: $out $err" >&2; }
 done
+echo "stage results done at each kill: ${done_at_kill[*]} (of $items)" >&2
 check "no published report ever differed from the clean run ($bad_publications)" [ "$bad_publications" -eq 0 ]
 check "every record verified after every kill ($unverified failures)" [ "$unverified" -eq 0 ]
 

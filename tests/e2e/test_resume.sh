@@ -46,7 +46,7 @@ run_scanlod run "$cfg" -q -s range.knn=13
 check "changed [range] key reruns range for all 3 (got: $out)" grep -q "^3 items: 3 stage runs" <<<"$out"
 run_scanlod run "$cfg" -q -s range.knn=13
 check "same key again: nothing to do (got: $out)" grep -q "^nothing to do" <<<"$out"
-run_scanlod run "$cfg" -q -s run.threads=1 -s run.log_level=debug
+run_scanlod run "$cfg" -q -s range.knn=13 -s run.threads=1 -s run.log_level=debug
 check "[run] keys are not stage keys: nothing to do (got: $out)" grep -q "^nothing to do" <<<"$out"
 
 rm -rf "$TMP/out/sub"

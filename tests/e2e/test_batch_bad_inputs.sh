@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Poison batch (reliability T7/T9/T15): good scans mixed with hostile files. Each bad file
+# gets one clear error naming it and its cause, is quarantined at once (not retried), the
+# good items still finish, the batch exits 65, and nothing takes long or much memory.
+source "$(dirname "$0")/../lib.sh"
+
+in="$TMP/in"
+mkdir -p "$in/bad"
+cp "$SCANS/bun_zipper_res4.ply" "$SCANS/cow.ply" "$in/"
+: >"$in/bad/empty.ply"
+printf 'this is not a ply file\n' >"$in/bad/garbage.ply"
+printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n0 0 0\n' >"$in/bad/no_end_header.ply"
+printf 'ply\nformat binary_little_endian 1.0\nelement vertex 4294967295\nproperty float x\nproperty float y\nproperty float z\nend_header\n0123456789' >"$in/bad/huge_count.ply"
+printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n' >"$in/bad/index_out_of_range.ply"
+printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\nnan 0 0\ninf 0 0\nnan nan nan\n3 0 1 2\n' >"$in/bad/all_nan.ply"
+printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uint int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n4294967295 0 1 2\n' >"$in/bad/huge_list.ply"
+head -c 60000 "$SCANS/cow.ply" >"$in/bad/truncated.ply"
+bad_count=$(find "$in/bad" -name '*.ply' | wc -l)
+
+write_config "$TMP/c.ini" "$in" "$TMP/work" "$TMP/out"
+start=$(date +%s)
+run_scanlod run "$TMP/c.ini"
+elapsed=$(( $(date +%s) - start ))
+check "batch exits 65 (got $rc)" [ "$rc" -eq 65 ]
+check "good items published" [ -f "$TMP/out/cow/report.json" -a -f "$TMP/out/bun_zipper_res4/report.json" ]
+check "no bad item published" [ ! -e "$TMP/out/bad" ]
+check "batch took < 60 s ($elapsed)" [ "$elapsed" -lt 60 ]
+for f in "$in"/bad/*.ply; do
+  name=$(basename "$f")
+  n=$(grep -c "quarantined: .*$name" <<<"$err" || true)
+  check "one quarantine line naming $name (got $n)" [ "$n" -eq 1 ]
+done
+check "empty file cause" grep -q "empty.ply: .*empty" <<<"$err"
+check "huge count cause names the count" grep -q "huge_count.ply: .*4294967295" <<<"$err"
+check "index cause names the index" grep -qi "index_out_of_range.ply: .*7" <<<"$err"
+
+run_scanlod status "$TMP/c.ini"
+check "status: $bad_count quarantined, 2 done" grep -qE "^range +0 +0 +2 +0 +$bad_count\$" <<<"$out"
+check "status lists each reason" [ "$(grep -c 'quarantine (badinput)' <<<"$out")" -eq "$bad_count" ]
+
+run_scanlod run "$TMP/c.ini" -q
+check "rerun: quarantined inputs are not retried, exit 65 (got $rc)" [ "$rc" -eq 65 ]
+check "rerun does no work (got: $out)" grep -q "^nothing to do" <<<"$out"
+
+# A fixed input leaves quarantine on the next run.
+cp "$SCANS/cow.ply" "$in/bad/truncated.ply"
+run_scanlod run "$TMP/c.ini" -q
+check "repaired input is rebuilt and published" [ -f "$TMP/out/bad/truncated/report.json" ]
+
+# Bad config: unknown key -> exit 78 with file:line.
+printf '[run]\ninput = %s\nwork = %s\noutput = %s\n[range]\nno_such_key = 1\n' "$in" "$TMP/w2" "$TMP/o2" >"$TMP/bad.ini"
+run_scanlod run "$TMP/bad.ini"
+check "unknown key exits 78 (got $rc)" [ "$rc" -eq 78 ]
+check "unknown key error has file:line (got: $err)" grep -q "bad.ini:6:" <<<"$err"
+run_scanlod run "$TMP/c.ini" -s range.knn=abc
+check "bad -s value exits 78 (got $rc)" [ "$rc" -eq 78 ]
+run_scanlod run
+check "missing config argument exits 64 (got $rc)" [ "$rc" -eq 64 ]
+run_scanlod run "$TMP/nonexistent.ini"
+check "missing config file exits 78 (got $rc)" [ "$rc" -eq 78 ]
+finish
