@@ -8,7 +8,19 @@
  * generated from the same tables (`scanlod config-reference`) and a test keeps it equal.
  *
  * Paths: a relative PATH value in a file is relative to that file's directory; in a
- * `-s` override, relative to the current directory.
+ * `-s` override or a default, relative to the current directory. Stored absolute,
+ * without "." segments or repeated slashes; ".." is kept (symlinks resolve as the
+ * kernel does).
+ *
+ * Errors: on failure sl_error has code SL_E_CONFIG, `file` holds the place
+ * ("FILE:LINE", "-s section.key=value", or FILE for a missing required option) and
+ * `message` the rest, so sl_error_format() prints the one line a user sees, e.g.
+ * "site.ini:12: [range] k: 0 is out of range [1, 64]". A default that fails its own
+ * validation is a bug in a table: SL_E_INTERNAL.
+ *
+ * Values are canonicalised before they are stored and hashed: BOOL -> "true"/"false",
+ * INT -> decimal, DOUBLE -> "%.17g", LIST -> words trimmed and joined by ",", PATH ->
+ * absolute; so `yes` vs `on` or `8` vs `08` is not a change.
  *
  * The hash a stage is keyed on covers exactly the options of its own section, by their
  * resolved values (defaults included), so a comment or a key of another stage never
@@ -38,7 +50,8 @@ typedef struct sl_option {
     const char *name;
     sl_option_type type;
     const char *default_value; /* text; NULL = required (no default) */
-    double min, max;           /* INT/DOUBLE/LIST ranges, inclusive */
+    double min, max;           /* INT/DOUBLE/LIST ranges, inclusive; checked only if
+                                  min < max (0, 0 = unbounded) */
     const char *choices;       /* ENUM only */
     const char *help;          /* one or more sentences; shown in reference.ini */
 } sl_option;
@@ -48,24 +61,35 @@ typedef struct sl_option {
 
 typedef struct sl_config sl_config;
 
-/* `tables` is a NULL-terminated array of option tables. `path` may be NULL (defaults and
- * overrides only; required options then fail). */
+/* `tables` is a NULL-terminated array of option tables; they must outlive `*out` (the
+ * config points into them). `path` may be NULL (defaults and overrides only; required
+ * options then fail). `overrides` are "section.key=value" texts (the `-s` arguments),
+ * applied after the file in order, so a later one wins. On error *out is NULL. */
 int sl_config_load(sl_config **out, const sl_option *const *tables, const char *path,
                    const char *const *overrides, int override_count, sl_error *err);
 void sl_config_free(sl_config *cfg);
 
-/* Resolved values; the option must exist in the tables (else abort: a programming bug). */
+/* Resolved values; the option must exist in the tables and have the getter's type
+ * (else abort: a programming bug). sl_config_string works for every type and returns
+ * the canonical text (LIST: "a,b,c"). */
 const char *sl_config_string(const sl_config *cfg, const char *section, const char *name);
 int64_t sl_config_int(const sl_config *cfg, const char *section, const char *name);
 double sl_config_double(const sl_config *cfg, const char *section, const char *name);
 int sl_config_bool(const sl_config *cfg, const char *section, const char *name);
 
-/* Hash of the resolved values of every option in `section` (canonical text, xxh3-64). */
+/* Hash of the resolved values of every option in `section` (canonical text, xxh3-64):
+ * XXH3-64 of the lines "section.name=value\n" in table order. A section without
+ * options hashes the empty text. */
 uint64_t sl_config_section_hash(const sl_config *cfg, const char *section);
 /* The config file it came from ("" if none). */
 const char *sl_config_path(const sl_config *cfg);
 
-/* Writes the commented reference file for `tables`. */
+/* Writes the commented reference file for `tables`: every option with its help, type,
+ * range and default, grouped by section in order of first appearance. Deterministic. */
 void sl_config_write_reference(FILE *out, const sl_option *const *tables);
+
+/* Every option table of the program ([run], [queue], then each registered stage's),
+ * NULL-terminated. Defined by the engine (pipeline/engine_options.c). */
+const sl_option *const *sl_all_option_tables(void);
 
 #endif
