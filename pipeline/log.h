@@ -1,6 +1,7 @@
 /* Logging: a human log and a JSON-lines event log per run, in `[run] logs`.
  *
- * Every line carries the run id, stage and item. Results go to stdout (by the commands),
+ * Every line carries the stage and item; events carry the run id, human lines have it in
+ * their file's name (`<run_id>.log`). Results go to stdout (by the commands),
  * chatter to stderr and the human log; the progress bar is drawn on stderr only when it
  * is a terminal, and is cleared before any log line. Child processes (one per item) keep
  * writing to the same files: each line is a single O_APPEND write.
@@ -16,8 +17,13 @@ enum sl_log_level { SL_LOG_ERROR = 0, SL_LOG_WARN, SL_LOG_INFO, SL_LOG_DEBUG };
 
 extern int sl_log_level_current; /* messages above it are skipped */
 
-/* Opens `<dir>/<run_id>.log` and `<dir>/<run_id>.jsonl` (creating dir). With dir == NULL
- * logs only to stderr. `stderr_level` caps what is echoed to stderr. */
+/* Opens `<dir>/<run_id>.log` and `<dir>/<run_id>.jsonl` (creating dir like mkdir -p;
+ * O_APPEND|O_CREAT|O_CLOEXEC, so forked children share them). With dir == NULL logs only
+ * to stderr. `stderr_level` caps what is echoed to stderr (-1: nothing); the files get
+ * everything up to sl_log_level_current. run_id: non-empty, no '/', under 256 bytes,
+ * else SL_E_USAGE. Before sl_log_open and after sl_log_close, lines go to stderr only
+ * (up to SL_LOG_INFO) and events are dropped. Not thread-safe against concurrent
+ * logging; call it before starting threads or children. */
 int sl_log_open(const char *dir, const char *run_id, int stderr_level, sl_error *err);
 void sl_log_close(void);
 const char *sl_log_run_id(void);
@@ -28,16 +34,26 @@ const char *sl_log_run_id(void);
             sl_log_write((level), (stage), (item), __VA_ARGS__);                      \
     } while (0)
 
+/* One line "2026-11-22T05:40:12.123Z INFO  [stage] item: message" (UTC; "[stage] " and
+ * "item: " left out when NULL), written with one write() to the log file and, up to
+ * stderr_level, to stderr. Control characters in the message become spaces; a line is
+ * cut at 4 KiB ("..."). Safe from any thread and from forked children. */
 void sl_log_write(int level, const char *stage, const char *item, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 
 /* One JSON line: {"time":..,"run":..,"host":..,"pid":..,"event":..,"stage":..,"item":..,
- * "duration_s":..,"error":{"code":..,"class":..,"file":..,"message":..},<extra>} where
- * `extra_json` (may be NULL) is a comma-separated list of members ("\"k\":1,\"j\":2"). */
+ * "duration_s":..,"error":{"code":..,"class":..,"errno":..,"file":..,"message":..},<extra>}
+ * where `extra_json` (may be NULL) is a comma-separated list of members
+ * ("\"k\":1,\"j\":2"). Every key is always present: stage/item null when NULL,
+ * duration_s null when negative, error null when err is NULL or holds no failure.
+ * Schema in docs/logs.md. */
 void sl_log_event(const char *event, const char *stage, const char *item, double duration_s,
                   const sl_error *err, const char *extra_json);
 
-/* Progress bar on stderr when it is a TTY (no-op otherwise). label may be NULL. */
+/* Progress bar on stderr when it is a TTY (no-op otherwise), redrawn with "\r" at most
+ * 10 times a second (calls in between are dropped): "[###.......] 12/40 items  LABEL 45%"
+ * with the bar filled by (done + item_fraction) / total; item_fraction < 0 leaves the
+ * percentage out; label may be NULL. Cut to the terminal width. Call from one thread. */
 void sl_log_progress(uint64_t done, uint64_t total, const char *label, double item_fraction);
 void sl_log_progress_clear(void);
 

@@ -22,8 +22,10 @@ typedef struct sl_progress {
     volatile sig_atomic_t *interrupt_flag;
 } sl_progress;
 
-/* Returns nonzero if interrupted. Reports only on the calling thread's first call per
- * 1/200 step so tight loops stay cheap. */
+/* Returns nonzero if interrupted. Reports only on the owning thread's first call per
+ * 1/200 step (or on a new phase) so tight loops stay cheap. `fraction` is clamped to
+ * [0, 1]. The owning thread is the caller outside OpenMP parallel regions and thread 0
+ * (the master, i.e. the thread that opened the region) inside one. */
 int sl_progress_step(sl_progress *p, const char *phase, double fraction);
 
 /* Nonzero once an interrupt was requested (cheap; for inner loops). */
