@@ -154,6 +154,19 @@ static int make_work_layout(sl_engine *e, sl_error *err)
     return rc;
 }
 
+/* Hash of every section the stage reads (its own by default), in declaration order. */
+static uint64_t stage_config_hash(const sl_config *cfg, const sl_stage *stage)
+{
+    if (!stage->sections)
+        return sl_config_section_hash(cfg, stage->name);
+    uint64_t hashes[8] = {0};
+    int n = 0;
+    for (; stage->sections[n] && n < 8; n++)
+        hashes[n] = sl_config_section_hash(cfg, stage->sections[n]);
+    sl_hash h = sl_hash_bytes(hashes, (size_t)n * sizeof hashes[0]);
+    return h.hi ^ h.lo;
+}
+
 static void make_run_id(const sl_identity *id, const char *command, char *buf, size_t size)
 {
     time_t now = time(NULL);
@@ -188,7 +201,7 @@ int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err
     e->max_crashes = (int)sl_config_int(e->cfg, "queue", "max_crashes");
     for (const sl_stage *const *s = sl_stage_registry(); *s && e->stage_count < SL_MAX_STAGES;
          s++) {
-        e->config_hash[e->stage_count] = sl_config_section_hash(e->cfg, (*s)->name);
+        e->config_hash[e->stage_count] = stage_config_hash(e->cfg, *s);
         e->stages[e->stage_count++] = *s;
     }
     sl_identity_self(&e->self);

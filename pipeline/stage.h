@@ -37,7 +37,10 @@ typedef struct sl_stage {
     const char *name;         /* also the config section */
     const char *description;  /* one line, for --help and docs */
     uint32_t version;         /* bump when the output for the same input changes */
-    const sl_option *options; /* this stage's options (section == name) */
+    const sl_option *options; /* the options this stage declares (usually section == name) */
+    /* Config sections the stage reads, NULL-terminated; NULL = just its own. The stage key
+     * hashes exactly these, so a key of another section never reruns this stage. */
+    const char *const *sections;
     /* Reads the stage's section into a freshly allocated config struct. */
     int (*configure)(const sl_config *cfg, void **stage_config, sl_error *err);
     void (*release_config)(void *stage_config);
