@@ -2,8 +2,8 @@
  *
  * Build: items {centroid, triangle} are partitioned in place by quickselect around the
  * median of the widest centroid axis, top-down; a range of at most SL_BVH_LEAF_SIZE
- * items becomes a leaf, which copies its corners out in leaf order and computes its
- * bounds; inner bounds are the union of the children's, computed after both are built.
+ * items becomes a leaf. Then the corners are copied out in leaf order and the bounds
+ * computed bottom-up in one reverse sweep over the nodes.
  * Subtrees above PARALLEL_CUTOFF triangles run as OpenMP tasks; offsets come from
  * subtree_nodes(), so the layout does not depend on the schedule.
  */
@@ -115,28 +115,52 @@ static void select_kth(bvh_item *items, uint64_t n, uint64_t k, int axis)
     }
 }
 
+/* Leaves only record their range here; corners and bounds are filled afterwards by
+ * fill_corners() and fill_bounds(), which stream through memory instead of chasing
+ * mesh indices inside the recursion. */
 static void make_leaf(bvh_build *b, uint64_t node_index, uint64_t begin, uint64_t count)
 {
-    sl_triangle_bvh *bvh = b->bvh;
-    sl_bvh_node *node = &bvh->nodes[node_index];
-    for (int a = 0; a < 3; a++) {
-        node->lo[a] = FLT_MAX;
-        node->hi[a] = -FLT_MAX;
-    }
-    for (uint64_t i = begin; i < begin + count; i++) {
-        uint32_t t = b->items[i].triangle;
-        bvh->source[i] = t;
-        for (int c = 0; c < 3; c++) {
-            const float *v = &b->mesh->positions[3 * (uint64_t)b->mesh->triangles[3 * (uint64_t)t + c]];
-            for (int a = 0; a < 3; a++) {
-                bvh->corners[9 * i + 3 * c + a] = v[a];
-                node->lo[a] = min_f(node->lo[a], v[a]);
-                node->hi[a] = max_f(node->hi[a], v[a]);
-            }
-        }
-    }
+    sl_bvh_node *node = &b->bvh->nodes[node_index];
+    for (uint64_t i = begin; i < begin + count; i++)
+        b->bvh->source[i] = b->items[i].triangle;
     node->first = (uint32_t)begin;
     node->count = (uint32_t)count;
+}
+
+static void fill_corners(sl_triangle_bvh *bvh, const sl_mesh *mesh)
+{
+#pragma omp parallel for schedule(static)
+    for (uint64_t i = 0; i < bvh->triangle_count; i++) {
+        const uint32_t *tri = &mesh->triangles[3 * (uint64_t)bvh->source[i]];
+        for (int c = 0; c < 3; c++)
+            memcpy(&bvh->corners[9 * i + 3 * c], &mesh->positions[3 * (uint64_t)tri[c]],
+                   3 * sizeof(float));
+    }
+}
+
+/* Children follow their parent in the array, so a reverse sweep sees both children of
+ * a node before the node itself. */
+static void fill_bounds(sl_triangle_bvh *bvh)
+{
+    for (uint64_t n = bvh->node_count; n-- > 0;) {
+        sl_bvh_node *node = &bvh->nodes[n];
+        if (node->count) {
+            const float *f = &bvh->corners[9 * (uint64_t)node->first];
+            for (int a = 0; a < 3; a++)
+                node->lo[a] = node->hi[a] = f[a];
+            for (uint32_t k = 1; k < 3 * node->count; k++)
+                for (int a = 0; a < 3; a++) {
+                    node->lo[a] = min_f(node->lo[a], f[3 * k + a]);
+                    node->hi[a] = max_f(node->hi[a], f[3 * k + a]);
+                }
+            continue;
+        }
+        const sl_bvh_node *l = &bvh->nodes[n + 1], *r = &bvh->nodes[node->first];
+        for (int a = 0; a < 3; a++) {
+            node->lo[a] = min_f(l->lo[a], r->lo[a]);
+            node->hi[a] = max_f(l->hi[a], r->hi[a]);
+        }
+    }
 }
 
 static int widest_centroid_axis(const bvh_item *items, uint64_t count)
@@ -174,15 +198,8 @@ static void build_node(bvh_build *b, uint64_t node_index, uint64_t begin, uint64
         build_node(b, left, begin, left_count);
         build_node(b, right, begin + left_count, count - left_count);
     }
-
-    sl_bvh_node *node = &b->bvh->nodes[node_index];
-    const sl_bvh_node *l = &b->bvh->nodes[left], *r = &b->bvh->nodes[right];
-    for (int a = 0; a < 3; a++) {
-        node->lo[a] = min_f(l->lo[a], r->lo[a]);
-        node->hi[a] = max_f(l->hi[a], r->hi[a]);
-    }
-    node->first = (uint32_t)right;
-    node->count = 0;
+    b->bvh->nodes[node_index].first = (uint32_t)right;
+    b->bvh->nodes[node_index].count = 0;
 }
 
 int sl_triangle_bvh_build(sl_triangle_bvh *bvh, const sl_mesh *mesh, sl_error *err)
@@ -222,8 +239,9 @@ int sl_triangle_bvh_build(sl_triangle_bvh *bvh, const sl_mesh *mesh, sl_error *e
 #pragma omp parallel default(none) shared(b, n)
 #pragma omp single
     build_node(&b, 0, 0, n);
-
     free(items);
+    fill_corners(bvh, mesh);
+    fill_bounds(bvh);
     return SL_OK;
 }
 
