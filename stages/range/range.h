@@ -82,6 +82,8 @@ typedef struct sl_range_counts {
     double grid_max_edge;          /* world units; 0 when no grid */
     int grid_flipped;              /* grid winding flipped to face the scanner */
     uint64_t normal_fallbacks;     /* file normal zero/non-finite (or zero face-normal sum) */
+    int normals_flipped;           /* face normals pointed inwards (an inside-out mesh) and
+                                      were all flipped */
     uint64_t pca_components;       /* connected components of the kNN graph (propagation) */
     uint64_t texture_warnings;     /* texture missing or unreadable, or no texcoords */
     char texture_warning[320];     /* the first such warning, "" if none */

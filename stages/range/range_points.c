@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry/mesh_distance.h"
 #include "stages/range/range_internal.h"
 
 double range_mean_spacing(const sl_kdtree *tree, const float *positions, uint64_t point_count)
@@ -65,6 +66,40 @@ static int check_usable(const sl_range_config *cfg, const sl_mesh *mesh,
     return SL_OK;
 }
 
+/* An inside-out closed mesh (horse.ply is one: watertight, negative volume) would give
+ * the samples stage inverted signs, so its normals are flipped as a whole. Only
+ * watertight meshes: for them the sign of the volume is exact; open scans keep the
+ * orientation their winding gives (grid meshes already face the scanner). */
+static int orient_closed_mesh(const range_clean *clean, sl_pointset *ps,
+                              sl_range_counts *counts, sl_error *err)
+{
+    sl_mesh view; /* borrows the arrays; not released */
+    sl_mesh_init(&view);
+    view.vertex_count = ps->count;
+    view.positions = ps->positions;
+    view.triangle_count = clean->triangle_count;
+    view.triangles = clean->triangles;
+    sl_mesh_topology topology;
+    int rc = sl_mesh_topology_compute(&view, &topology, err);
+    if (rc != SL_OK || !topology.watertight)
+        return rc;
+    double volume = 0; /* six times the signed volume, in triangle order */
+    for (uint64_t t = 0; t < clean->triangle_count; t++) {
+        const float *a = ps->positions + 3 * (uint64_t)clean->triangles[3 * t];
+        const float *b = ps->positions + 3 * (uint64_t)clean->triangles[3 * t + 1];
+        const float *c = ps->positions + 3 * (uint64_t)clean->triangles[3 * t + 2];
+        volume += a[0] * ((double)b[1] * c[2] - (double)b[2] * c[1]) -
+                  a[1] * ((double)b[0] * c[2] - (double)b[2] * c[0]) +
+                  a[2] * ((double)b[0] * c[1] - (double)b[1] * c[0]);
+    }
+    if (volume < 0) {
+        counts->normals_flipped = 1;
+        for (uint64_t i = 0; i < 3 * ps->count; i++)
+            ps->normals[i] = -ps->normals[i];
+    }
+    return SL_OK;
+}
+
 /* Face or PCA normals, then the file's where asked and usable. */
 static int compute_normals(const sl_range_config *cfg, const sl_mesh *mesh,
                            const range_clean *clean, const sl_kdtree *tree, sl_pointset *ps,
@@ -76,6 +111,8 @@ static int compute_normals(const sl_range_config *cfg, const sl_mesh *mesh,
         ps->normal_source = from_grid ? SL_NORMALS_RANGE_GRID : SL_NORMALS_FACES;
         rc = range_face_normals(ps->positions, ps->count, clean->triangles,
                                 clean->triangle_count, ps->normals, counts, progress, err);
+        if (rc == SL_OK && !from_grid)
+            rc = orient_closed_mesh(clean, ps, counts, err);
     } else {
         rc = range_pca_normals(tree, ps->positions, ps->count, cfg->knn,
                                mesh->has_viewpoint ? mesh->viewpoint : NULL, ps->normals,

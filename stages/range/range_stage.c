@@ -98,6 +98,7 @@ static void report_counts(sl_json *j, const sl_range_counts *c, const sl_pointse
     sl_json_double(j, "grid_max_edge", c->grid_max_edge);
     sl_json_string(j, "normal_source", sl_normal_source_name(c->normal_source));
     sl_json_u64(j, "normal_fallbacks", c->normal_fallbacks);
+    sl_json_bool(j, "normals_flipped_outward", c->normals_flipped);
     sl_json_u64(j, "pca_components", c->pca_components);
     sl_json_string(j, "color_source", c->color_source);
     sl_json_u64(j, "texture_warnings", c->texture_warnings);
