@@ -1,0 +1,219 @@
+/* Welding cells' triangles into an indexed mesh (see lod_mesh.h). */
+#include "runtime/lod_mesh.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void sl_lod_mesh_release(sl_lod_mesh *m)
+{
+    free(m->positions);
+    free(m->normals);
+    free(m->colors);
+    free(m->indices);
+    memset(m, 0, sizeof *m);
+}
+
+int sl_mesh_builder_init(sl_mesh_builder *b, const sl_octree *tree, uint32_t *scratch)
+{
+    memset(b, 0, sizeof *b);
+    b->tree = tree;
+    if (!scratch) {
+        scratch = malloc((tree->crossing_count ? tree->crossing_count : 1) * sizeof *scratch);
+        if (!scratch)
+            return -1;
+        memset(scratch, 0xff, (size_t)tree->crossing_count * sizeof *scratch);
+        b->owns_scratch = 1;
+    }
+    b->vertex_of_crossing = scratch;
+    return 0;
+}
+
+static int grow(void **p, uint64_t *cap, uint64_t need, size_t elem)
+{
+    if (need <= *cap)
+        return 0;
+    uint64_t n = *cap ? *cap : 1024;
+    while (n < need)
+        n *= 2;
+    void *q = realloc(*p, (size_t)n * elem);
+    if (!q)
+        return -1;
+    *p = q;
+    *cap = n;
+    return 0;
+}
+
+static int reserve_vertices(sl_mesh_builder *b, uint64_t need)
+{
+    sl_lod_mesh *m = &b->mesh;
+    uint64_t cap = b->vertex_capacity, c1 = cap, c2 = cap, c3 = cap;
+    if (grow((void **)&m->positions, &c1, need, 3 * sizeof(float)) ||
+        grow((void **)&b->used, &c2, need, sizeof(uint32_t)) ||
+        (b->tree->crossing_color && grow((void **)&m->colors, &c3, need, 4)))
+        return -1;
+    b->vertex_capacity = c1;
+    return 0;
+}
+
+/* Vertex index of a crossing, mapping it on first use. */
+static uint32_t vertex_of(sl_mesh_builder *b, uint32_t crossing)
+{
+    uint32_t v = b->vertex_of_crossing[crossing];
+    if (v != SL_OCTREE_NONE)
+        return v;
+    sl_lod_mesh *m = &b->mesh;
+    if (reserve_vertices(b, m->vertex_count + 1)) {
+        b->failed = 1;
+        return 0;
+    }
+    v = (uint32_t)m->vertex_count++;
+    memcpy(m->positions + 3 * (size_t)v, b->tree->crossing_position + 3 * (size_t)crossing,
+           3 * sizeof(float));
+    if (m->colors)
+        memcpy(m->colors + 4 * (size_t)v, b->tree->crossing_color + 4 * (size_t)crossing, 4);
+    b->used[v] = crossing;
+    b->vertex_of_crossing[crossing] = v;
+    return v;
+}
+
+/* A cell's own vertex at the mean of a loop (not in the crossing table). */
+static uint32_t centroid_vertex(sl_mesh_builder *b, const sl_mc_triangles *tri, int loop,
+                                const uint32_t point_crossing[SL_MC_MAX_POINTS])
+{
+    sl_lod_mesh *m = &b->mesh;
+    if (reserve_vertices(b, m->vertex_count + 1)) {
+        b->failed = 1;
+        return 0;
+    }
+    uint32_t v = (uint32_t)m->vertex_count++;
+    double sum[3] = {0, 0, 0}, col[4] = {0, 0, 0, 0};
+    int n = tri->loop_sizes[loop];
+    for (int i = 0; i < n; i++) {
+        uint32_t c = point_crossing[tri->loop_points[loop][i]];
+        for (int a = 0; a < 3; a++)
+            sum[a] += b->tree->crossing_position[3 * (size_t)c + a];
+        if (m->colors)
+            for (int k = 0; k < 4; k++)
+                col[k] += b->tree->crossing_color[4 * (size_t)c + k];
+    }
+    for (int a = 0; a < 3; a++)
+        m->positions[3 * (size_t)v + a] = (float)(sum[a] / n);
+    if (m->colors)
+        for (int k = 0; k < 4; k++)
+            m->colors[4 * (size_t)v + k] = (uint8_t)lround(col[k] / n);
+    b->used[v] = SL_OCTREE_NONE;
+    return v;
+}
+
+void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
+                              const uint32_t point_crossing[SL_MC_MAX_POINTS])
+{
+    if (b->failed || tri->count == 0)
+        return;
+    uint32_t centroid[SL_MC_MAX_LOOPS];
+    for (int l = 0; l < tri->loops; l++)
+        if (tri->centroids >> l & 1)
+            centroid[l] = centroid_vertex(b, tri, l, point_crossing);
+    sl_lod_mesh *m = &b->mesh;
+    uint64_t cap = b->triangle_capacity;
+    if (grow((void **)&m->indices, &cap, m->triangle_count + tri->count, 3 * sizeof(uint32_t))) {
+        b->failed = 1;
+        return;
+    }
+    b->triangle_capacity = cap;
+    for (int t = 0; t < tri->count; t++) {
+        uint32_t *out = m->indices + 3 * (size_t)m->triangle_count;
+        for (int k = 0; k < 3; k++) {
+            int p = tri->points[t][k];
+            out[k] = p >= SL_MC_MAX_POINTS ? centroid[p - SL_MC_MAX_POINTS]
+                                           : vertex_of(b, point_crossing[p]);
+        }
+        m->triangle_count++;
+    }
+}
+
+static void compute_normals(sl_lod_mesh *m)
+{
+    memset(m->normals, 0, (size_t)m->vertex_count * 3 * sizeof(float));
+    for (uint64_t t = 0; t < m->triangle_count; t++) {
+        const uint32_t *i = m->indices + 3 * t;
+        const float *p0 = m->positions + 3 * (size_t)i[0], *p1 = m->positions + 3 * (size_t)i[1],
+                    *p2 = m->positions + 3 * (size_t)i[2];
+        float u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+        float v[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+        float n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        for (int k = 0; k < 3; k++)
+            for (int a = 0; a < 3; a++)
+                m->normals[3 * (size_t)i[k] + a] += n[a]; /* area-weighted (|n| = 2 area) */
+    }
+    for (uint64_t v = 0; v < m->vertex_count; v++) {
+        float *n = m->normals + 3 * v;
+        float len = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (len > 0)
+            for (int a = 0; a < 3; a++)
+                n[a] /= len;
+    }
+}
+
+static void reset_scratch(sl_mesh_builder *b)
+{
+    for (uint64_t v = 0; v < b->mesh.vertex_count; v++)
+        if (b->used && b->used[v] != SL_OCTREE_NONE)
+            b->vertex_of_crossing[b->used[v]] = SL_OCTREE_NONE;
+}
+
+int sl_mesh_builder_finish(sl_mesh_builder *b, sl_lod_mesh *out)
+{
+    reset_scratch(b);
+    sl_lod_mesh *m = &b->mesh;
+    if (!b->failed) {
+        m->normals = malloc((m->vertex_count ? m->vertex_count : 1) * 3 * sizeof(float));
+        if (!m->normals)
+            b->failed = 1;
+        else
+            compute_normals(m);
+    }
+    free(b->used);
+    b->used = NULL;
+    if (b->owns_scratch)
+        free(b->vertex_of_crossing);
+    b->vertex_of_crossing = NULL;
+    if (b->failed) {
+        sl_lod_mesh_release(m);
+        return -1;
+    }
+    *out = *m;
+    memset(m, 0, sizeof *m);
+    return 0;
+}
+
+void sl_mesh_builder_abort(sl_mesh_builder *b)
+{
+    reset_scratch(b);
+    free(b->used);
+    if (b->owns_scratch)
+        free(b->vertex_of_crossing);
+    sl_lod_mesh_release(&b->mesh);
+    memset(b, 0, sizeof *b);
+}
+
+int sl_octree_level_mesh(const sl_octree *tree, uint32_t level, sl_lod_mesh *out)
+{
+    memset(out, 0, sizeof *out);
+    if (level > tree->depth)
+        return -1;
+    sl_mesh_builder b;
+    if (sl_mesh_builder_init(&b, tree, NULL))
+        return -1;
+    const sl_mc_triangles *table = sl_mc_uniform_table();
+    uint32_t first = tree->level_first[level], count = tree->level_count[level];
+    for (uint32_t i = 0; i < count; i++) {
+        const sl_octree_node *n = &tree->nodes[first + i];
+        uint32_t point_crossing[SL_MC_MAX_POINTS];
+        for (int e = 0; e < 12; e++)
+            point_crossing[e] = (n->edge_mask >> e & 1) ? sl_octree_crossing(tree, n, e) : 0;
+        sl_mesh_builder_add_cell(&b, &table[n->inside], point_crossing);
+    }
+    return sl_mesh_builder_finish(&b, out);
+}

@@ -1,0 +1,49 @@
+/* Meshes cut from the octree: triangles given as crossing ids are welded into an indexed
+ * mesh (a crossing shared by several cells, at whatever level, becomes one vertex), with
+ * colours from the crossings and area-weighted vertex normals. Cost is linear in the
+ * output: the crossing -> vertex map is a scratch array the builder resets entry by entry.
+ */
+#ifndef SCANLOD_RUNTIME_LOD_MESH_H
+#define SCANLOD_RUNTIME_LOD_MESH_H
+
+#include <stdint.h>
+
+#include "runtime/mc_cube.h"
+#include "runtime/octree.h"
+
+typedef struct sl_lod_mesh {
+    uint64_t vertex_count;
+    uint64_t triangle_count;
+    float *positions;  /* 3 * vertex_count, world */
+    float *normals;    /* 3 * vertex_count, unit (zero for isolated vertices) */
+    uint8_t *colors;   /* 4 * vertex_count RGBA, or NULL when the octree has none */
+    uint32_t *indices; /* 3 * triangle_count */
+} sl_lod_mesh;
+
+void sl_lod_mesh_release(sl_lod_mesh *m);
+
+typedef struct sl_mesh_builder {
+    const sl_octree *tree;
+    uint32_t *vertex_of_crossing; /* scratch, crossing_count entries, all NONE when idle */
+    sl_lod_mesh mesh;
+    uint64_t vertex_capacity, triangle_capacity;
+    uint32_t *used;               /* crossing ids mapped so far (to reset the scratch) */
+    int owns_scratch;
+    int failed;                   /* out of memory */
+} sl_mesh_builder;
+
+/* `scratch` may be NULL (allocated here, O(crossings) once) or a caller-kept array of
+ * crossing_count entries all SL_OCTREE_NONE, which lets repeated extractions stay O(m). */
+int sl_mesh_builder_init(sl_mesh_builder *b, const sl_octree *tree, uint32_t *scratch);
+/* Adds the triangles of one cell: `point_id` maps the cell's point ids to crossing ids;
+ * centroid points (SL_MC_CENTROID_POINT) become new vertices at their loop's mean. */
+void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
+                              const uint32_t point_crossing[SL_MC_MAX_POINTS]);
+/* Finishes normals, resets the scratch, moves the mesh to *out. Returns -1 on OOM. */
+int sl_mesh_builder_finish(sl_mesh_builder *b, sl_lod_mesh *out);
+void sl_mesh_builder_abort(sl_mesh_builder *b);
+
+/* The uniform mesh of one level (all level-L nodes with the 256-case table). */
+int sl_octree_level_mesh(const sl_octree *tree, uint32_t level, sl_lod_mesh *out);
+
+#endif

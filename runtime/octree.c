@@ -1,0 +1,64 @@
+/* Octree basics: lifetime, lookup, Morton codes (see octree.h). */
+#include "runtime/octree.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+void sl_octree_init(sl_octree *t)
+{
+    memset(t, 0, sizeof *t);
+}
+
+void sl_octree_release(sl_octree *t)
+{
+    free(t->nodes);
+    free(t->crossing_position);
+    free(t->crossing_color);
+    free(t->node_crossings);
+    sl_octree_init(t);
+}
+
+static uint64_t spread_bits(uint32_t v)
+{
+    uint64_t x = v & 0xfffffu; /* 20 bits */
+    x = (x | x << 32) & 0x001f00000000ffffULL;
+    x = (x | x << 16) & 0x001f0000ff0000ffULL;
+    x = (x | x << 8) & 0x100f00f00f00f00fULL;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+    x = (x | x << 2) & 0x1249249249249249ULL;
+    return x;
+}
+
+uint64_t sl_morton3(uint32_t x, uint32_t y, uint32_t z)
+{
+    return spread_bits(x) | spread_bits(y) << 1 | spread_bits(z) << 2;
+}
+
+void sl_octree_corner_world(const sl_octree *t, const sl_octree_node *n, int c, double out[3])
+{
+    double size = t->leaf_size * (double)(1u << n->level);
+    int32_t p[3] = {n->x + (c & 1), n->y + (c >> 1 & 1), n->z + (c >> 2 & 1)};
+    for (int a = 0; a < 3; a++)
+        out[a] = t->origin[a] + p[a] * size;
+}
+
+uint32_t sl_octree_find(const sl_octree *t, uint32_t level, int64_t x, int64_t y, int64_t z)
+{
+    if (level > t->depth || x < 0 || y < 0 || z < 0 || x >= (1 << 20) || y >= (1 << 20) ||
+        z >= (1 << 20))
+        return SL_OCTREE_NONE;
+    uint64_t key = sl_morton3((uint32_t)x, (uint32_t)y, (uint32_t)z);
+    uint32_t lo = t->level_first[level], hi = lo + t->level_count[level];
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        const sl_octree_node *n = &t->nodes[mid];
+        uint64_t k = sl_morton3((uint32_t)n->x, (uint32_t)n->y, (uint32_t)n->z);
+        if (k == key)
+            return mid;
+        if (k < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return SL_OCTREE_NONE;
+}

@@ -1,0 +1,80 @@
+/* The marching-cube octree (paper 1, section 2.2; docs/octree.md).
+ *
+ * Nodes are cubes of the level's grid: a level-l node has edge length leaf_size * 2^l and
+ * integer coordinates (x, y, z) in level-l cells, so its world corner is
+ * origin + (x, y, z) * leaf_size * 2^l. Each node holds the paper's marching-cube node
+ * data: 8 vertex signs, and for every edge whose ends differ in sign, the crossing point
+ * ("edge ratio"). Crossings are shared: a crossing is one entry of the crossing table, and
+ * a parent's crossing on an edge *is* the child's crossing on the half-edge it came from
+ * (the ratio extension of section 2.2), so meshes of any mix of levels share vertices.
+ *
+ * Layout: nodes sorted by level, root (level `depth`) first, leaves (level 0) last; within
+ * a level in Morton order, so the children of a node are contiguous, in octant order
+ * (octant o = child at (2x + (o & 1), 2y + (o >> 1 & 1), 2z + (o >> 2))).
+ */
+#ifndef SCANLOD_RUNTIME_OCTREE_H
+#define SCANLOD_RUNTIME_OCTREE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define SL_OCTREE_MAX_LEVELS 21 /* coordinates are packed in 20 bits */
+#define SL_OCTREE_NONE UINT32_MAX
+
+typedef struct sl_octree_node {
+    int32_t x, y, z;        /* cube position in this level's cells */
+    uint8_t level;          /* 0 = leaf */
+    uint8_t inside;         /* bit i: corner i inside (paper: s_n = true) */
+    uint8_t child_mask;     /* bit o: child in octant o exists */
+    uint8_t flags;          /* SL_NODE_* */
+    uint32_t parent;        /* SL_OCTREE_NONE for the root */
+    uint32_t first_child;   /* children are nodes [first_child, first_child + popcount) */
+    uint32_t crossing_base; /* this node's crossings: node_crossings[crossing_base + rank] */
+    uint16_t edge_mask;     /* bit e: edge e has a crossing (its ends differ in sign) */
+    uint16_t reserved;
+} sl_octree_node;
+
+typedef struct sl_octree_stats {
+    uint64_t sign_case[4];      /* parent corners by paper case A (corresponding), B
+                                   (adjacent), C (diagonal), D (centre) */
+    uint64_t inherited_crossings;
+    uint64_t fallback_crossings; /* parent crossing with no child crossing to extend */
+} sl_octree_stats;
+
+typedef struct sl_octree {
+    double leaf_size;    /* world units */
+    double origin[3];    /* world position of leaf-grid vertex (0, 0, 0) */
+    uint32_t depth;      /* the root's level */
+    uint32_t node_count;
+    sl_octree_node *nodes;
+    uint32_t level_first[SL_OCTREE_MAX_LEVELS]; /* first node of each level */
+    uint32_t level_count[SL_OCTREE_MAX_LEVELS];
+    uint32_t crossing_count;
+    float *crossing_position;  /* 3 * crossing_count, world */
+    uint8_t *crossing_color;   /* 4 * crossing_count RGBA, or NULL */
+    uint64_t node_crossing_count;
+    uint32_t *node_crossings;  /* crossing ids, per node in edge order */
+    sl_octree_stats stats;
+} sl_octree;
+
+void sl_octree_init(sl_octree *t);
+void sl_octree_release(sl_octree *t);
+
+/* Crossing id of edge e of node n (edge_mask must have bit e). */
+static inline uint32_t sl_octree_crossing(const sl_octree *t, const sl_octree_node *n, int e)
+{
+    unsigned below = (unsigned)n->edge_mask & ((1u << e) - 1u);
+    return t->node_crossings[n->crossing_base + (uint32_t)__builtin_popcount(below)];
+}
+
+/* World position of a node's corner c. */
+void sl_octree_corner_world(const sl_octree *t, const sl_octree_node *n, int c, double out[3]);
+
+/* Index of the node at (level, x, y, z), or SL_OCTREE_NONE. Binary search in the level's
+ * Morton order: O(log n). */
+uint32_t sl_octree_find(const sl_octree *t, uint32_t level, int64_t x, int64_t y, int64_t z);
+
+/* Morton code of 20-bit coordinates (x in the lowest interleaved bit). */
+uint64_t sl_morton3(uint32_t x, uint32_t y, uint32_t z);
+
+#endif

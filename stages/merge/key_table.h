@@ -1,0 +1,55 @@
+/* Sorted 64-bit key tables for the octree build: LSD radix sort of (key, value) pairs and
+ * binary search. Sorted arrays instead of hash maps: deterministic, compact, and trivially
+ * shared by OpenMP threads for lookups. */
+#ifndef SCANLOD_STAGES_MERGE_KEY_TABLE_H
+#define SCANLOD_STAGES_MERGE_KEY_TABLE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct sl_key_pair {
+    uint64_t key;
+    uint64_t value;
+} sl_key_pair;
+
+/* Sorts by key (stable); `bits` = how many low bits of the key are used (<= 64).
+ * Returns 0, or -1 when out of memory. */
+int sl_sort_pairs(sl_key_pair *pairs, size_t count, int bits);
+int sl_sort_keys(uint64_t *keys, size_t count, int bits);
+/* Removes adjacent duplicates of a sorted array; returns the new count. */
+size_t sl_unique_keys(uint64_t *keys, size_t count);
+
+/* Index of `key` in the sorted `keys`, or -1. */
+static inline int64_t sl_find_key(const uint64_t *keys, size_t count, uint64_t key)
+{
+    size_t lo = 0, hi = count;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (keys[mid] < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < count && keys[lo] == key ? (int64_t)lo : -1;
+}
+
+/* Leaf-grid and level-grid vertex keys: 20 bits per coordinate. */
+#define SL_COORD_BITS 20
+#define SL_COORD_LIMIT (1u << SL_COORD_BITS)
+static inline uint64_t sl_vertex_key(uint32_t x, uint32_t y, uint32_t z)
+{
+    return (uint64_t)x << 40 | (uint64_t)y << 20 | (uint64_t)z;
+}
+static inline void sl_vertex_unpack(uint64_t key, uint32_t p[3])
+{
+    p[0] = (uint32_t)(key >> 40) & (SL_COORD_LIMIT - 1);
+    p[1] = (uint32_t)(key >> 20) & (SL_COORD_LIMIT - 1);
+    p[2] = (uint32_t)key & (SL_COORD_LIMIT - 1);
+}
+/* An edge: its first vertex and its axis. */
+static inline uint64_t sl_edge_key(uint64_t vertex_key, int axis)
+{
+    return vertex_key << 2 | (uint64_t)axis;
+}
+
+#endif

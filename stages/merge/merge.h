@@ -1,0 +1,41 @@
+/* merge stage (paper 1, section 2.2): signed samples -> marching-cube octree.
+ *
+ * Leaf nodes are the leaf-grid cubes whose 8 corners all carry a sample; their vertex signs
+ * are the samples' signs and their edge ratios come from "simple divide" of the two
+ * distances. Parents are built bottom-up, level by level: a parent corner takes the sign of
+ * the corresponding child vertex (case A), else of the adjacent child vertices (B: edge
+ * midpoints), else the diagonal ones (C: face centres), else the centre (D), as in the
+ * paper's Figure 2 -- looked up in the level's global vertex table, so that every parent
+ * sharing a corner agrees. A parent's crossing on an edge is the child's crossing on the
+ * half-edge where the sign flips (ratio extension); only when no child crossing exists is
+ * a new one made at the half's middle (counted as a fallback). Output: `octree.slot`.
+ */
+#ifndef SCANLOD_STAGES_MERGE_H
+#define SCANLOD_STAGES_MERGE_H
+
+#include <stdint.h>
+
+#include "pipeline/error.h"
+#include "pipeline/progress.h"
+#include "pipeline/stage.h"
+#include "runtime/octree.h"
+
+#define SL_OCTREE_FILE "octree.slot"
+
+extern const sl_stage sl_merge_stage;
+
+/* Signed samples on the leaf grid (the samples stage's output, read back). */
+typedef struct sl_sample_grid {
+    uint64_t count;
+    const int32_t *coords;  /* 3 * count, leaf-grid vertex coordinates */
+    const float *distance;  /* signed distance, world units, < 0 inside */
+    const uint8_t *colors;  /* 4 * count RGBA, or NULL */
+    double voxel_size;      /* leaf size, world units */
+    double origin[3];       /* world position of grid vertex (0, 0, 0) */
+} sl_sample_grid;
+
+/* Builds the octree; deterministic whatever the thread count. */
+int sl_octree_build(const sl_sample_grid *samples, sl_octree *out, sl_progress *progress,
+                    sl_error *err);
+
+#endif

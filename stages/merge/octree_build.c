@@ -1,0 +1,669 @@
+/* Bottom-up construction of the marching-cube octree (paper 1, section 2.2; merge.h).
+ *
+ * Each level keeps three sorted tables: its vertices (with signs), its edges whose ends
+ * differ in sign (with their crossing ids), and its nodes (Morton order, so a parent's
+ * children are contiguous). Level l + 1 is derived from level l only:
+ *   nodes    parents of the level-l nodes;
+ *   signs    per parent corner u, the level-l vertex 2u (case A), else the majority of the
+ *            defined level-l vertices at 2u + one unit step along 1 (B), 2 (C) or 3 (D)
+ *            axes -- the adjacent, diagonal and centre vertices of the paper's Figure 2,
+ *            looked up globally so every parent sharing u agrees;
+ *   crossings on a parent edge (u, a) with a sign change: the crossing of the level-l
+ *            half-edge where the sign flips, found through the midpoint 2u + e_a (ratio
+ *            extension: the same crossing id, hence the same point); without one, a new
+ *            crossing at the middle of that half (a counted fallback).
+ * All per-element work runs in OpenMP loops writing to disjoint slots; anything that
+ * appends (fallback crossings) happens afterwards in key order, so the result does not
+ * depend on the thread count.
+ */
+#include "stages/merge/merge.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "runtime/mc_cube.h"
+#include "stages/merge/key_table.h"
+
+#define RATIO_MIN 1e-3 /* keeps crossings off the corners: no zero-length edges */
+
+typedef struct level_tables {
+    uint32_t level;
+    size_t vcount;
+    uint64_t *vkeys;     /* sorted vertex keys */
+    uint8_t *vinside;
+    size_t ecount;
+    uint64_t *ekeys;     /* sorted keys of edges with a crossing */
+    uint32_t *ecrossing; /* crossing id per edge */
+    size_t ncount;
+    sl_octree_node *nodes;  /* Morton order; level, x, y, z, inside, child_mask, edge_mask */
+    uint32_t *ncross;       /* 12 per node: crossing id per edge (or NONE) */
+} level_tables;
+
+typedef struct crossing_table {
+    uint32_t count, capacity;
+    float *position;
+    uint8_t *color; /* NULL without colours */
+} crossing_table;
+
+typedef struct build_state {
+    const sl_sample_grid *samples;
+    int64_t shift[3];     /* added to sample coords to make them >= 0 */
+    double origin[3];     /* world of shifted vertex (0,0,0) */
+    crossing_table crossings;
+    sl_octree_stats stats;
+    sl_error *err;
+} build_state;
+
+static void level_release(level_tables *l)
+{
+    free(l->vkeys);
+    free(l->vinside);
+    free(l->ekeys);
+    free(l->ecrossing);
+    free(l->nodes);
+    free(l->ncross);
+    memset(l, 0, sizeof *l);
+}
+
+static int nomem(build_state *b)
+{
+    return sl_error_set(b->err, SL_E_NOMEM, ENOMEM, NULL, "out of memory building the octree");
+}
+
+static int crossings_reserve(build_state *b, uint32_t extra)
+{
+    crossing_table *c = &b->crossings;
+    if ((uint64_t)c->count + extra >= UINT32_MAX)
+        return sl_error_set(b->err, SL_E_LIMIT, 0, NULL, "more than 2^32 crossings");
+    if (c->count + extra <= c->capacity)
+        return 0;
+    uint32_t cap = c->capacity ? c->capacity : 1024;
+    while (cap < c->count + extra)
+        cap = cap > UINT32_MAX / 2 ? UINT32_MAX - 1 : cap * 2;
+    float *p = realloc(c->position, (size_t)cap * 3 * sizeof *p);
+    if (!p)
+        return nomem(b);
+    c->position = p;
+    if (b->samples->colors) {
+        uint8_t *col = realloc(c->color, (size_t)cap * 4);
+        if (!col)
+            return nomem(b);
+        c->color = col;
+    }
+    c->capacity = cap;
+    return 0;
+}
+
+static inline int64_t vertex_index(const level_tables *l, uint32_t x, uint32_t y, uint32_t z)
+{
+    if (x >= SL_COORD_LIMIT || y >= SL_COORD_LIMIT || z >= SL_COORD_LIMIT)
+        return -1;
+    return sl_find_key(l->vkeys, l->vcount, sl_vertex_key(x, y, z));
+}
+
+static int corner_offset(int c, int a)
+{
+    return (c >> a) & 1;
+}
+
+/* ---- level 0: leaf cubes from the samples ---------------------------------------- */
+
+static int leaf_vertices(build_state *b, level_tables *l, uint32_t **sample_of)
+{
+    const sl_sample_grid *s = b->samples;
+    sl_key_pair *pairs = malloc(s->count * sizeof *pairs);
+    if (!pairs)
+        return nomem(b);
+    for (uint64_t i = 0; i < s->count; i++) {
+        uint32_t p[3];
+        for (int a = 0; a < 3; a++)
+            p[a] = (uint32_t)(s->coords[3 * i + a] + b->shift[a]);
+        pairs[i].key = sl_vertex_key(p[0], p[1], p[2]);
+        pairs[i].value = i;
+    }
+    if (sl_sort_pairs(pairs, s->count, 3 * SL_COORD_BITS) != 0) {
+        free(pairs);
+        return nomem(b);
+    }
+    l->vcount = s->count;
+    l->vkeys = malloc(s->count * sizeof *l->vkeys);
+    l->vinside = malloc(s->count);
+    *sample_of = malloc(s->count * sizeof **sample_of);
+    if (!l->vkeys || !l->vinside || !*sample_of) {
+        free(pairs);
+        return nomem(b);
+    }
+    for (uint64_t i = 0; i < s->count; i++) {
+        if (i > 0 && pairs[i].key == pairs[i - 1].key) {
+            free(pairs);
+            return sl_error_set(b->err, SL_E_CORRUPT, 0, NULL, "two samples at one grid vertex");
+        }
+        l->vkeys[i] = pairs[i].key;
+        (*sample_of)[i] = (uint32_t)pairs[i].value;
+        l->vinside[i] = s->distance[pairs[i].value] < 0;
+    }
+    free(pairs);
+    return 0;
+}
+
+/* Sorts `count` nodes (x, y, z filled) into Morton order. */
+static int sort_nodes_morton(build_state *b, sl_octree_node *nodes, size_t count)
+{
+    sl_key_pair *pairs = malloc(count * sizeof *pairs);
+    sl_octree_node *copy = malloc(count * sizeof *copy);
+    if (!pairs || !copy) {
+        free(pairs);
+        free(copy);
+        return nomem(b);
+    }
+    for (size_t i = 0; i < count; i++) {
+        pairs[i].key = sl_morton3((uint32_t)nodes[i].x, (uint32_t)nodes[i].y, (uint32_t)nodes[i].z);
+        pairs[i].value = i;
+    }
+    int rc = sl_sort_pairs(pairs, count, 3 * SL_COORD_BITS);
+    if (rc == 0) {
+        memcpy(copy, nodes, count * sizeof *copy);
+        for (size_t i = 0; i < count; i++)
+            nodes[i] = copy[pairs[i].value];
+    }
+    free(pairs);
+    free(copy);
+    return rc ? nomem(b) : 0;
+}
+
+/* Corner signs of every node from the level's vertex table. */
+static void node_signs(level_tables *l)
+{
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < l->ncount; i++) {
+        sl_octree_node *n = &l->nodes[i];
+        uint8_t inside = 0;
+        for (int c = 0; c < 8; c++) {
+            int64_t v = vertex_index(l, (uint32_t)(n->x + corner_offset(c, 0)),
+                                     (uint32_t)(n->y + corner_offset(c, 1)),
+                                     (uint32_t)(n->z + corner_offset(c, 2)));
+            if (v >= 0 && l->vinside[v])
+                inside |= (uint8_t)(1u << c);
+        }
+        n->inside = inside;
+        uint16_t mask = 0;
+        for (int e = 0; e < 12; e++)
+            if (((inside >> sl_mc_edge_c0(e)) ^ (inside >> sl_mc_edge_c1(e))) & 1)
+                mask |= (uint16_t)(1u << e);
+        n->edge_mask = mask;
+    }
+}
+
+/* Keys of every edge with a crossing, over all nodes of the level, sorted and unique. */
+static int collect_edges(build_state *b, level_tables *l)
+{
+    size_t total = 0;
+    for (size_t i = 0; i < l->ncount; i++)
+        total += (size_t)__builtin_popcount(l->nodes[i].edge_mask);
+    uint64_t *keys = malloc((total ? total : 1) * sizeof *keys);
+    if (!keys)
+        return nomem(b);
+    size_t k = 0;
+    for (size_t i = 0; i < l->ncount; i++) {
+        const sl_octree_node *n = &l->nodes[i];
+        for (int e = 0; e < 12; e++) {
+            if (!(n->edge_mask >> e & 1))
+                continue;
+            int c0 = sl_mc_edge_c0(e);
+            keys[k++] = sl_edge_key(sl_vertex_key((uint32_t)(n->x + corner_offset(c0, 0)),
+                                                  (uint32_t)(n->y + corner_offset(c0, 1)),
+                                                  (uint32_t)(n->z + corner_offset(c0, 2))),
+                                    sl_mc_edge_axis(e));
+        }
+    }
+    if (sl_sort_keys(keys, total, 3 * SL_COORD_BITS + 2) != 0) {
+        free(keys);
+        return nomem(b);
+    }
+    l->ecount = sl_unique_keys(keys, total);
+    l->ekeys = keys;
+    l->ecrossing = malloc((l->ecount ? l->ecount : 1) * sizeof *l->ecrossing);
+    return l->ecrossing ? 0 : nomem(b);
+}
+
+/* Per node, the crossing id of each edge (from the level's edge table). */
+static int node_crossings(build_state *b, level_tables *l)
+{
+    l->ncross = malloc((l->ncount ? l->ncount : 1) * 12 * sizeof *l->ncross);
+    if (!l->ncross)
+        return nomem(b);
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < l->ncount; i++) {
+        const sl_octree_node *n = &l->nodes[i];
+        for (int e = 0; e < 12; e++) {
+            uint32_t id = SL_OCTREE_NONE;
+            if (n->edge_mask >> e & 1) {
+                int c0 = sl_mc_edge_c0(e);
+                uint64_t key = sl_edge_key(
+                    sl_vertex_key((uint32_t)(n->x + corner_offset(c0, 0)),
+                                  (uint32_t)(n->y + corner_offset(c0, 1)),
+                                  (uint32_t)(n->z + corner_offset(c0, 2))),
+                    sl_mc_edge_axis(e));
+                int64_t at = sl_find_key(l->ekeys, l->ecount, key);
+                if (at >= 0)
+                    id = l->ecrossing[at];
+            }
+            l->ncross[12 * i + (size_t)e] = id;
+        }
+    }
+    return 0;
+}
+
+static int build_leaves(build_state *b, level_tables *l)
+{
+    const sl_sample_grid *s = b->samples;
+    uint32_t *sample_of = NULL;
+    int rc = leaf_vertices(b, l, &sample_of);
+    uint8_t *is_leaf = rc ? NULL : calloc(l->vcount ? l->vcount : 1, 1);
+    if (rc == 0 && !is_leaf)
+        rc = nomem(b);
+    if (rc) {
+        free(sample_of);
+        return rc;
+    }
+    /* A leaf cube is a cube whose 8 corners all carry a sample. */
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < l->vcount; i++) {
+        uint32_t p[3];
+        sl_vertex_unpack(l->vkeys[i], p);
+        int all = 1;
+        for (int c = 1; c < 8 && all; c++)
+            all = vertex_index(l, p[0] + (uint32_t)corner_offset(c, 0),
+                               p[1] + (uint32_t)corner_offset(c, 1),
+                               p[2] + (uint32_t)corner_offset(c, 2)) >= 0;
+        is_leaf[i] = (uint8_t)all;
+    }
+    for (size_t i = 0; i < l->vcount; i++)
+        l->ncount += is_leaf[i];
+    l->nodes = calloc(l->ncount ? l->ncount : 1, sizeof *l->nodes);
+    if (!l->nodes) {
+        free(is_leaf);
+        free(sample_of);
+        return nomem(b);
+    }
+    for (size_t i = 0, k = 0; i < l->vcount; i++) {
+        if (!is_leaf[i])
+            continue;
+        uint32_t p[3];
+        sl_vertex_unpack(l->vkeys[i], p);
+        l->nodes[k].x = (int32_t)p[0];
+        l->nodes[k].y = (int32_t)p[1];
+        l->nodes[k].z = (int32_t)p[2];
+        k++;
+    }
+    free(is_leaf);
+    rc = sort_nodes_morton(b, l->nodes, l->ncount);
+    if (rc == 0) {
+        node_signs(l);
+        rc = collect_edges(b, l);
+    }
+    if (rc == 0)
+        rc = crossings_reserve(b, (uint32_t)l->ecount);
+    if (rc) {
+        free(sample_of);
+        return rc;
+    }
+    /* Leaf crossings: "simple divide" of the two distances along the edge. */
+    crossing_table *ct = &b->crossings;
+    uint32_t base = ct->count;
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < l->ecount; i++) {
+        uint64_t v0 = l->ekeys[i] >> 2;
+        int axis = (int)(l->ekeys[i] & 3);
+        uint32_t p[3];
+        sl_vertex_unpack(v0, p);
+        int64_t i0 = sl_find_key(l->vkeys, l->vcount, v0);
+        uint32_t q[3] = {p[0], p[1], p[2]};
+        q[axis]++;
+        int64_t i1 = vertex_index(l, q[0], q[1], q[2]);
+        double d0 = s->distance[sample_of[i0]], d1 = s->distance[sample_of[i1]];
+        double t = d0 / (d0 - d1);
+        if (!(t >= RATIO_MIN))
+            t = RATIO_MIN;
+        if (t > 1 - RATIO_MIN)
+            t = 1 - RATIO_MIN;
+        uint32_t id = base + (uint32_t)i;
+        for (int a = 0; a < 3; a++)
+            ct->position[3 * (size_t)id + a] =
+                (float)(b->origin[a] + ((double)p[a] + (a == axis ? t : 0.0)) * s->voxel_size);
+        if (ct->color)
+            for (int k = 0; k < 4; k++)
+                ct->color[4 * (size_t)id + k] = (uint8_t)lround(
+                    (1 - t) * s->colors[4 * (size_t)sample_of[i0] + k] +
+                    t * s->colors[4 * (size_t)sample_of[i1] + k]);
+        l->ecrossing[i] = id;
+    }
+    ct->count += (uint32_t)l->ecount;
+    free(sample_of);
+    return node_crossings(b, l);
+}
+
+/* ---- level l + 1 from level l ----------------------------------------------------- */
+
+static int build_parent_nodes(build_state *b, const level_tables *child, level_tables *l)
+{
+    l->level = child->level + 1;
+    l->nodes = calloc(child->ncount ? child->ncount : 1, sizeof *l->nodes);
+    if (!l->nodes)
+        return nomem(b);
+    size_t k = 0;
+    for (size_t i = 0; i < child->ncount; i++) { /* children in Morton order: parents too */
+        const sl_octree_node *c = &child->nodes[i];
+        int32_t x = c->x >> 1, y = c->y >> 1, z = c->z >> 1;
+        if (k == 0 || l->nodes[k - 1].x != x || l->nodes[k - 1].y != y || l->nodes[k - 1].z != z) {
+            l->nodes[k].x = x;
+            l->nodes[k].y = y;
+            l->nodes[k].z = z;
+            l->nodes[k].level = (uint8_t)l->level;
+            k++;
+        }
+        int octant = (c->x & 1) | (c->y & 1) << 1 | (c->z & 1) << 2;
+        l->nodes[k - 1].child_mask |= (uint8_t)(1u << octant);
+    }
+    l->ncount = k;
+    return 0;
+}
+
+static int build_parent_vertices(build_state *b, level_tables *l)
+{
+    uint64_t *keys = malloc((l->ncount ? l->ncount : 1) * 8 * sizeof *keys);
+    if (!keys)
+        return nomem(b);
+    for (size_t i = 0; i < l->ncount; i++)
+        for (int c = 0; c < 8; c++)
+            keys[8 * i + (size_t)c] =
+                sl_vertex_key((uint32_t)(l->nodes[i].x + corner_offset(c, 0)),
+                              (uint32_t)(l->nodes[i].y + corner_offset(c, 1)),
+                              (uint32_t)(l->nodes[i].z + corner_offset(c, 2)));
+    if (sl_sort_keys(keys, 8 * l->ncount, 3 * SL_COORD_BITS) != 0) {
+        free(keys);
+        return nomem(b);
+    }
+    l->vcount = sl_unique_keys(keys, 8 * l->ncount);
+    l->vkeys = keys;
+    l->vinside = malloc(l->vcount ? l->vcount : 1);
+    return l->vinside ? 0 : nomem(b);
+}
+
+/* Sign of parent vertex u from the child level (paper Figure 2, cases A-D): returns the
+ * case (0..3) and sets *inside; -1 if no child vertex is near (cannot happen for a
+ * corner of a parent that has children). */
+static int parent_sign(const level_tables *child, const uint32_t u[3], uint8_t *inside)
+{
+    int64_t w[3] = {2 * (int64_t)u[0], 2 * (int64_t)u[1], 2 * (int64_t)u[2]};
+    for (int steps = 0; steps <= 3; steps++) {
+        int in = 0, out = 0, first = -1;
+        for (int dx = -1; dx <= 1; dx++)
+            for (int dy = -1; dy <= 1; dy++)
+                for (int dz = -1; dz <= 1; dz++) {
+                    if ((dx != 0) + (dy != 0) + (dz != 0) != steps)
+                        continue;
+                    int64_t p[3] = {w[0] + dx, w[1] + dy, w[2] + dz};
+                    if (p[0] < 0 || p[1] < 0 || p[2] < 0)
+                        continue;
+                    int64_t v = vertex_index(child, (uint32_t)p[0], (uint32_t)p[1], (uint32_t)p[2]);
+                    if (v < 0)
+                        continue;
+                    if (first < 0)
+                        first = child->vinside[v];
+                    if (child->vinside[v])
+                        in++;
+                    else
+                        out++;
+                }
+        if (in + out > 0) {
+            *inside = (uint8_t)(in > out ? 1 : in < out ? 0 : first);
+            return steps;
+        }
+    }
+    return -1;
+}
+
+static int parent_signs(build_state *b, const level_tables *child, level_tables *l)
+{
+    uint64_t cases[4] = {0, 0, 0, 0};
+    int missing = 0;
+#pragma omp parallel for schedule(static) reduction(+ : missing)
+    for (size_t i = 0; i < l->vcount; i++) {
+        uint32_t u[3];
+        sl_vertex_unpack(l->vkeys[i], u);
+        int which = parent_sign(child, u, &l->vinside[i]);
+        if (which < 0) {
+            l->vinside[i] = 0;
+            missing++;
+        } else {
+#pragma omp atomic
+            cases[which]++;
+        }
+    }
+    for (int c = 0; c < 4; c++)
+        b->stats.sign_case[c] += cases[c];
+    if (missing)
+        return sl_error_set(b->err, SL_E_INTERNAL, 0, NULL,
+                            "%d parent corners without any child vertex", missing);
+    return 0;
+}
+
+/* Parent edge crossings: the child's crossing on the half-edge where the sign flips. */
+static int parent_crossings(build_state *b, const level_tables *child, level_tables *l)
+{
+    uint8_t *fallback_half = malloc(l->ecount ? l->ecount : 1); /* 0 none, 1/2 half, 3 whole */
+    if (!fallback_half)
+        return nomem(b);
+#pragma omp parallel for schedule(static)
+    for (size_t i = 0; i < l->ecount; i++) {
+        uint64_t vu = l->ekeys[i] >> 2;
+        int axis = (int)(l->ekeys[i] & 3);
+        uint32_t u[3];
+        sl_vertex_unpack(vu, u);
+        uint8_t inside_u = l->vinside[sl_find_key(l->vkeys, l->vcount, vu)];
+        uint32_t w[3] = {2 * u[0], 2 * u[1], 2 * u[2]}, m[3] = {w[0], w[1], w[2]};
+        m[axis]++;
+        int64_t mid = vertex_index(child, m[0], m[1], m[2]);
+        l->ecrossing[i] = SL_OCTREE_NONE;
+        fallback_half[i] = 3;
+        if (mid < 0)
+            continue;
+        int first_half = child->vinside[mid] != inside_u;
+        const uint32_t *start = first_half ? w : m;
+        int64_t e = sl_find_key(child->ekeys, child->ecount,
+                                sl_edge_key(sl_vertex_key(start[0], start[1], start[2]), axis));
+        if (e >= 0) {
+            l->ecrossing[i] = child->ecrossing[e];
+            fallback_half[i] = 0;
+        } else {
+            fallback_half[i] = first_half ? 1 : 2;
+        }
+    }
+    size_t fallbacks = 0;
+    for (size_t i = 0; i < l->ecount; i++)
+        fallbacks += fallback_half[i] != 0;
+    int rc = crossings_reserve(b, (uint32_t)fallbacks);
+    if (rc) {
+        free(fallback_half);
+        return rc;
+    }
+    crossing_table *ct = &b->crossings;
+    double size = b->samples->voxel_size * (double)(1u << l->level);
+    for (size_t i = 0; i < l->ecount; i++) { /* appended in key order: deterministic */
+        if (!fallback_half[i])
+            continue;
+        uint32_t u[3];
+        sl_vertex_unpack(l->ekeys[i] >> 2, u);
+        int axis = (int)(l->ekeys[i] & 3);
+        double t = fallback_half[i] == 1 ? 0.25 : fallback_half[i] == 2 ? 0.75 : 0.5;
+        uint32_t id = ct->count++;
+        for (int a = 0; a < 3; a++)
+            ct->position[3 * (size_t)id + a] =
+                (float)(b->origin[a] + ((double)u[a] + (a == axis ? t : 0.0)) * size);
+        if (ct->color)
+            memset(ct->color + 4 * (size_t)id, 160, 4);
+        l->ecrossing[i] = id;
+    }
+    b->stats.fallback_crossings += fallbacks;
+    b->stats.inherited_crossings += l->ecount - fallbacks;
+    free(fallback_half);
+    return 0;
+}
+
+static int build_parent(build_state *b, const level_tables *child, level_tables *l)
+{
+    int rc = build_parent_nodes(b, child, l);
+    if (rc == 0)
+        rc = build_parent_vertices(b, l);
+    if (rc == 0)
+        rc = parent_signs(b, child, l);
+    if (rc == 0) {
+        node_signs(l);
+        rc = collect_edges(b, l);
+    }
+    if (rc == 0)
+        rc = parent_crossings(b, child, l);
+    if (rc == 0)
+        rc = node_crossings(b, l);
+    return rc;
+}
+
+/* ---- assembly: levels root-first into one node array ------------------------------ */
+
+static int assemble(build_state *b, level_tables *levels, uint32_t depth, sl_octree *out)
+{
+    uint64_t total = 0, crossings = 0;
+    for (uint32_t l = 0; l <= depth; l++) {
+        total += levels[l].ncount;
+        for (size_t i = 0; i < levels[l].ncount; i++)
+            crossings += (uint64_t)__builtin_popcount(levels[l].nodes[i].edge_mask);
+    }
+    if (total >= UINT32_MAX)
+        return sl_error_set(b->err, SL_E_LIMIT, 0, NULL, "more than 2^32 octree nodes");
+    out->nodes = malloc((size_t)total * sizeof *out->nodes);
+    out->node_crossings = malloc((size_t)(crossings ? crossings : 1) * sizeof *out->node_crossings);
+    if (!out->nodes || !out->node_crossings)
+        return nomem(b);
+    out->node_count = (uint32_t)total;
+    out->node_crossing_count = crossings;
+    out->depth = depth;
+    uint32_t next = 0;
+    uint64_t cross = 0;
+    for (int32_t l = (int32_t)depth; l >= 0; l--) {
+        level_tables *lt = &levels[l];
+        out->level_first[l] = next;
+        out->level_count[l] = (uint32_t)lt->ncount;
+        for (size_t i = 0; i < lt->ncount; i++) {
+            sl_octree_node *n = &out->nodes[next + i];
+            *n = lt->nodes[i];
+            n->level = (uint8_t)l;
+            n->parent = SL_OCTREE_NONE;
+            n->first_child = SL_OCTREE_NONE;
+            n->crossing_base = (uint32_t)cross;
+            for (int e = 0; e < 12; e++)
+                if (n->edge_mask >> e & 1)
+                    out->node_crossings[cross++] = lt->ncross[12 * i + (size_t)e];
+        }
+        next += (uint32_t)lt->ncount;
+    }
+    /* Children of level l + 1 nodes are the level-l nodes, in the same Morton order. */
+    for (uint32_t l = 1; l <= depth; l++) {
+        uint32_t child = out->level_first[l - 1];
+        for (uint32_t i = 0; i < out->level_count[l]; i++) {
+            uint32_t p = out->level_first[l] + i;
+            out->nodes[p].first_child = child;
+            int count = __builtin_popcount(out->nodes[p].child_mask);
+            for (int k = 0; k < count; k++)
+                out->nodes[child + (uint32_t)k].parent = p;
+            child += (uint32_t)count;
+        }
+    }
+    out->crossing_count = b->crossings.count;
+    out->crossing_position = b->crossings.position;
+    out->crossing_color = b->crossings.color;
+    b->crossings.position = NULL;
+    b->crossings.color = NULL;
+    out->leaf_size = b->samples->voxel_size;
+    memcpy(out->origin, b->origin, sizeof out->origin);
+    out->stats = b->stats;
+    return 0;
+}
+
+static int check_samples(build_state *b)
+{
+    const sl_sample_grid *s = b->samples;
+    if (s->count == 0)
+        return sl_error_set(b->err, SL_E_BADINPUT, 0, NULL, "no samples: nothing to mesh");
+    if (!(s->voxel_size > 0) || !isfinite(s->voxel_size))
+        return sl_error_set(b->err, SL_E_CORRUPT, 0, NULL, "leaf size %g is not positive",
+                            s->voxel_size);
+    int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
+    for (uint64_t i = 0; i < s->count; i++)
+        for (int a = 0; a < 3; a++) {
+            int64_t c = s->coords[3 * i + a];
+            lo[a] = c < lo[a] ? c : lo[a];
+            hi[a] = c > hi[a] ? c : hi[a];
+        }
+    for (int a = 0; a < 3; a++) {
+        if (hi[a] - lo[a] >= (int64_t)SL_COORD_LIMIT / 2)
+            return sl_error_set(b->err, SL_E_LIMIT, 0, NULL,
+                                "samples span %lld leaf cells, more than the octree's %u",
+                                (long long)(hi[a] - lo[a]), SL_COORD_LIMIT / 2);
+        b->shift[a] = -lo[a]; /* the octree grid starts at the lowest sample */
+        b->origin[a] = s->origin[a] - (double)b->shift[a] * s->voxel_size;
+    }
+    return 0;
+}
+
+int sl_octree_build(const sl_sample_grid *samples, sl_octree *out, sl_progress *progress,
+                    sl_error *err)
+{
+    sl_octree_init(out);
+    build_state b;
+    memset(&b, 0, sizeof b);
+    b.samples = samples;
+    b.err = err;
+    level_tables levels[SL_OCTREE_MAX_LEVELS];
+    memset(levels, 0, sizeof levels);
+    int rc = check_samples(&b);
+    if (rc == 0)
+        rc = build_leaves(&b, &levels[0]);
+    if (rc == 0 && levels[0].ncount == 0)
+        rc = sl_error_set(err, SL_E_BADINPUT, 0, NULL,
+                          "no leaf cube has all 8 corners sampled: the samples are too sparse");
+    uint32_t depth = 0;
+    while (rc == 0 && levels[depth].ncount > 1) {
+        if (depth + 1 >= SL_OCTREE_MAX_LEVELS) {
+            rc = sl_error_set(err, SL_E_LIMIT, 0, NULL, "octree deeper than %d levels",
+                              SL_OCTREE_MAX_LEVELS);
+            break;
+        }
+        if (sl_progress_step(progress, "merge", (double)depth / 16.0)) {
+            rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+            break;
+        }
+        rc = build_parent(&b, &levels[depth], &levels[depth + 1]);
+        depth++;
+        /* The child level's vertex and edge tables are no longer needed. */
+        free(levels[depth - 1].vkeys);
+        free(levels[depth - 1].vinside);
+        free(levels[depth - 1].ekeys);
+        free(levels[depth - 1].ecrossing);
+        levels[depth - 1].vkeys = NULL;
+        levels[depth - 1].vinside = NULL;
+        levels[depth - 1].ekeys = NULL;
+        levels[depth - 1].ecrossing = NULL;
+    }
+    if (rc == 0)
+        rc = assemble(&b, levels, depth, out);
+    for (uint32_t l = 0; l < SL_OCTREE_MAX_LEVELS; l++)
+        level_release(&levels[l]);
+    free(b.crossings.position);
+    free(b.crossings.color);
+    if (rc)
+        sl_octree_release(out);
+    return rc;
+}
