@@ -16,6 +16,8 @@
 
 #include "geometry/ply_internal.h"
 
+#define POPULATE_MAX ((size_t)256 << 20)
+
 sl_ply_limits sl_ply_default_limits(void)
 {
     sl_ply_limits lim = {
@@ -171,7 +173,11 @@ int sl_ply_read(const char *path, const sl_ply_limits *limits, sl_mesh *out, sl_
     }
     size_t size = (size_t)st.st_size;
     void *map = NULL;
-    if (size > 0 && (map = mmap(NULL, size, PROT_READ, MAP_PRIVATE, fd, 0)) == MAP_FAILED) {
+    /* Prefault typical scans in one call (cheaper than a fault per 64 KiB); larger files
+     * stream through readahead instead of being pinned whole. */
+    int populate = size <= POPULATE_MAX ? MAP_POPULATE : 0;
+    if (size > 0 &&
+        (map = mmap(NULL, size, PROT_READ, MAP_PRIVATE | populate, fd, 0)) == MAP_FAILED) {
         int e = errno;
         close(fd);
         return sl_error_errno(err, e, path, "mmap");

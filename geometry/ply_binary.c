@@ -77,18 +77,33 @@ static void column_to_float(const unsigned char *src, size_t stride, size_t n, i
     }
 }
 
-/* Where a float vertex role goes, or NULL (colours, camera, absent arrays). */
-static float *float_column(sl_mesh *m, int role, size_t *stride)
+static const ply_property *find_role(const ply_reader *r, const ply_element *e, int role)
 {
-    *stride = 3;
-    if (role >= ROLE_X && role <= ROLE_Z)
-        return m->positions + (role - ROLE_X);
-    if (role >= ROLE_NX && role <= ROLE_NZ && m->normals)
-        return m->normals + (role - ROLE_NX);
-    *stride = 2;
-    if ((role == ROLE_U || role == ROLE_V) && m->texcoords)
-        return m->texcoords + (role - ROLE_U);
+    for (int k = 0; k < e->nprops; k++)
+        if (r->h->props[e->first_prop + k].role == role)
+            return &r->h->props[e->first_prop + k];
     return NULL;
+}
+
+/* x y z (or nx ny nz) stored as three native floats side by side: one 12-byte copy per
+ * row, or one copy of the whole block when that is all a row holds. */
+static int copy_triplets(const ply_reader *r, const ply_element *e, int role,
+                         const unsigned char *block, size_t n, float *dst)
+{
+    const ply_property *a = find_role(r, e, role), *b = find_role(r, e, role + 1),
+                       *c = find_role(r, e, role + 2);
+    if (!dst || !a || !b || !c || r->swap || a->type != PLY_FLOAT32 ||
+        b->type != PLY_FLOAT32 || c->type != PLY_FLOAT32 || b->offset != a->offset + 4 ||
+        c->offset != a->offset + 8)
+        return 0;
+    size_t stride = (size_t)e->row_bytes;
+    if (stride == 12) {
+        memcpy(dst, block, 12 * n);
+        return 1;
+    }
+    for (size_t i = 0; i < n; i++)
+        memcpy(dst + 3 * i, block + i * stride + a->offset, 12);
+    return 1;
 }
 
 static void convert_block(ply_reader *r, const ply_element *e, const unsigned char *block,
@@ -96,19 +111,24 @@ static void convert_block(ply_reader *r, const ply_element *e, const unsigned ch
 {
     const ply_property *props = &r->h->props[e->first_prop];
     size_t stride = (size_t)e->row_bytes, dst_stride;
+    sl_mesh *m = r->mesh;
+    int vertex = e->kind == KIND_VERTEX; /* (a camera fills no arrays) */
+    int xyz = vertex && copy_triplets(r, e, ROLE_X, block, n, m->positions + 3 * row);
+    int nxyz = vertex && m->normals && copy_triplets(r, e, ROLE_NX, block, n, m->normals + 3 * row);
     for (int k = 0; k < e->nprops; k++) {
         const ply_property *p = &props[k];
-        if (p->role == ROLE_SKIP)
+        if (p->role == ROLE_SKIP || (xyz && p->role >= ROLE_X && p->role <= ROLE_Z) ||
+            (nxyz && p->role >= ROLE_NX && p->role <= ROLE_NZ))
             continue;
-        float *dst = float_column(r->mesh, p->role, &dst_stride);
+        float *dst = sl_ply_float_column(m, p->role, &dst_stride);
         if (dst) {
             column_to_float(block + p->offset, stride, n, p->type, r->swap,
                             dst + row * dst_stride, dst_stride);
             continue;
         }
         for (size_t i = 0; i < n; i++)
-            sl_ply_store_vertex(r, row + i, p->role,
-                                p->type, load_scalar(block + i * stride + p->offset, p->type, r->swap));
+            sl_ply_store_vertex(r, row + i, p->role, p->type,
+                                load_scalar(block + i * stride + p->offset, p->type, r->swap));
     }
 }
 
@@ -170,35 +190,42 @@ static int is_plain_face(const ply_reader *r, const ply_element *e)
            (p->type == PLY_INT32 || p->type == PLY_UINT32) && !r->mesh->face_texcoords;
 }
 
-/* Triangles of a plain face element; other rows go through read_row. */
+/* Consecutive rows `3 a b c` with a, b, c < limit, at most `rows` of them: copied to t.
+ * Returns how many; stops before the first row that is anything else. */
+static inline __attribute__((always_inline)) uint64_t
+triangle_run(ply_reader *r, uint64_t rows, uint64_t limit, int swap, uint32_t *t)
+{
+    const unsigned char *p = r->p;
+    uint64_t fit = (uint64_t)(r->end - p) / 13, i = 0;
+    for (rows = rows < fit ? rows : fit; i < rows; i++, p += 13) {
+        uint32_t a = load32(p + 1, swap), b = load32(p + 5, swap), c = load32(p + 9, swap);
+        if ((p[0] != 3) | (a >= limit) | (b >= limit) | (c >= limit))
+            break;
+        t[3 * i] = a;
+        t[3 * i + 1] = b;
+        t[3 * i + 2] = c;
+    }
+    r->p = p;
+    return i;
+}
+
+static uint64_t native_triangles(ply_reader *r, uint64_t rows, uint64_t limit, uint32_t *t)
+{
+    return triangle_run(r, rows, limit, 0, t);
+}
+
+static uint64_t swapped_triangles(ply_reader *r, uint64_t rows, uint64_t limit, uint32_t *t)
+{
+    return triangle_run(r, rows, limit, 1, t);
+}
+
 static int plain_faces(ply_reader *r, const ply_element *e)
 {
-    sl_mesh *m = r->mesh;
-    uint64_t limit = m->vertex_count; /* a negative int32 must not pass as a big uint32 */
+    uint64_t limit = r->mesh->vertex_count; /* a negative int32 must not pass as a big uint32 */
     if (r->h->props[e->first_prop].type == PLY_INT32 && limit > 0x80000000u)
         limit = 0x80000000u;
-    int rc;
-    for (uint64_t row = 0; row < e->count; row++) {
-        const unsigned char *s = r->p;
-        r->row = row;
-        if ((row & PLY_TICK_ROWS) == 0 && (rc = sl_ply_tick(r)))
-            return rc;
-        if (r->end - s >= 13 && s[0] == 3 && m->triangle_count < r->tri_cap) {
-            uint32_t a = load32(s + 1, r->swap), b = load32(s + 5, r->swap),
-                     c = load32(s + 9, r->swap);
-            if (a < limit && b < limit && c < limit) {
-                uint32_t *t = m->triangles + 3 * m->triangle_count++;
-                t[0] = a;
-                t[1] = b;
-                t[2] = c;
-                r->p = s + 13;
-                continue;
-            }
-        }
-        if ((rc = ply_read_row(r, e, binary_value, binary_room)))
-            return rc;
-    }
-    return 0;
+    return ply_read_triangles(r, e, limit, r->swap ? swapped_triangles : native_triangles,
+                              binary_value, binary_room);
 }
 
 int sl_ply_binary_element(ply_reader *r, const ply_element *e)

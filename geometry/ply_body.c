@@ -13,8 +13,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 #include "geometry/ply_internal.h"
+
+#define HUGE_PAGE ((size_t)2 << 20)
 
 static uint64_t line_of(const ply_reader *r)
 {
@@ -90,6 +93,19 @@ void sl_ply_store_vertex(ply_reader *r, uint64_t row, int role, int type, double
     default:
         break;
     }
+}
+
+float *sl_ply_float_column(sl_mesh *m, int role, size_t *stride)
+{
+    *stride = 3;
+    if (role >= ROLE_X && role <= ROLE_Z && m->positions) /* NULL for 0 vertices */
+        return m->positions + (role - ROLE_X);
+    if (role >= ROLE_NX && role <= ROLE_NZ && m->normals)
+        return m->normals + (role - ROLE_NX);
+    *stride = 2;
+    if ((role == ROLE_U || role == ROLE_V) && m->texcoords)
+        return m->texcoords + (role - ROLE_U);
+    return NULL;
 }
 
 int sl_ply_check_index(ply_reader *r, double v, uint32_t *index)
@@ -255,11 +271,26 @@ int sl_ply_tick(ply_reader *r)
     return 0;
 }
 
+/* Large arrays on 2 MiB boundaries with transparent huge pages asked for: the reader
+ * writes every byte of them once, and 4 KiB page faults on fresh memory would cost more
+ * than parsing a binary file (measured: scripts/bench/bench_ply_read.sh). */
+static void *alloc_big(size_t bytes)
+{
+    void *p = NULL;
+    if (posix_memalign(&p, HUGE_PAGE, bytes) != 0)
+        return NULL;
+    madvise(p, bytes & ~(size_t)(HUGE_PAGE - 1), MADV_HUGEPAGE);
+    return p;
+}
+
 static void *alloc_items(ply_reader *r, uint64_t n, size_t item, int *rc)
 {
+    size_t bytes;
     if (n == 0 || *rc)
         return NULL;
-    void *p = realloc_array(NULL, n, item);
+    void *p = NULL;
+    if (n <= SIZE_MAX && !__builtin_mul_overflow((size_t)n, item, &bytes))
+        p = bytes >= 2 * HUGE_PAGE ? alloc_big(bytes) : malloc(bytes);
     if (!p)
         *rc = nomem(r, n, item);
     return p;

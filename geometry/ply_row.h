@@ -81,4 +81,38 @@ PLY_INLINE int ply_read_rows(ply_reader *r, const ply_element *e, ply_value_fn v
     return 0;
 }
 
+/* A face element of one index list, read in runs of plain triangles: `run` copies up to
+ * `rows` rows "3 a b c" with indices < limit into t and stops before any other row; that
+ * row (a polygon, a bad index, the end of the data, a full array) goes through
+ * ply_read_row, which grows the array or reports the error. */
+typedef uint64_t (*ply_triangle_run_fn)(ply_reader *r, uint64_t rows, uint64_t limit, uint32_t *t);
+
+PLY_INLINE int ply_read_triangles(ply_reader *r, const ply_element *e, uint64_t limit,
+                                  ply_triangle_run_fn run, ply_value_fn value, ply_room_fn room)
+{
+    sl_mesh *m = r->mesh;
+    uint64_t next_tick = 0;
+    int rc;
+    for (uint64_t row = 0; row < e->count;) {
+        if (row >= next_tick) {
+            r->row = row;
+            if ((rc = sl_ply_tick(r)))
+                return rc;
+            next_tick = row + PLY_TICK_ROWS + 1;
+        }
+        uint64_t want = (next_tick < e->count ? next_tick : e->count) - row;
+        uint64_t room_left = r->tri_cap - m->triangle_count;
+        want = want < room_left ? want : room_left;
+        uint64_t done = run(r, want, limit, m->triangles + 3 * m->triangle_count);
+        m->triangle_count += done;
+        row += done;
+        if ((done == want && want > 0) || row == e->count)
+            continue;
+        r->row = row++;
+        if ((rc = ply_read_row(r, e, value, room)))
+            return rc;
+    }
+    return 0;
+}
+
 #endif
