@@ -1,0 +1,198 @@
+/* Octree serialisation with full validation on read (see octree_io.h). */
+#include "runtime/octree_io.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+_Static_assert(sizeof(sl_octree_node) == 32, "sl_octree_node is stored as 32 bytes");
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+#error "scanlod's binary formats are little-endian; add byte swapping for this host"
+#endif
+
+#define HEADER_SIZE (4 * 4 + 8 + 8 * 4 + 4 * 2 * SL_OCTREE_MAX_LEVELS + 8 * 6)
+
+static void put_f64(unsigned char *p, double v)
+{
+    uint64_t bits;
+    memcpy(&bits, &v, 8);
+    sl_put_u64(p, bits);
+}
+
+static double get_f64(const unsigned char *p)
+{
+    uint64_t bits = sl_get_u64(p);
+    double v;
+    memcpy(&v, &bits, 8);
+    return v;
+}
+
+int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_part *parts)
+{
+    unsigned char *p = header;
+    sl_put_u32(p, t->depth);
+    sl_put_u32(p + 4, t->node_count);
+    sl_put_u32(p + 8, t->crossing_count);
+    sl_put_u32(p + 12, t->crossing_color != NULL);
+    sl_put_u64(p + 16, t->node_crossing_count);
+    put_f64(p + 24, t->leaf_size);
+    for (int a = 0; a < 3; a++)
+        put_f64(p + 32 + 8 * a, t->origin[a]);
+    p += 56;
+    for (int l = 0; l < SL_OCTREE_MAX_LEVELS; l++, p += 8) {
+        sl_put_u32(p, t->level_first[l]);
+        sl_put_u32(p + 4, t->level_count[l]);
+    }
+    const uint64_t stats[6] = {t->stats.sign_case[0], t->stats.sign_case[1], t->stats.sign_case[2],
+                               t->stats.sign_case[3], t->stats.inherited_crossings,
+                               t->stats.fallback_crossings};
+    for (int i = 0; i < 6; i++, p += 8)
+        sl_put_u64(p, stats[i]);
+    int n = 0;
+    parts[n++] = (sl_artifact_part){header, HEADER_SIZE};
+    parts[n++] = (sl_artifact_part){t->nodes, (size_t)t->node_count * sizeof *t->nodes};
+    parts[n++] = (sl_artifact_part){t->node_crossings,
+                                    (size_t)t->node_crossing_count * sizeof *t->node_crossings};
+    parts[n++] = (sl_artifact_part){t->crossing_position, (size_t)t->crossing_count * 3 * sizeof(float)};
+    if (t->crossing_color)
+        parts[n++] = (sl_artifact_part){t->crossing_color, (size_t)t->crossing_count * 4};
+    return n;
+}
+
+static int bad(sl_error *err, const char *name, const char *what)
+{
+    return sl_error_set(err, SL_E_CORRUPT, 0, name, "invalid octree: %s", what);
+}
+
+/* Every index in range, levels consistent: nothing downstream re-checks. */
+static int validate(const sl_octree *t, const char *name, sl_error *err)
+{
+    if (t->depth >= SL_OCTREE_MAX_LEVELS || !(t->leaf_size > 0) || !isfinite(t->leaf_size))
+        return bad(err, name, "depth or leaf size out of range");
+    uint64_t sum = 0;
+    for (uint32_t l = 0; l < SL_OCTREE_MAX_LEVELS; l++) {
+        if (l > t->depth && t->level_count[l])
+            return bad(err, name, "nodes above the root level");
+        if (l <= t->depth && ((uint64_t)t->level_first[l] + t->level_count[l] > t->node_count))
+            return bad(err, name, "level range outside the node table");
+        sum += t->level_count[l];
+    }
+    if (sum != t->node_count || t->level_count[t->depth] != 1 || t->level_first[t->depth] != 0)
+        return bad(err, name, "level counts do not add up to one root");
+    for (uint32_t i = 0; i < t->node_count; i++) {
+        const sl_octree_node *n = &t->nodes[i];
+        int kids = __builtin_popcount(n->child_mask);
+        if (n->level > t->depth || i < t->level_first[n->level] ||
+            i >= t->level_first[n->level] + t->level_count[n->level])
+            return bad(err, name, "node outside its level's range");
+        if (n->x < 0 || n->y < 0 || n->z < 0 || n->x >= (1 << 20) || n->y >= (1 << 20) ||
+            n->z >= (1 << 20))
+            return bad(err, name, "node coordinates out of range");
+        if ((i == 0) != (n->parent == SL_OCTREE_NONE) || (i && n->parent >= i))
+            return bad(err, name, "bad parent link");
+        if (kids && (n->level == 0 || n->first_child == SL_OCTREE_NONE ||
+                     n->first_child < t->level_first[n->level - 1] ||
+                     (uint64_t)n->first_child + (uint64_t)kids >
+                         (uint64_t)t->level_first[n->level - 1] + t->level_count[n->level - 1]))
+            return bad(err, name, "bad child range");
+        if ((uint64_t)n->crossing_base + (uint64_t)__builtin_popcount(n->edge_mask) >
+                t->node_crossing_count || n->edge_mask >> 12)
+            return bad(err, name, "bad crossing range");
+    }
+    for (uint64_t i = 0; i < t->node_crossing_count; i++)
+        if (t->node_crossings[i] >= t->crossing_count)
+            return bad(err, name, "crossing id out of range");
+    for (uint64_t i = 0; i < 3 * (uint64_t)t->crossing_count; i++)
+        if (!isfinite(t->crossing_position[i]))
+            return bad(err, name, "non-finite crossing position");
+    return 0;
+}
+
+static void *copy_out(const unsigned char *src, uint64_t size)
+{
+    void *p = malloc(size ? size : 1);
+    if (p && size)
+        memcpy(p, src, size);
+    return p;
+}
+
+int sl_octree_parse(const unsigned char *body, uint64_t size, const char *name, sl_octree *out,
+                    uint64_t *used, sl_error *err)
+{
+    sl_octree_init(out);
+    if (size < HEADER_SIZE)
+        return bad(err, name, "truncated header");
+    const unsigned char *p = body;
+    out->depth = sl_get_u32(p);
+    out->node_count = sl_get_u32(p + 4);
+    out->crossing_count = sl_get_u32(p + 8);
+    uint32_t has_color = sl_get_u32(p + 12);
+    out->node_crossing_count = sl_get_u64(p + 16);
+    out->leaf_size = get_f64(p + 24);
+    for (int a = 0; a < 3; a++)
+        out->origin[a] = get_f64(p + 32 + 8 * a);
+    p += 56;
+    for (int l = 0; l < SL_OCTREE_MAX_LEVELS; l++, p += 8) {
+        out->level_first[l] = sl_get_u32(p);
+        out->level_count[l] = sl_get_u32(p + 4);
+    }
+    uint64_t *stats[6] = {&out->stats.sign_case[0], &out->stats.sign_case[1],
+                          &out->stats.sign_case[2], &out->stats.sign_case[3],
+                          &out->stats.inherited_crossings, &out->stats.fallback_crossings};
+    for (int i = 0; i < 6; i++, p += 8)
+        *stats[i] = sl_get_u64(p);
+    if (has_color > 1 || out->node_count == 0 || out->node_crossing_count > (uint64_t)1 << 40)
+        return bad(err, name, "header counts out of range");
+    /* 64-bit sizes: no overflow for 32-bit counts. */
+    uint64_t nodes = (uint64_t)out->node_count * sizeof(sl_octree_node);
+    uint64_t ids = out->node_crossing_count * 4;
+    uint64_t pos = (uint64_t)out->crossing_count * 12;
+    uint64_t col = has_color ? (uint64_t)out->crossing_count * 4 : 0;
+    uint64_t need = HEADER_SIZE + nodes + ids + pos + col;
+    if (need > size)
+        return bad(err, name, "counts exceed the bytes present");
+    p = body + HEADER_SIZE;
+    out->nodes = copy_out(p, nodes);
+    out->node_crossings = copy_out(p + nodes, ids);
+    out->crossing_position = copy_out(p + nodes + ids, pos);
+    out->crossing_color = has_color ? copy_out(p + nodes + ids + pos, col) : NULL;
+    if (!out->nodes || !out->node_crossings || !out->crossing_position ||
+        (has_color && !out->crossing_color)) {
+        sl_octree_release(out);
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
+    }
+    int rc = validate(out, name, err);
+    if (rc) {
+        sl_octree_release(out);
+        return rc;
+    }
+    *used = need;
+    return 0;
+}
+
+int sl_octree_write(const char *path, const sl_octree *t, uint32_t stage_version, sl_error *err)
+{
+    unsigned char header[512];
+    sl_artifact_part parts[SL_OCTREE_PARTS];
+    int n = sl_octree_parts(t, header, parts);
+    return sl_artifact_write(path, SL_OCTREE_MAGIC, SL_OCTREE_FORMAT_VERSION, stage_version,
+                             parts, n, err);
+}
+
+int sl_octree_read(const char *path, sl_octree *out, sl_error *err)
+{
+    void *body = NULL;
+    uint64_t size = 0, used = 0;
+    sl_octree_init(out);
+    int rc = sl_artifact_read(path, SL_OCTREE_MAGIC, SL_OCTREE_FORMAT_VERSION, (uint64_t)1 << 40,
+                              &body, &size, NULL, err);
+    if (rc == 0)
+        rc = sl_octree_parse(body, size, path, out, &used, err);
+    if (rc == 0 && used != size) {
+        sl_octree_release(out);
+        rc = bad(err, path, "trailing bytes");
+    }
+    free(body);
+    return rc;
+}

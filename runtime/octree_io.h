@@ -1,0 +1,40 @@
+/* The octree's on-disk form (docs/formats.md, "octree section"): shared by the merge
+ * stage's `octree.slot` and the LOD model `.slod`, inside the artifact envelope.
+ *
+ *   header  (272 bytes, little-endian: depth, counts, leaf size, origin, level ranges, stats)
+ *   nodes   node_count x 32 bytes (sl_octree_node as laid out in octree.h)
+ *   node crossings  node_crossing_count x u32
+ *   crossing positions  crossing_count x 3 x f32
+ *   crossing colours    crossing_count x 4 x u8 (only if has_color)
+ *
+ * Parsing checks every count against the bytes present and every index against its
+ * table (parents, children, crossing ids, level ranges) before anything is trusted, so a
+ * corrupt or hostile file gives an error, never an out-of-bounds read.
+ */
+#ifndef SCANLOD_RUNTIME_OCTREE_IO_H
+#define SCANLOD_RUNTIME_OCTREE_IO_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "pipeline/artifact.h"
+#include "pipeline/error.h"
+#include "runtime/octree.h"
+
+#define SL_OCTREE_MAGIC "SLOCTREE"
+#define SL_OCTREE_FORMAT_VERSION 1u
+#define SL_OCTREE_PARTS 5
+
+/* Describes the octree as artifact parts (pointing into `t` and `header`, which must
+ * outlive the write). Returns the number of parts used. */
+int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_part *parts);
+
+/* Parses an octree section starting at `body`; *used gets its byte length. The octree
+ * gets its own copies of the arrays. `name` is used in messages. */
+int sl_octree_parse(const unsigned char *body, uint64_t size, const char *name, sl_octree *out,
+                    uint64_t *used, sl_error *err);
+
+int sl_octree_write(const char *path, const sl_octree *t, uint32_t stage_version, sl_error *err);
+int sl_octree_read(const char *path, sl_octree *out, sl_error *err);
+
+#endif
