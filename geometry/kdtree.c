@@ -20,6 +20,7 @@
 #include <string.h>
 
 enum { LEAF_SIZE = 8, AXIS_LEAF = 3, STACK_RESULTS = 256 };
+#define PARALLEL_RECORDS 65536u /* subtrees at least this big are built as tasks */
 
 typedef struct kd_point {
     float p[3];
@@ -37,7 +38,7 @@ struct sl_kdtree {
     kd_point *points;
     uint32_t count;
     kd_node *nodes;
-    uint32_t node_count, node_capacity;
+    uint32_t node_capacity; /* slots; unused ones are never reached */
 };
 
 /* Lexicographic (coordinate, index) order: a strict total order on the records. */
@@ -111,8 +112,20 @@ static int widest_axis(const kd_point *pts, uint32_t n)
     return axis;
 }
 
-/* Builds the subtree of records [begin, end) into node `at` (already allocated). */
-static void build_node(sl_kdtree *t, uint32_t at, uint32_t begin, uint32_t end)
+/* Node slots reserved below the root of a subtree of n records: B(n) = n/2 - 2. It
+ * covers the subtree because B(n) >= 2 + B(n/2) + B(n - n/2) (the two children and their
+ * reservations), and a leaf needs B >= 0, true for every leaf that comes from a split
+ * (> LEAF_SIZE records halve into >= LEAF_SIZE / 2 = 4). About n/2 nodes in all. */
+static uint64_t descendants_bound(uint64_t n)
+{
+    return n < 4 ? 0 : n / 2 - 2;
+}
+
+/* Builds the subtree of records [begin, end) into node `at`; its descendants take node
+ * slots from `region` on. Each child's subtree gets its own slot range sized by
+ * descendants_bound, so the layout does not depend on which task runs first and large
+ * subtrees are built as parallel OpenMP tasks (unused slots are left as empty leaves). */
+static void build_node(sl_kdtree *t, uint32_t at, uint32_t begin, uint32_t end, uint64_t region)
 {
     kd_node *nd = &t->nodes[at];
     nd->begin = begin;
@@ -126,13 +139,15 @@ static void build_node(sl_kdtree *t, uint32_t at, uint32_t begin, uint32_t end)
     uint32_t n = end - begin, half = n / 2;
     int axis = widest_axis(t->points + begin, n);
     select_rank(t->points + begin, n, half, axis);
-    uint32_t child = t->node_count;
-    t->node_count += 2; /* capacity is sized for the worst case in sl_kdtree_build */
+    uint32_t child = (uint32_t)region;
+    uint64_t left_region = region + 2, right_region = left_region + descendants_bound(half);
     nd->axis = (uint32_t)axis;
     nd->split = t->points[begin + half].p[axis];
     nd->child = child;
-    build_node(t, child, begin, begin + half);
-    build_node(t, child + 1, begin + half, end);
+#pragma omp task if (n > PARALLEL_RECORDS) default(shared) firstprivate(child, begin, half, left_region)
+    build_node(t, child, begin, begin + half, left_region);
+    build_node(t, child + 1, begin + half, end, right_region);
+#pragma omp taskwait
 }
 
 int sl_kdtree_build(sl_kdtree **out, const float *points, uint64_t count, sl_error *err)
@@ -145,10 +160,13 @@ int sl_kdtree_build(sl_kdtree **out, const float *points, uint64_t count, sl_err
     if (!t)
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "k-d tree: out of memory");
     t->count = (uint32_t)count;
-    /* Leaves hold > LEAF_SIZE / 2 records (or all of them), so there are fewer than
-     * count / (LEAF_SIZE / 2) + 1 leaves and twice that many nodes. */
-    uint64_t leaves = count / (LEAF_SIZE / 2) + 1;
-    t->node_capacity = (uint32_t)(2 * leaves);
+    uint64_t capacity = 1 + descendants_bound(count);
+    if (capacity > UINT32_MAX) {
+        sl_kdtree_free(t);
+        return sl_error_set(err, SL_E_LIMIT, 0, NULL, "k-d tree: %llu points need too many nodes",
+                            (unsigned long long)count);
+    }
+    t->node_capacity = (uint32_t)capacity;
     t->points = malloc((count ? count : 1) * sizeof *t->points);
     t->nodes = malloc((size_t)t->node_capacity * sizeof *t->nodes);
     if (!t->points || !t->nodes) {
@@ -160,8 +178,9 @@ int sl_kdtree_build(sl_kdtree **out, const float *points, uint64_t count, sl_err
         memcpy(t->points[i].p, points + 3 * (uint64_t)i, 3 * sizeof(float));
         t->points[i].index = i;
     }
-    t->node_count = 1;
-    build_node(t, 0, 0, t->count);
+#pragma omp parallel if (count > PARALLEL_RECORDS)
+#pragma omp single
+    build_node(t, 0, 0, t->count, 1);
     *out = t;
     return SL_OK;
 }

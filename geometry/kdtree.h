@@ -7,8 +7,9 @@
  *
  * Sizes: at most SL_KDTREE_MAX_POINTS points (indices are uint32_t).
  * Ownership: the tree copies the points it needs (the caller's array may be freed).
- * Thread safety: build is single-threaded; queries on a built tree are read-only and may
- * run concurrently from any number of threads (e.g. inside `omp parallel for`).
+ * Thread safety: build runs OpenMP tasks inside (same tree on any thread count); queries
+ * on a built tree are read-only and may run concurrently from any number of threads
+ * (e.g. inside `omp parallel for`).
  */
 #ifndef SCANLOD_GEOMETRY_KDTREE_H
 #define SCANLOD_GEOMETRY_KDTREE_H
