@@ -127,6 +127,35 @@ int sl_input_hash(sl_engine *e, const char *ticket, const char *source_rel, sl_h
     return sl_hash_file_cached(source, cache, out, err);
 }
 
+sl_hash sl_chain_hash(sl_hash chain, sl_hash digest)
+{
+    sl_hash pair[2] = {chain, digest};
+    return sl_hash_bytes(pair, sizeof pair);
+}
+
+int sl_upstream_chain(sl_engine *e, const char *ticket, const char *source_rel, int s,
+                      int verify_last, sl_hash *out, sl_error *err)
+{
+    sl_hash chain;
+    int rc = sl_input_hash(e, ticket, source_rel, &chain, err);
+    for (int i = 0; rc == 0 && i < s; i++) {
+        char dir[PATH_MAX], record[PATH_MAX];
+        sl_artifact_dir(e, i, ticket, dir, sizeof dir);
+        sl_engine_path(record, sizeof record, "%s/%s", dir, SL_RECORD_FILE);
+        sl_record rec;
+        sl_error rerr;
+        sl_error_init(&rerr);
+        int bad = verify_last && i == s - 1 ? sl_record_verify(record, dir, NULL, &rec, &rerr)
+                                            : sl_record_read(record, &rec, &rerr);
+        if (bad)
+            return SL_E_CORRUPT; /* an upstream result is gone or stale */
+        chain = sl_chain_hash(chain, rec.outputs_digest);
+    }
+    if (rc == 0)
+        *out = chain;
+    return rc;
+}
+
 static int check_directory(const char *path, const char *what, sl_error *err)
 {
     struct stat st;

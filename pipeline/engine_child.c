@@ -72,6 +72,17 @@ static int run_stage_in_child(sl_engine *e, int s, const char *item, const char 
                               const char *in_dir, const char *out_dir, shared_progress *sp,
                               sl_error *err)
 {
+    /* Every earlier stage's artifact directory, for stages that read more than the
+     * previous one (the key chain covers them all). */
+    static char dirs[SL_MAX_STAGES][PATH_MAX];
+    const char *upstream[SL_MAX_STAGES + 1] = {NULL};
+    char ticket[SL_TICKET_NAME_MAX + 1];
+    if (sl_ticket_name(item, ticket, sizeof ticket, err))
+        return err->code;
+    for (int i = 0; i < s; i++) {
+        sl_artifact_dir(e, i, ticket, dirs[i], sizeof dirs[i]);
+        upstream[i] = dirs[i];
+    }
     const sl_stage *stage = e->stages[s];
     void *stage_config = NULL;
     int rc = stage->configure(e->cfg, &stage_config, err);
@@ -85,7 +96,8 @@ static int run_stage_in_child(sl_engine *e, int s, const char *item, const char 
     progress.report = report_to_parent;
     progress.ctx = sp;
     progress.interrupt_flag = sl_interrupt_flag();
-    sl_stage_io io = {item, source, in_dir, out_dir, &report, &progress, omp_get_max_threads()};
+    sl_stage_io io = {item,     source,    in_dir, out_dir, &report,
+                      &progress, omp_get_max_threads(), upstream};
     rc = stage->run(stage_config, &io, err);
     sl_json_object_end(&report);
     if (rc == 0 && report.failed)
@@ -345,15 +357,7 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
     sl_hash upstream;
     sl_error uerr;
     sl_error_init(&uerr);
-    if (s == 0)
-        rc = sl_input_hash(e, name, t->source, &upstream, &uerr);
-    else {
-        sl_record up;
-        char up_record[PATH_MAX];
-        sl_engine_path(up_record, sizeof up_record, "%s/%s", in_dir, SL_RECORD_FILE);
-        rc = sl_record_verify(up_record, in_dir, NULL, &up, &uerr);
-        upstream = up.outputs_digest;
-    }
+    rc = sl_upstream_chain(e, name, t->source, s, 1, &upstream, &uerr);
     if (rc) {
         char path[PATH_MAX];
         sl_queue_path(path, sizeof path, e->work, stage->name, SL_STATE_CLAIMED, name);

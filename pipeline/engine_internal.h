@@ -56,6 +56,13 @@ int sl_engine_path(char *buf, size_t size, const char *fmt, ...)
 int sl_artifact_dir(const sl_engine *e, int stage, const char *ticket, char *buf, size_t size);
 int sl_input_hash(sl_engine *e, const char *ticket, const char *source_rel, sl_hash *out,
                   sl_error *err);
+/* The upstream chain stage s is keyed on: the input's content hash, then the outputs
+ * digest of every earlier stage in order (chain = H(chain, digest)), so a change anywhere
+ * upstream reruns it, and identical upstream outputs never do. SL_E_CORRUPT when an
+ * earlier record is missing; `verify_last` re-hashes stage s-1's outputs. */
+int sl_upstream_chain(sl_engine *e, const char *ticket, const char *source_rel, int s,
+                      int verify_last, sl_hash *out, sl_error *err);
+sl_hash sl_chain_hash(sl_hash chain, sl_hash digest);
 int sl_remove_dir_contents(const char *dir, sl_error *err);
 double sl_now_seconds(void);
 

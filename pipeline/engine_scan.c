@@ -1,8 +1,8 @@
 /* Collection scan and reconciliation: make each item's tickets match its current keys.
  *
  * For every stage in order, the stage key is computed from the config section hash, the
- * stage version and the upstream digest (the input's content hash for the first stage,
- * the upstream record's outputs digest after that). A stage whose record verifies under
+ * stage version and the upstream chain (the input's content hash, then every earlier
+ * stage's outputs digest: sl_upstream_chain). A stage whose record verifies under
  * that key is done; the first stage that is not gets a ready ticket (or keeps its
  * quarantine, when the key is the one it was quarantined under). Items whose every stage
  * is done are published if their publication is missing or stale.
@@ -46,23 +46,6 @@ static int requeue(sl_engine *e, const char *stage, const char *name, int from, 
     return rc == SL_E_BUSY ? 0 : rc;
 }
 
-static int upstream_digest(sl_engine *e, const char *name, const char *source_rel, int s,
-                           sl_hash *out, sl_error *err)
-{
-    if (s == 0)
-        return sl_input_hash(e, name, source_rel, out, err);
-    char dir[PATH_MAX], record[PATH_MAX];
-    sl_artifact_dir(e, s - 1, name, dir, sizeof dir);
-    sl_engine_path(record, sizeof record, "%s/%s", dir, SL_RECORD_FILE);
-    sl_record rec;
-    sl_error verr;
-    sl_error_init(&verr);
-    if (sl_record_verify(record, dir, NULL, &rec, &verr) != 0)
-        return SL_E_CORRUPT; /* upstream no longer valid: reconcile from the start */
-    *out = rec.outputs_digest;
-    return 0;
-}
-
 int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
                         sl_error *err)
 {
@@ -71,7 +54,7 @@ int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, 
     if (rc)
         return rc;
     sl_hash upstream;
-    rc = upstream_digest(e, name, source_rel, from, &upstream, err);
+    rc = sl_upstream_chain(e, name, source_rel, from, 0, &upstream, err);
     if (rc == SL_E_CORRUPT && from > 0)
         return sl_engine_reconcile(e, item, source_rel, 0, err);
     if (rc)
@@ -101,7 +84,7 @@ int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, 
                     return rc;
             }
             e->counts.reused++;
-            upstream = rec.outputs_digest;
+            upstream = sl_chain_hash(upstream, rec.outputs_digest);
             continue;
         }
         if (state == SL_STATE_NONE) {

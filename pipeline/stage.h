@@ -31,7 +31,13 @@ typedef struct sl_stage_io {
     sl_json *report;         /* open object: this stage's section of the item report */
     sl_progress *progress;
     int threads;             /* OpenMP threads for this item (already set) */
+    /* Artifact directories of every earlier stage, in pipeline order (NULL-terminated);
+     * the stage key chains over all of them. Find one by name with sl_stage_dir(). */
+    const char *const *upstream_dirs;
 } sl_stage_io;
+
+/* The artifact directory of the earlier stage `name` for this item, or NULL. */
+const char *sl_stage_dir(const sl_stage_io *io, const char *name);
 
 typedef struct sl_stage {
     const char *name;         /* also the config section */

@@ -17,6 +17,9 @@ check "first run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
 check "three items published" [ -f "$TMP/out/a/report.json" -a -f "$TMP/out/sub/b/report.json" -a -f "$TMP/out/c/report.json" ]
 check "item id keeps the folder" grep -q '"item": "sub/b"' "$TMP/out/sub/b/report.json"
 ref=$(tree_digest "$TMP/work" "$TMP/out")
+run_scanlod status "$cfg"
+stages=$(( $(wc -l <<<"$out") - 1 ))
+check "status lists the stages ($stages)" [ "$stages" -ge 1 ]
 
 run_scanlod run "$cfg" -q
 check "rerun exits 0" [ "$rc" -eq 0 ]
@@ -34,25 +37,30 @@ check "digest unchanged after touch/copy" [ "$ref" = "$(tree_digest "$TMP/work" 
 # One changed byte: the first coordinate of bun_zipper_res4 (ascii) gets another digit.
 sed -i '0,/^-0.0312216/s//-0.0312217/' "$TMP/in/a.ply"
 run_scanlod run "$cfg" -q
-check "changed byte reruns one stage run (got: $out)" grep -q "^3 items: 1 stage runs" <<<"$out"
+check "changed byte reruns that item only (got: $out)" grep -q "^3 items: $stages stage runs, .* 1 published" <<<"$out"
 
 # Corrupt one artifact byte: detected by hash, rebuilt, identical again.
 art=$(find "$TMP/work/artifacts/range" -name points.slpts | head -n 1)
 printf 'X' | dd of="$art" bs=1 seek=100 conv=notrunc status=none
 run_scanlod run "$cfg" -q
-check "corrupted artifact rebuilt (got: $out)" grep -q "^3 items: 1 stage runs" <<<"$out"
+check "corrupted artifact rebuilt (got: $out)" grep -qE "^3 items: [1-9][0-9]* stage runs" <<<"$out"
 
+# A [range] key that does not change range's outputs on meshes (knn is for point clouds):
+# range reruns everywhere, later stages see identical upstream bytes and do not.
 run_scanlod run "$cfg" -q -s range.knn=13
-check "changed [range] key reruns range for all 3 (got: $out)" grep -q "^3 items: 3 stage runs" <<<"$out"
+check "changed [range] key reruns range for all 3, nothing else (got: $out)" grep -q "^3 items: 3 stage runs" <<<"$out"
 run_scanlod run "$cfg" -q -s range.knn=13
 check "same key again: nothing to do (got: $out)" grep -q "^nothing to do" <<<"$out"
 run_scanlod run "$cfg" -q -s range.knn=13 -s run.threads=1 -s run.log_level=debug
 check "[run] keys are not stage keys: nothing to do (got: $out)" grep -q "^nothing to do" <<<"$out"
+# One that changes range's outputs (range images are written): every stage reruns.
+run_scanlod run "$cfg" -q -s range.knn=13 -s range.range_images=true
+check "range output change reruns every stage of every item (got: $out)" grep -q "^3 items: $((3 * stages)) stage runs, .* 3 published" <<<"$out"
 
 rm -rf "$TMP/out/sub"
 run_scanlod run "$cfg" -q
 check "deleted publication republished (rc $rc)" [ -f "$TMP/out/sub/b/report.json" ]
 
 run_scanlod status "$cfg"
-check "status shows 3 done" grep -qE '^range +0 +0 +3 +0 +0$' <<<"$out"
+check "status shows 3 done in every stage" [ "$(grep -cE '^[a-z]+ +0 +0 +3 +0 +0$' <<<"$out")" -eq "$stages" ]
 finish
