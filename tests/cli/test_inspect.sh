@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# `scanlod inspect`: what a PLY holds on stdout, exit 0; a malformed file gives exactly one
+# line "scanlod: FILE: cause" on stderr and exit 65; usage errors exit 64.
+source "$(dirname "$0")/../lib.sh"
+data="$SCANLOD_SOURCE_DIR/tests/data"
+
+inspect() { # inspect ARGS...: sets rc, out, err
+  set +e
+  out=$("$SCANLOD" inspect "$@" 2>"$TMP/err")
+  rc=$?
+  set -e
+  err=$(cat "$TMP/err")
+}
+
+inspect "$data/cow.ply"
+check "cow: exit 0" [ "$rc" -eq 0 ]
+check "cow: format" grep -qx "format: binary_little_endian 1.0 (header 258 bytes)" <<<"$out"
+check "cow: vertices" grep -qx "vertices: 2904" <<<"$out"
+check "cow: faces" grep -q "^faces: 5804 declared, 5804 triangles" <<<"$out"
+check "cow: bbox" grep -q "^bbox: min -0.5 " <<<"$out"
+check "cow: nothing on stderr" [ -z "$err" ]
+
+inspect "$data/bun_zipper_res4.ply"
+check "bunny: elements" grep -qx "elements: vertex 453 (x y z confidence intensity); face 948 (list uchar int vertex_indices)" <<<"$out"
+check "bunny: non-finite" grep -qx "non-finite vertices: 0" <<<"$out"
+
+inspect "$data/malformed/all_nan.ply"
+check "all-NaN: valid, counted" [ "$rc" -eq 0 ]
+check "all-NaN: count" grep -qx "non-finite vertices: 3" <<<"$out"
+check "all-NaN: no bbox" grep -qx "bbox: none" <<<"$out"
+
+bad="$data/malformed/vertex_2e32_binary.ply"
+inspect "$bad"
+check "malformed: exit 65" [ "$rc" -eq 65 ]
+check "malformed: one line" [ "$(wc -l <"$TMP/err")" -eq 1 ]
+check "malformed: names file and cause" grep -qx "scanlod: $bad: header line 3: element vertex declares 4294967295 vertices (at least 12 bytes each) but the file has 36 bytes after the header" <<<"$err"
+check "malformed: nothing on stdout" [ -z "$out" ]
+
+inspect "$TMP/missing.ply"
+check "missing file: exit 65" [ "$rc" -eq 65 ]
+check "missing file: says so" grep -q "^scanlod: $TMP/missing.ply: open failed" <<<"$err"
+
+inspect
+check "no argument: exit 64" [ "$rc" -eq 64 ]
+check "no argument: usage on stderr" grep -q "^usage: scanlod inspect" <<<"$err"
+inspect a.ply b.ply
+check "two arguments: exit 64" [ "$rc" -eq 64 ]
+inspect --help
+check "--help: exit 0" [ "$rc" -eq 0 ]
+check "--help: usage on stdout" grep -q "^usage: scanlod inspect" <<<"$out"
+
+finish
