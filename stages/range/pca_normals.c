@@ -15,8 +15,8 @@
  * dragon_rangescan backwards; the hull vote gets 98.7% right; docs/range-stage.md).
  *
  * Determinism: the neighbour search and PCA are per point (parallel, independent); the
- * MST walk is serial, seeded at the lowest unvisited index, with heap ties broken by
- * (cost, point, parent).
+ * MST walk is serial, seeded at the lowest unvisited index, with ties broken by the
+ * lower point, then the lower parent index.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -97,63 +97,72 @@ static void flip(float *n)
     n[0] = -n[0], n[1] = -n[1], n[2] = -n[2];
 }
 
-/* ---- MST propagation (Prim with a lazy binary heap) ---- */
+/* ---- MST propagation: Prim with an indexed binary heap (decrease-key), so memory is
+ * O(points) however many edges the kNN graph has ---- */
 
-typedef struct heap_entry {
-    double cost;
-    uint32_t point, parent;
-} heap_entry;
+typedef struct prim_heap {
+    uint32_t *items;  /* heap of points, ordered by (key, point) */
+    uint32_t *slot;   /* point -> position in items, or RANGE_NONE */
+    double *key;      /* point -> cheapest edge to the tree so far */
+    uint32_t *parent; /* point -> the tree point at the other end of that edge */
+    uint64_t size;
+} prim_heap;
 
-typedef struct heap {
-    heap_entry *e;
-    uint64_t size, cap;
-} heap;
-
-static int entry_less(const heap_entry *a, const heap_entry *b)
+static int heap_before(const prim_heap *h, uint32_t a, uint32_t b)
 {
-    if (a->cost != b->cost)
-        return a->cost < b->cost;
-    if (a->point != b->point)
-        return a->point < b->point;
-    return a->parent < b->parent;
+    return h->key[a] != h->key[b] ? h->key[a] < h->key[b] : a < b;
 }
 
-static int heap_push(heap *h, heap_entry x)
+static void heap_place(prim_heap *h, uint64_t i, uint32_t point)
 {
-    if (h->size == h->cap) {
-        uint64_t cap = h->cap ? 2 * h->cap : 1024;
-        heap_entry *e = realloc(h->e, cap * sizeof *e);
-        if (!e)
-            return SL_E_NOMEM;
-        h->e = e, h->cap = cap;
-    }
-    uint64_t i = h->size++;
-    while (i > 0 && entry_less(&x, &h->e[(i - 1) / 2])) {
-        h->e[i] = h->e[(i - 1) / 2];
+    h->items[i] = point;
+    h->slot[point] = (uint32_t)i;
+}
+
+static void heap_sift_up(prim_heap *h, uint64_t i)
+{
+    uint32_t x = h->items[i];
+    while (i > 0 && heap_before(h, x, h->items[(i - 1) / 2])) {
+        heap_place(h, i, h->items[(i - 1) / 2]);
         i = (i - 1) / 2;
     }
-    h->e[i] = x;
-    return SL_OK;
+    heap_place(h, i, x);
 }
 
-static heap_entry heap_pop(heap *h)
+static uint32_t heap_pop(prim_heap *h)
 {
-    heap_entry top = h->e[0], last = h->e[--h->size];
+    uint32_t top = h->items[0], last = h->items[--h->size];
+    h->slot[top] = RANGE_NONE;
+    if (h->size == 0)
+        return top;
     uint64_t i = 0;
     for (;;) {
         uint64_t c = 2 * i + 1;
         if (c >= h->size)
             break;
-        if (c + 1 < h->size && entry_less(&h->e[c + 1], &h->e[c]))
+        if (c + 1 < h->size && heap_before(h, h->items[c + 1], h->items[c]))
             c++;
-        if (!entry_less(&h->e[c], &last))
+        if (!heap_before(h, h->items[c], last))
             break;
-        h->e[i] = h->e[c];
+        heap_place(h, i, h->items[c]);
         i = c;
     }
-    if (h->size)
-        h->e[i] = last;
+    heap_place(h, i, last);
     return top;
+}
+
+/* Offers the edge (parent p -> q) of `cost`; keeps the cheaper, then lower-parent one. */
+static void heap_offer(prim_heap *h, uint32_t q, double cost, uint32_t p)
+{
+    uint32_t at = h->slot[q];
+    if (at == RANGE_NONE) {
+        h->key[q] = cost, h->parent[q] = p;
+        h->items[h->size] = q;
+        heap_sift_up(h, h->size++);
+    } else if (cost < h->key[q] || (cost == h->key[q] && p < h->parent[q])) {
+        h->key[q] = cost, h->parent[q] = p;
+        heap_sift_up(h, at);
+    }
 }
 
 typedef struct graph {
@@ -210,18 +219,15 @@ static double edge_cost(const graph *g, const float *normals, uint32_t p, uint32
     return cost;
 }
 
-static int push_neighbours(heap *h, const graph *g, const uint8_t *visited, const float *normals,
-                           uint32_t p)
+static void offer_neighbours(prim_heap *h, const graph *g, const uint8_t *visited,
+                             const float *normals, uint32_t p)
 {
     const uint32_t *fwd = g->knn + (uint64_t)p * g->k;
     for (uint64_t i = 0; i < g->k + (g->rstart[p + 1] - g->rstart[p]); i++) {
         uint32_t q = i < g->k ? fwd[i] : g->rev[g->rstart[p] + (i - g->k)];
-        if (q == RANGE_NONE || visited[q])
-            continue;
-        if (heap_push(h, (heap_entry){edge_cost(g, normals, p, q), q, p}) != SL_OK)
-            return SL_E_NOMEM;
+        if (q != RANGE_NONE && !visited[q])
+            heap_offer(h, q, edge_cost(g, normals, p, q), p);
     }
-    return SL_OK;
 }
 
 /* The sign rule for a component: at a point of the component that is extreme in a
@@ -265,14 +271,18 @@ static double hull_vote(const float *positions, const float *normals, const uint
 static int propagate(const graph *g, const float *positions, uint64_t n, float *normals,
                      uint64_t *components, sl_progress *progress, sl_error *err)
 {
-    uint8_t *visited = calloc(n ? n : 1, 1);
-    uint32_t *members = malloc((n ? n : 1) * sizeof *members);
-    heap h = {NULL, 0, 0};
+    uint64_t size = n ? n : 1;
+    uint8_t *visited = calloc(size, 1);
+    uint32_t *members = malloc(size * sizeof *members);
+    prim_heap h = {malloc(size * sizeof(uint32_t)), malloc(size * sizeof(uint32_t)),
+                   malloc(size * sizeof(double)), malloc(size * sizeof(uint32_t)), 0};
     int rc = SL_OK;
-    if (!visited || !members) {
+    if (!visited || !members || !h.items || !h.slot || !h.key || !h.parent) {
         rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "normals: out of memory (propagation)");
         goto done;
     }
+    for (uint64_t i = 0; i < n; i++)
+        h.slot[i] = RANGE_NONE;
     uint64_t done_count = 0;
     *components = 0;
     for (uint64_t seed = 0; seed < n; seed++) {
@@ -280,20 +290,15 @@ static int propagate(const graph *g, const float *positions, uint64_t n, float *
             continue;
         (*components)++;
         uint64_t member_count = 0;
-        h.size = 0;
-        if ((rc = heap_push(&h, (heap_entry){0.0, (uint32_t)seed, RANGE_NONE})) != SL_OK)
-            goto nomem;
+        heap_offer(&h, (uint32_t)seed, 0.0, RANGE_NONE);
         while (h.size) {
-            heap_entry x = heap_pop(&h);
-            if (visited[x.point])
-                continue;
-            visited[x.point] = 1;
-            members[member_count++] = x.point;
-            float *np = normals + 3 * (uint64_t)x.point;
-            if (x.parent != RANGE_NONE && dot3f(normals + 3 * (uint64_t)x.parent, np) < 0)
+            uint32_t p = heap_pop(&h);
+            visited[p] = 1;
+            members[member_count++] = p;
+            float *np = normals + 3 * (uint64_t)p;
+            if (h.parent[p] != RANGE_NONE && dot3f(normals + 3 * (uint64_t)h.parent[p], np) < 0)
                 flip(np);
-            if ((rc = push_neighbours(&h, g, visited, normals, x.point)) != SL_OK)
-                goto nomem;
+            offer_neighbours(&h, g, visited, normals, p);
             if ((++done_count & 0xffff) == 0 &&
                 sl_progress_step(progress, "orient normals", (double)done_count / n)) {
                 rc = SL_E_INTERRUPTED;
@@ -305,11 +310,9 @@ static int propagate(const graph *g, const float *positions, uint64_t n, float *
             for (uint64_t i = 0; i < member_count; i++)
                 flip(normals + 3 * (uint64_t)members[i]);
     }
-    goto done;
-nomem:
-    rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "normals: out of memory (propagation heap)");
 done:
-    free(visited), free(members), free(h.e);
+    free(visited), free(members);
+    free(h.items), free(h.slot), free(h.key), free(h.parent);
     return rc;
 }
 

@@ -62,7 +62,8 @@ static int run_stage(const sl_range_config *cfg, const char *source, const char 
     sl_json_init(&j, 0);
     sl_json_object_begin(&j, NULL);
     sl_progress progress = {NULL, NULL, interrupt};
-    sl_stage_io io = {"item", source, NULL, out, &j, &progress, threads};
+    sl_stage_io io = {.item = "item", .source_path = source, .out_dir = out, .report = &j,
+                      .progress = &progress, .threads = threads};
     sl_error err;
     sl_error_init(&err);
     omp_set_num_threads(threads);
