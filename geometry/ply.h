@@ -13,7 +13,10 @@
  * length, element counts and list lengths are bounded by sl_ply_limits; indices must be
  * < vertex_count. Any failure is one sl_error naming the file, the element/line and the
  * cause (SL_E_BADINPUT or SL_E_LIMIT), never a crash. Non-finite coordinates are kept (the
- * range stage counts and drops them).
+ * range stage counts and drops them). After the last element an ascii file may hold only
+ * whitespace; a binary file must end exactly there (extra bytes mean the header does not
+ * describe the body: SL_E_BADINPUT). Faces with fewer than 3 corners are dropped and
+ * counted; repeated indices are kept (degenerate faces are the range stage's business).
  *
  * Thread safety: reentrant; no global state.
  */

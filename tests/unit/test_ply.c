@@ -426,6 +426,35 @@ static void test_empty_rows(void)
     sl_mesh_release(&m);
 }
 
+/* 64-bit offsets: a sparse 4.5 GiB file whose last bytes hold the vertices, after an
+ * element of 4.5 billion one-byte rows (skipped, never touched, never allocated). */
+static void test_beyond_4gib(void)
+{
+    char path[512];
+    const uint64_t pad = 4500000000ull;
+    snprintf(path, sizeof path, "%s/sparse.ply", tmpdir);
+    FILE *f = fopen(path, "wb");
+    CHECK(f != NULL);
+    if (!f)
+        return;
+    fprintf(f, "ply\nformat binary_little_endian 1.0\nelement pad %llu\nproperty uchar p\n"
+               "element vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+               "end_header\n", (unsigned long long)pad);
+    const float xyz[6] = {1, 2, 3, -4, -5, -6};
+    int ok = fseeko(f, (off_t)pad, SEEK_CUR) == 0 && fwrite(xyz, sizeof xyz, 1, f) == 1;
+    ok = fclose(f) == 0 && ok;
+    CHECK_MSG(ok, "cannot write the sparse file");
+    sl_mesh m;
+    sl_error err;
+    sl_error_init(&err);
+    int rc = ok ? sl_ply_read(path, NULL, &m, NULL, NULL, &err) : -1;
+    CHECK_MSG(rc == 0, "%s", err.message);
+    CHECK(rc == 0 && m.vertex_count == 2 && memcmp(m.positions, xyz, sizeof xyz) == 0);
+    if (rc == 0)
+        sl_mesh_release(&m);
+    unlink(path);
+}
+
 /* The info summary `scanlod inspect` prints. */
 static void test_info(void)
 {
@@ -470,6 +499,8 @@ int main(void)
     }
     test_empty_rows();
     test_info();
+    if (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__ && sizeof(size_t) == 8)
+        test_beyond_4gib();
     printf("%d files written and read back\n", files_written);
     rmdir(tmpdir);
     return check_report();
