@@ -228,6 +228,22 @@ static void test_texture_file(void)
           memcmp(ps.colors + 12, "\xff\x00\x00\xff", 4) == 0);
     sl_pointset_release(&ps);
     remove_tree(out);
+    /* Per-face texcoords (the MeshLab `texcoord` list): a point averages its corners. */
+    snprintf(path, sizeof path, "%s/faces.ply", dir);
+    write_text(path, "ply\nformat ascii 1.0\ncomment TextureFile tex.png\n"
+                     "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                     "element face 1\nproperty list uchar int vertex_indices\n"
+                     "property list uchar float texcoord\nend_header\n"
+                     "0 0 0\n1 0 0\n0 1 0\n3 0 1 2 6 0.25 0.75 0.75 0.75 0.75 0.25\n");
+    make_dir(out, sizeof out, "textured_out");
+    CHECK(run_stage(&cfg, path, out, 1, NULL, NULL, NULL) == SL_OK);
+    snprintf(path, sizeof path, "%s/%s", out, SL_POINTSET_FILE);
+    CHECK(sl_pointset_read(path, &ps, &err) == SL_OK);
+    CHECK(ps.count == 3 && ps.colors && memcmp(ps.colors, "\xff\x00\x00\xff", 4) == 0 &&
+          memcmp(ps.colors + 4, "\x00\xff\x00\xff", 4) == 0 &&
+          memcmp(ps.colors + 8, "\xff\xff\xff\xff", 4) == 0);
+    sl_pointset_release(&ps);
+    remove_tree(out);
     /* Without the image: a warning in the report, not a failure. */
     snprintf(path, sizeof path, "%s/tex.png", dir);
     unlink(path);
