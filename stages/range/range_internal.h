@@ -67,7 +67,9 @@ int range_pca_normals(const sl_kdtree *tree, const float *positions, uint64_t po
 int range_colors(const sl_mesh *mesh, const range_clean *clean, const char *texture_dir,
                  int enabled, uint8_t **colors, sl_range_counts *counts, sl_error *err);
 
-/* Mean distance from each point to its nearest other point (0 for a single point). */
-double range_mean_spacing(const sl_kdtree *tree, const float *positions, uint64_t point_count);
+/* Mean distance from each point to its nearest other point (0 for a single point).
+ * OUT: *spacing. Returns 0 or SL_E_NOMEM. */
+int range_mean_spacing(const sl_kdtree *tree, const float *positions, uint64_t point_count,
+                       double *spacing, sl_error *err);
 
 #endif

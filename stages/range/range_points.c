@@ -10,13 +10,16 @@
 #include "geometry/mesh_distance.h"
 #include "stages/range/range_internal.h"
 
-double range_mean_spacing(const sl_kdtree *tree, const float *positions, uint64_t point_count)
+int range_mean_spacing(const sl_kdtree *tree, const float *positions, uint64_t point_count,
+                       double *spacing, sl_error *err)
 {
+    *spacing = 0.0;
     if (point_count < 2)
-        return 0.0;
+        return SL_OK;
     double *d = malloc(point_count * sizeof *d);
     if (!d)
-        return 0.0; /* spacing is informative; callers treat 0 as "unknown" */
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "spacing: out of memory (%llu points)",
+                            (unsigned long long)point_count);
 #pragma omp parallel for schedule(static, 4096)
     for (int64_t i = 0; i < (int64_t)point_count; i++) {
         uint32_t idx[2];
@@ -29,7 +32,8 @@ double range_mean_spacing(const sl_kdtree *tree, const float *positions, uint64_
     for (uint64_t i = 0; i < point_count; i++)
         sum += d[i];
     free(d);
-    return sum / (double)point_count;
+    *spacing = sum / (double)point_count;
+    return SL_OK;
 }
 
 static void bounding_box(const float *positions, uint64_t n, float lo[3], float hi[3])
@@ -189,7 +193,8 @@ int sl_range_points_from_mesh(const sl_range_config *cfg, sl_mesh *mesh, const c
         goto done;
     if ((rc = range_colors(mesh, &clean, texture_dir, cfg->colors, &out->colors, counts, err)))
         goto done;
-    out->mean_spacing = range_mean_spacing(tree, out->positions, n);
+    if ((rc = range_mean_spacing(tree, out->positions, n, &out->mean_spacing, err)))
+        goto done;
     counts->points = n;
     counts->normal_source = out->normal_source;
     if (triangles && clean.triangle_count) {
