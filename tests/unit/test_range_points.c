@@ -1,6 +1,7 @@
 /* Range stage on meshes built in memory: exact drop/weld counts, face normals, file
  * normal fallback, grid triangulation and its orientation, PCA normals on spheres
- * (propagated and viewpoint), texture sampling, point set round trip and corruption. */
+ * (propagated and viewpoint), degenerate clouds, texture sampling, point set round trip
+ * and corruption. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -237,6 +238,46 @@ static void test_pca_spheres(void)
     sl_mesh_release(&m);
 }
 
+/* Degenerate clouds give unit normals and no crash; a plane gets one consistent side. */
+static void test_degenerate_clouds(void)
+{
+    sl_range_config cfg = sl_range_default_config();
+    const int sizes[] = {1, 2, 5, 400};
+    for (int c = 0; c < 4; c++) {
+        sl_mesh m;
+        sl_pointset ps;
+        sl_range_counts counts;
+        sl_mesh_init(&m);
+        m.vertex_count = (uint64_t)sizes[c];
+        m.positions = calloc(3 * (size_t)sizes[c], sizeof(float));
+        for (int i = 0; i < sizes[c]; i++) {
+            m.positions[3 * i] = (float)(i % 20);         /* collinear below 20 points */
+            m.positions[3 * i + 1] = (float)(i / 20) * 0.5f; /* then a 20 x 20 plane z = 0 */
+        }
+        CHECK(run(&cfg, &m, NULL, &ps, &counts) == SL_OK);
+        CHECK_EQ_U64(ps.count, (uint64_t)sizes[c]);
+        int unit = 0, up = 0;
+        for (uint64_t i = 0; i < ps.count; i++) {
+            const float *n = ps.normals + 3 * i;
+            unit += fabs(sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]) - 1) < 1e-5;
+            up += n[2] > 0.999f;
+        }
+        CHECK_EQ_U64(unit, ps.count);
+        if (sizes[c] == 400)
+            CHECK(up == 0 || up == 400);
+        sl_pointset_release(&ps);
+        sl_mesh_release(&m);
+    }
+    /* A scanner grid naming a vertex that does not exist is bad input. */
+    sl_mesh m;
+    sl_pointset ps;
+    sl_range_counts counts;
+    build_grid(&m, 0);
+    m.grid_index[5] = (int64_t)m.vertex_count;
+    CHECK(run(&cfg, &m, NULL, &ps, &counts) == SL_E_BADINPUT);
+    sl_mesh_release(&m);
+}
+
 static void make_temp_dir(char *dir, size_t size)
 {
     snprintf(dir, size, "%s/scanlod-test-range-XXXXXX", getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
@@ -349,6 +390,7 @@ int main(void)
     test_file_normals();
     test_grid();
     test_pca_spheres();
+    test_degenerate_clouds();
     test_texture(dir);
     test_pointset_file(dir);
     rmdir(dir);
