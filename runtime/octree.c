@@ -15,6 +15,7 @@ void sl_octree_release(sl_octree *t)
     free(t->crossing_position);
     free(t->crossing_color);
     free(t->node_crossings);
+    free(t->morton);
     sl_octree_init(t);
 }
 
@@ -42,6 +43,18 @@ void sl_octree_corner_world(const sl_octree *t, const sl_octree_node *n, int c, 
         out[a] = t->origin[a] + p[a] * size;
 }
 
+int sl_octree_index(sl_octree *t)
+{
+    free(t->morton);
+    t->morton = malloc((t->node_count ? t->node_count : 1) * sizeof *t->morton);
+    if (!t->morton)
+        return -1;
+    for (uint32_t i = 0; i < t->node_count; i++)
+        t->morton[i] = sl_morton3((uint32_t)t->nodes[i].x, (uint32_t)t->nodes[i].y,
+                                  (uint32_t)t->nodes[i].z);
+    return 0;
+}
+
 uint32_t sl_octree_find(const sl_octree *t, uint32_t level, int64_t x, int64_t y, int64_t z)
 {
     if (level > t->depth || x < 0 || y < 0 || z < 0 || x >= (1 << 20) || y >= (1 << 20) ||
@@ -52,7 +65,8 @@ uint32_t sl_octree_find(const sl_octree *t, uint32_t level, int64_t x, int64_t y
     while (lo < hi) {
         uint32_t mid = lo + (hi - lo) / 2;
         const sl_octree_node *n = &t->nodes[mid];
-        uint64_t k = sl_morton3((uint32_t)n->x, (uint32_t)n->y, (uint32_t)n->z);
+        uint64_t k = t->morton ? t->morton[mid]
+                               : sl_morton3((uint32_t)n->x, (uint32_t)n->y, (uint32_t)n->z);
         if (k == key)
             return mid;
         if (k < key)

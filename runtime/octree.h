@@ -55,6 +55,7 @@ typedef struct sl_octree {
     uint64_t node_crossing_count;
     uint32_t *node_crossings;  /* crossing ids, per node in edge order */
     sl_octree_stats stats;
+    uint64_t *morton;          /* per node Morton key, derived (not stored): lookups */
 } sl_octree;
 
 void sl_octree_init(sl_octree *t);
@@ -73,6 +74,10 @@ void sl_octree_corner_world(const sl_octree *t, const sl_octree_node *n, int c, 
 /* Index of the node at (level, x, y, z), or SL_OCTREE_NONE. Binary search in the level's
  * Morton order: O(log n). */
 uint32_t sl_octree_find(const sl_octree *t, uint32_t level, int64_t x, int64_t y, int64_t z);
+
+/* Derives the per-node Morton keys that make sl_octree_find fast (called by the
+ * builder and the readers; -1 when out of memory). */
+int sl_octree_index(sl_octree *t);
 
 /* Morton code of 20-bit coordinates (x in the lowest interleaved bit). */
 uint64_t sl_morton3(uint32_t x, uint32_t y, uint32_t z);

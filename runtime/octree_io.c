@@ -163,6 +163,8 @@ int sl_octree_parse(const unsigned char *body, uint64_t size, const char *name, 
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
     }
     int rc = validate(out, name, err);
+    if (rc == 0 && sl_octree_index(out))
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
     if (rc) {
         sl_octree_release(out);
         return rc;

@@ -1,0 +1,237 @@
+/* .slod reading and writing, and completing a model (see lod_io.h). */
+#include "runtime/lod_io.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pipeline/artifact.h"
+#include "runtime/octree_io.h"
+
+#define LOD_HEADER_SIZE 24
+
+static int cell_triangles(const sl_lod_model *m, uint32_t n, uint32_t k)
+{
+    sl_mc_cell cell;
+    uint32_t point_crossing[SL_MC_MAX_POINTS];
+    sl_lod_cell(&m->tree, &m->neighbours, &m->transitions, m->expansion_index, k, n, &cell,
+                point_crossing);
+    sl_mc_triangles tri;
+    sl_mc_triangulate(&cell, &tri);
+    return tri.count;
+}
+
+static int frontier_at(const sl_lod_model *m, uint32_t n, uint32_t k)
+{
+    uint32_t parent = m->tree.nodes[n].parent;
+    return m->expansion_index[n] >= k &&
+           (parent == SL_OCTREE_NONE || m->expansion_index[parent] < k);
+}
+
+/* Triangle count change of expansion i: the node, its children, and the same-level
+ * neighbours whose cells it splits. */
+static int64_t expansion_delta(const sl_lod_model *m, uint32_t i)
+{
+    uint32_t n = m->lod_array[i];
+    const sl_octree_node *node = &m->tree.nodes[n];
+    int64_t before = cell_triangles(m, n, i), after = 0;
+    for (int c = 0; c < __builtin_popcount(node->child_mask); c++)
+        after += cell_triangles(m, node->first_child + (uint32_t)c, i + 1);
+    for (int d = 0; d < 27; d++) {
+        uint32_t nb = d == 13 ? SL_OCTREE_NONE : sl_neighbour(&m->neighbours, n, d);
+        if (nb == SL_OCTREE_NONE || !frontier_at(m, nb, i))
+            continue;
+        before += cell_triangles(m, nb, i);
+        after += cell_triangles(m, nb, i + 1);
+    }
+    return after - before;
+}
+
+int sl_lod_model_finish(sl_lod_model *m, const float *node_error, sl_error *err)
+{
+    uint32_t n = m->tree.node_count, e = m->expansion_count;
+    free(m->expansion_index);
+    free(m->accumulation);
+    free(m->error_after);
+    free(m->scratch);
+    m->expansion_index = malloc((size_t)n * sizeof *m->expansion_index);
+    m->accumulation = malloc(((size_t)e + 1) * sizeof *m->accumulation);
+    m->error_after = malloc(((size_t)e + 1) * sizeof *m->error_after);
+    m->scratch = malloc((m->tree.crossing_count ? m->tree.crossing_count : 1) * sizeof *m->scratch);
+    int64_t *delta = malloc(((size_t)e + 1) * sizeof *delta);
+    if (!m->expansion_index || !m->accumulation || !m->error_after || !m->scratch || !delta) {
+        free(delta);
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    }
+    memset(m->scratch, 0xff, (size_t)m->tree.crossing_count * sizeof *m->scratch);
+    memset(m->expansion_index, 0xff, (size_t)n * sizeof *m->expansion_index);
+    for (uint32_t i = 0; i < e; i++)
+        m->expansion_index[m->lod_array[i]] = i;
+#pragma omp parallel for schedule(dynamic, 256)
+    for (uint32_t i = 0; i < e; i++)
+        delta[i] = expansion_delta(m, i);
+    int64_t count = cell_triangles(m, 0, 0);
+    for (uint32_t i = 0; i <= e; i++) {
+        m->accumulation[i] = (uint64_t)(count < 0 ? 0 : count);
+        if (i < e)
+            count += delta[i];
+    }
+    free(delta);
+    float worst = 0;
+    m->error_after[e] = 0;
+    for (uint32_t i = e; i-- > 0;) {
+        if (node_error)
+            worst = fmaxf(worst, node_error[m->lod_array[i]]);
+        m->error_after[i] = worst;
+    }
+    return 0;
+}
+
+int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_version,
+                       sl_error *err)
+{
+    unsigned char octree_header[512], header[LOD_HEADER_SIZE];
+    sl_artifact_part parts[SL_OCTREE_PARTS + 9];
+    int count = sl_octree_parts(&m->tree, octree_header, parts);
+    uint32_t n = m->tree.node_count, e = m->expansion_count;
+    sl_put_u32(header, e);
+    sl_put_u32(header + 4, n);
+    sl_put_u64(header + 8, m->neighbours.count);
+    sl_put_u64(header + 16, m->transitions.count);
+    parts[count++] = (sl_artifact_part){header, sizeof header};
+    parts[count++] = (sl_artifact_part){m->lod_array, (size_t)e * 4};
+    parts[count++] = (sl_artifact_part){m->accumulation, ((size_t)e + 1) * 8};
+    parts[count++] = (sl_artifact_part){m->error_after, ((size_t)e + 1) * 4};
+    parts[count++] = (sl_artifact_part){m->neighbours.mask, (size_t)n * 4};
+    parts[count++] = (sl_artifact_part){m->neighbours.base, (size_t)n * 4};
+    parts[count++] = (sl_artifact_part){m->neighbours.index, (size_t)m->neighbours.count * 4};
+    parts[count++] = (sl_artifact_part){m->transitions.base, (size_t)n * 4};
+    parts[count++] = (sl_artifact_part){m->transitions.words, (size_t)m->transitions.count * 4};
+    return sl_artifact_write(path, SL_LOD_MAGIC, SL_LOD_FORMAT_VERSION, stage_version, parts,
+                             count, err);
+}
+
+static int corrupt(sl_error *err, const char *path, const char *what)
+{
+    return sl_error_set(err, SL_E_CORRUPT, 0, path, "invalid LOD model: %s", what);
+}
+
+static void *take(const unsigned char **at, uint64_t bytes)
+{
+    void *p = malloc(bytes ? bytes : 1);
+    if (p && bytes)
+        memcpy(p, *at, bytes);
+    *at += bytes;
+    return p;
+}
+
+/* The LOD array must be a valid expansion order, the tables in range. */
+static int validate(const sl_lod_model *m, const char *path, sl_error *err)
+{
+    const sl_octree *t = &m->tree;
+    uint32_t n = t->node_count;
+    uint8_t *seen = calloc(n ? n : 1, 1);
+    if (!seen)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    int rc = 0;
+    for (uint32_t i = 0; i < m->expansion_count && !rc; i++) {
+        uint32_t node = m->lod_array[i];
+        if (node >= n || seen[node] || !t->nodes[node].child_mask ||
+            (t->nodes[node].parent != SL_OCTREE_NONE && !seen[t->nodes[node].parent]))
+            rc = corrupt(err, path, "the LOD array is not an expansion order");
+        else
+            seen[node] = 1;
+    }
+    free(seen);
+    for (uint32_t i = 0; i < n && !rc; i++) {
+        uint32_t mask = m->neighbours.mask[i];
+        if (mask >> 27 || (mask >> 13 & 1) ||
+            (uint64_t)m->neighbours.base[i] + (uint64_t)__builtin_popcount(mask) > m->neighbours.count)
+            rc = corrupt(err, path, "neighbour table out of range");
+        uint32_t tb = m->transitions.base[i];
+        if (!rc && tb != SL_OCTREE_NONE) {
+            if ((uint64_t)tb + 3 > m->transitions.count)
+                rc = corrupt(err, path, "transition record out of range");
+            else {
+                const uint32_t *w = m->transitions.words + tb;
+                uint64_t ids = (uint64_t)__builtin_popcount(w[1] & 0xffffff) +
+                               (uint64_t)__builtin_popcount(w[2] & 0xffffff);
+                if ((uint64_t)tb + 3 + ids > m->transitions.count)
+                    rc = corrupt(err, path, "transition record out of range");
+                for (uint64_t j = 0; !rc && j < ids; j++)
+                    if (w[3 + j] >= t->crossing_count)
+                        rc = corrupt(err, path, "transition crossing out of range");
+            }
+        } else if (!rc && t->nodes[i].level > 0) {
+            rc = corrupt(err, path, "internal node without a transition record");
+        }
+    }
+    for (uint64_t i = 0; i < m->neighbours.count && !rc; i++)
+        if (m->neighbours.index[i] >= n)
+            rc = corrupt(err, path, "neighbour index out of range");
+    for (uint32_t i = 0; i <= m->expansion_count && !rc; i++)
+        if (!isfinite(m->error_after[i]))
+            rc = corrupt(err, path, "non-finite error");
+    return rc;
+}
+
+static int parse_lod(sl_lod_model *m, const unsigned char *p, uint64_t size, const char *path,
+                     sl_error *err)
+{
+    if (size < LOD_HEADER_SIZE)
+        return corrupt(err, path, "truncated LOD header");
+    uint64_t e = sl_get_u32(p), n = sl_get_u32(p + 4);
+    m->neighbours.count = sl_get_u64(p + 8);
+    m->transitions.count = sl_get_u64(p + 16);
+    if (n != m->tree.node_count || e > n || m->neighbours.count > 26 * n ||
+        m->transitions.count > 51 * n ||
+        size != LOD_HEADER_SIZE + 4 * e + 8 * (e + 1) + 4 * (e + 1) + 12 * n +
+                    4 * m->neighbours.count + 4 * m->transitions.count)
+        return corrupt(err, path, "LOD section sizes do not match the file");
+    m->expansion_count = (uint32_t)e;
+    const unsigned char *at = p + LOD_HEADER_SIZE;
+    m->lod_array = take(&at, 4 * e);
+    m->accumulation = take(&at, 8 * (e + 1));
+    m->error_after = take(&at, 4 * (e + 1));
+    m->neighbours.mask = take(&at, 4 * n);
+    m->neighbours.base = take(&at, 4 * n);
+    m->neighbours.index = take(&at, 4 * m->neighbours.count);
+    m->transitions.base = take(&at, 4 * n);
+    m->transitions.words = take(&at, 4 * m->transitions.count);
+    if (!m->lod_array || !m->accumulation || !m->error_after || !m->neighbours.mask ||
+        !m->neighbours.base || !m->neighbours.index || !m->transitions.base ||
+        !m->transitions.words)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    return validate(m, path, err);
+}
+
+int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err)
+{
+    sl_lod_model_init(out);
+    void *body = NULL;
+    uint64_t size = 0, used = 0;
+    int rc = sl_artifact_read(path, SL_LOD_MAGIC, SL_LOD_FORMAT_VERSION, (uint64_t)1 << 40, &body,
+                              &size, NULL, err);
+    if (rc == 0)
+        rc = sl_octree_parse(body, size, path, &out->tree, &used, err);
+    if (rc == 0)
+        rc = parse_lod(out, (const unsigned char *)body + used, size - used, path, err);
+    free(body);
+    if (rc == 0) {
+        out->expansion_index = malloc((size_t)out->tree.node_count * sizeof *out->expansion_index);
+        out->scratch = malloc((out->tree.crossing_count ? out->tree.crossing_count : 1) *
+                              sizeof *out->scratch);
+        if (!out->expansion_index || !out->scratch)
+            rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    }
+    if (rc == 0) {
+        memset(out->expansion_index, 0xff, (size_t)out->tree.node_count * sizeof(uint32_t));
+        for (uint32_t i = 0; i < out->expansion_count; i++)
+            out->expansion_index[out->lod_array[i]] = i;
+        memset(out->scratch, 0xff, (size_t)out->tree.crossing_count * sizeof(uint32_t));
+    } else {
+        sl_lod_model_release(out);
+    }
+    return rc;
+}

@@ -1,0 +1,33 @@
+/* The LOD model file, `.slod` (docs/formats.md): artifact envelope "SLODMODL" whose body is
+ * the octree section (octree_io.h) followed by the LOD section:
+ *
+ *   u32 expansion_count, u32 node_count, u64 neighbour_count, u64 transition_words
+ *   lod_array      expansion_count x u32
+ *   accumulation   (expansion_count + 1) x u64
+ *   error_after    (expansion_count + 1) x f32
+ *   neighbours     node_count x u32 mask, node_count x u32 base, neighbour_count x u32
+ *   transitions    node_count x u32 base, transition_words x u32
+ *
+ * Reading validates every index (the LOD array is a valid expansion order: each entry an
+ * internal node whose parent was expanded before it, each node at most once).
+ */
+#ifndef SCANLOD_RUNTIME_LOD_IO_H
+#define SCANLOD_RUNTIME_LOD_IO_H
+
+#include "pipeline/error.h"
+#include "runtime/lod_model.h"
+
+#define SL_LOD_MAGIC "SLODMODL"
+#define SL_LOD_FORMAT_VERSION 1u
+
+int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_version,
+                       sl_error *err);
+/* Loads and validates; prepares expansion_index and the extraction scratch. */
+int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err);
+
+/* Completes a model whose tree, lod_array, neighbours and transitions are set: derives
+ * expansion_index, the accumulation table (by drawing the cells each expansion changes)
+ * and error_after from per-node errors (may be NULL: then all zero). */
+int sl_lod_model_finish(sl_lod_model *m, const float *node_error, sl_error *err);
+
+#endif

@@ -1,0 +1,109 @@
+/* The LOD model: the marching-cube octree plus what makes any level of detail cheap to cut
+ * (paper 1, sections 2.3-3; docs/lod.md).
+ *
+ *   lod_array        node index of the k-th expansion, k = 0 .. expansion_count - 1 (paper:
+ *                    "priority number"); expanding a node replaces it by its children;
+ *   expansion_index  per node, its position in lod_array (SL_OCTREE_NONE: never expanded);
+ *   accumulation     triangles of the mesh after k expansions, k = 0 .. expansion_count;
+ *   error_after      the largest geometric error of any node still unexpanded after k
+ *                    expansions (world units), non-increasing in k;
+ *   neighbours       per node, its same-level neighbours in the 26 directions;
+ *   transitions      per node, the finer level's samples on its boundary (edge midpoint and
+ *                    face centre signs, half-edge and spoke crossings): the precomputed crack
+ *                    compensation, so a coarse cell next to a finer one is drawn with the
+ *                    finer one's points on their shared face and no crack opens.
+ *
+ * The mesh after k expansions has as cells the frontier nodes: children of the first k
+ * expanded nodes that are not themselves among them (the root for k = 0). Generating it
+ * costs O(k + m): every frontier cell is found from the LOD array and drawn from its own
+ * record and its neighbours' expansion indices, with no search.
+ */
+#ifndef SCANLOD_RUNTIME_LOD_MODEL_H
+#define SCANLOD_RUNTIME_LOD_MODEL_H
+
+#include <stdint.h>
+
+#include "runtime/lod_mesh.h"
+#include "runtime/mc_cube.h"
+#include "runtime/octree.h"
+
+/* Direction index of a neighbour offset (dx, dy, dz) in {-1, 0, 1}^3, 13 = self. */
+static inline int sl_direction(int dx, int dy, int dz)
+{
+    return (dx + 1) + 3 * (dy + 1) + 9 * (dz + 1);
+}
+
+typedef struct sl_neighbours {
+    uint32_t *mask;   /* per node: bit d set when the neighbour in direction d exists */
+    uint32_t *base;   /* per node: index of its first neighbour in `index` */
+    uint64_t count;
+    uint32_t *index;  /* node indices, per node in direction order */
+} sl_neighbours;
+
+/* Per node transition record, compact: words[base] = mid_known | mid_inside << 12 |
+ * centre_known << 24; words[base + 1] = half_mask | centre_inside << 24; words[base + 2] =
+ * spoke_mask; then one crossing id per set bit of half_mask (bit 2e + h: half h of edge e)
+ * and of spoke_mask (bit 4f + k: spoke k of face f). */
+typedef struct sl_transitions {
+    uint32_t *base;   /* per node, SL_OCTREE_NONE for leaves */
+    uint64_t count;
+    uint32_t *words;
+} sl_transitions;
+
+typedef struct sl_lod_model {
+    sl_octree tree;
+    uint32_t expansion_count;
+    uint32_t *lod_array;
+    uint32_t *expansion_index;
+    uint64_t *accumulation;  /* expansion_count + 1 entries */
+    float *error_after;      /* expansion_count + 1 entries */
+    sl_neighbours neighbours;
+    sl_transitions transitions;
+    uint32_t *scratch;       /* crossing -> vertex map for O(m) extraction (all NONE) */
+} sl_lod_model;
+
+void sl_lod_model_init(sl_lod_model *m);
+void sl_lod_model_release(sl_lod_model *m);
+
+/* Neighbour in direction d of node n, or SL_OCTREE_NONE. */
+static inline uint32_t sl_neighbour(const sl_neighbours *nb, uint32_t n, int d)
+{
+    uint32_t mask = nb->mask[n];
+    if (!(mask >> d & 1))
+        return SL_OCTREE_NONE;
+    return nb->index[nb->base[n] + (uint32_t)__builtin_popcount(mask & ((1u << d) - 1u))];
+}
+
+/* Builds the neighbour table of every node (O(n log n) lookups). Returns -1 on OOM. */
+int sl_neighbours_build(const sl_octree *t, sl_neighbours *out);
+void sl_neighbours_release(sl_neighbours *nb);
+
+/* Gathers every node's transition record from the finer level (O(n log n)). */
+int sl_transitions_build(const sl_octree *t, sl_transitions *out, uint64_t *unresolved);
+void sl_transitions_release(sl_transitions *tr);
+
+/* The cell of frontier node n when the nodes with expansion_index < k are expanded:
+ * corner signs plus the splits its expanded neighbours require; `point_crossing` maps the
+ * cell's point ids to crossing ids. Returns 0, or -1 when a split lacks data (a crack the
+ * report counts; the cell is then drawn unsplit there). */
+int sl_lod_cell(const sl_octree *t, const sl_neighbours *nb, const sl_transitions *tr,
+                const uint32_t *expansion_index, uint32_t k, uint32_t n, sl_mc_cell *cell,
+                uint32_t point_crossing[SL_MC_MAX_POINTS]);
+
+/* Frontier after k expansions, in a deterministic order; *cells must hold
+ * sl_lod_frontier_bound(m, k) entries. Returns the count. */
+uint64_t sl_lod_frontier_bound(const sl_lod_model *m, uint32_t k);
+uint64_t sl_lod_frontier(const sl_lod_model *m, uint32_t k, uint32_t *cells);
+
+/* The mesh after k expansions (k <= expansion_count). `cracks` (may be NULL) gets the
+ * count of cells drawn without a split they needed. Returns 0 or -1 on OOM. */
+int sl_lod_generate(sl_lod_model *m, uint32_t k, sl_lod_mesh *out, uint64_t *cracks);
+
+/* k for a triangle budget (largest k whose accumulation <= budget; at least 0), a LOD
+ * percent (k = round(percent / 100 * expansion_count), paper Table 1) and a maximum
+ * error (smallest k whose error_after <= max_error). */
+uint32_t sl_lod_expansions_for_triangles(const sl_lod_model *m, uint64_t budget);
+uint32_t sl_lod_expansions_for_percent(const sl_lod_model *m, double percent);
+uint32_t sl_lod_expansions_for_error(const sl_lod_model *m, double max_error);
+
+#endif

@@ -1,0 +1,79 @@
+/* crack stage entry (crack.h). */
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "runtime/lod_io.h"
+#include "runtime/octree_io.h"
+#include "stages/crack/crack.h"
+#include "stages/merge/merge.h"
+#include "stages/priority/priority.h"
+
+#define CRACK_STAGE_VERSION 1u
+
+static int crack_configure(const sl_config *cfg, void **out, sl_error *err)
+{
+    (void)cfg;
+    (void)err;
+    *out = NULL;
+    return 0;
+}
+
+static int crack_run(const void *config, const sl_stage_io *io, sl_error *err)
+{
+    (void)config;
+    const char *merge_dir = sl_stage_dir(io, "merge");
+    if (!merge_dir)
+        return sl_error_set(err, SL_E_INTERNAL, 0, NULL, "crack stage needs the merge stage");
+    char octree_path[PATH_MAX], priority_path[PATH_MAX], out_path[PATH_MAX];
+    snprintf(octree_path, sizeof octree_path, "%s/%s", merge_dir, SL_OCTREE_FILE);
+    snprintf(priority_path, sizeof priority_path, "%s/%s", io->in_dir, SL_PRIORITY_FILE);
+    snprintf(out_path, sizeof out_path, "%s/%s", io->out_dir, SL_MODEL_FILE);
+    sl_lod_model model;
+    sl_lod_model_init(&model);
+    int rc = sl_octree_read(octree_path, &model.tree, err);
+    sl_priority p;
+    memset(&p, 0, sizeof p);
+    if (rc == 0)
+        rc = sl_priority_read(priority_path, &model.tree, &p, err);
+    uint64_t unresolved = 0;
+    if (rc == 0 && sl_progress_step(io->progress, "crack: transitions", 0.1))
+        rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+    if (rc == 0 && sl_transitions_build(&model.tree, &model.transitions, &unresolved))
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    if (rc == 0) {
+        /* The model takes over the priority stage's arrays. */
+        model.expansion_count = p.expansion_count;
+        model.lod_array = p.lod_array;
+        model.neighbours = p.neighbours;
+        p.lod_array = NULL;
+        memset(&p.neighbours, 0, sizeof p.neighbours);
+        if (sl_progress_step(io->progress, "crack: accumulation", 0.5))
+            rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+    }
+    if (rc == 0)
+        rc = sl_lod_model_finish(&model, p.node_error, err);
+    if (rc == 0)
+        rc = sl_lod_model_write(out_path, &model, CRACK_STAGE_VERSION, err);
+    if (rc == 0) {
+        sl_json_u64(io->report, "transition_words", model.transitions.count);
+        sl_json_u64(io->report, "finer_samples_missing", unresolved);
+        sl_json_u64(io->report, "triangles_coarsest", model.accumulation[0]);
+        sl_json_u64(io->report, "triangles_finest", model.accumulation[model.expansion_count]);
+    }
+    sl_priority_release(&p);
+    sl_lod_model_release(&model);
+    return rc;
+}
+
+const sl_stage sl_crack_stage = {
+    .name = "crack",
+    .description = "LOD array -> crack compensation records and the LOD model (paper 1 2.4)",
+    .version = CRACK_STAGE_VERSION,
+    .options = NULL,
+    .configure = crack_configure,
+    .release_config = NULL,
+    .run = crack_run,
+};

@@ -1,0 +1,188 @@
+/* priority stage entry and its file, priority.slpri (priority.h; docs/formats.md). */
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pipeline/artifact.h"
+#include "runtime/octree_io.h"
+#include "stages/merge/merge.h"
+#include "stages/priority/priority.h"
+
+#define PRIORITY_STAGE_VERSION 1u
+#define PRIORITY_MAGIC "SLPRIORI"
+#define PRIORITY_FORMAT_VERSION 1u
+
+void sl_priority_release(sl_priority *p)
+{
+    free(p->lod_array);
+    free(p->area_difference);
+    free(p->node_error);
+    sl_neighbours_release(&p->neighbours);
+    memset(p, 0, sizeof *p);
+}
+
+int sl_priority_write(const char *path, const sl_priority *p, uint32_t stage_version,
+                      sl_error *err)
+{
+    unsigned char header[16];
+    sl_put_u32(header, p->node_count);
+    sl_put_u32(header + 4, p->expansion_count);
+    sl_put_u64(header + 8, p->neighbours.count);
+    size_t n = p->node_count;
+    sl_artifact_part parts[] = {
+        {header, sizeof header},
+        {p->lod_array, (size_t)p->expansion_count * 4},
+        {p->area_difference, n * 4},
+        {p->node_error, n * 4},
+        {p->neighbours.mask, n * 4},
+        {p->neighbours.base, n * 4},
+        {p->neighbours.index, (size_t)p->neighbours.count * 4},
+    };
+    return sl_artifact_write(path, PRIORITY_MAGIC, PRIORITY_FORMAT_VERSION, stage_version, parts,
+                             (int)(sizeof parts / sizeof parts[0]), err);
+}
+
+static int corrupt(sl_error *err, const char *path, const char *what)
+{
+    return sl_error_set(err, SL_E_CORRUPT, 0, path, "invalid priority file: %s", what);
+}
+
+static int validate(const sl_priority *p, const sl_octree *t, const char *path, sl_error *err)
+{
+    for (uint32_t i = 0; i < p->expansion_count; i++)
+        if (p->lod_array[i] >= t->node_count || !t->nodes[p->lod_array[i]].child_mask)
+            return corrupt(err, path, "LOD array entry is not an internal node");
+    for (uint32_t i = 0; i < p->node_count; i++) {
+        uint64_t count = (uint64_t)__builtin_popcount(p->neighbours.mask[i] & 0x7ffffff);
+        if ((p->neighbours.mask[i] >> 13 & 1) || p->neighbours.mask[i] >> 27 ||
+            (uint64_t)p->neighbours.base[i] + count > p->neighbours.count)
+            return corrupt(err, path, "neighbour table out of range");
+        if (!isfinite(p->area_difference[i]) || !isfinite(p->node_error[i]))
+            return corrupt(err, path, "non-finite metric");
+    }
+    for (uint64_t i = 0; i < p->neighbours.count; i++)
+        if (p->neighbours.index[i] >= t->node_count)
+            return corrupt(err, path, "neighbour index out of range");
+    return 0;
+}
+
+static void *take(const unsigned char **at, uint64_t bytes)
+{
+    void *p = malloc(bytes ? bytes : 1);
+    if (p && bytes)
+        memcpy(p, *at, bytes);
+    *at += bytes;
+    return p;
+}
+
+int sl_priority_read(const char *path, const sl_octree *t, sl_priority *out, sl_error *err)
+{
+    memset(out, 0, sizeof *out);
+    void *body;
+    uint64_t size;
+    int rc = sl_artifact_read(path, PRIORITY_MAGIC, PRIORITY_FORMAT_VERSION, (uint64_t)1 << 40,
+                              &body, &size, NULL, err);
+    if (rc)
+        return rc;
+    const unsigned char *p = body;
+    if (size < 16) {
+        free(body);
+        return corrupt(err, path, "truncated header");
+    }
+    out->node_count = sl_get_u32(p);
+    out->expansion_count = sl_get_u32(p + 4);
+    out->neighbours.count = sl_get_u64(p + 8);
+    uint64_t n = out->node_count;
+    if (n != t->node_count || out->expansion_count > n || out->neighbours.count > 26 * n ||
+        size != 16 + 4 * ((uint64_t)out->expansion_count + 4 * n + out->neighbours.count)) {
+        free(body);
+        return corrupt(err, path, "counts do not match the octree or the file size");
+    }
+    const unsigned char *at = p + 16;
+    out->lod_array = take(&at, (uint64_t)out->expansion_count * 4);
+    out->area_difference = take(&at, n * 4);
+    out->node_error = take(&at, n * 4);
+    out->neighbours.mask = take(&at, n * 4);
+    out->neighbours.base = take(&at, n * 4);
+    out->neighbours.index = take(&at, out->neighbours.count * 4);
+    free(body);
+    if (!out->lod_array || !out->area_difference || !out->node_error || !out->neighbours.mask ||
+        !out->neighbours.base || !out->neighbours.index) {
+        sl_priority_release(out);
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    }
+    rc = validate(out, t, path, err);
+    if (rc)
+        sl_priority_release(out);
+    return rc;
+}
+
+static int priority_configure(const sl_config *cfg, void **out, sl_error *err)
+{
+    (void)cfg;
+    (void)err;
+    *out = NULL;
+    return 0;
+}
+
+static int priority_run(const void *config, const sl_stage_io *io, sl_error *err)
+{
+    (void)config;
+    char in_path[PATH_MAX], out_path[PATH_MAX];
+    snprintf(in_path, sizeof in_path, "%s/%s", io->in_dir, SL_OCTREE_FILE);
+    snprintf(out_path, sizeof out_path, "%s/%s", io->out_dir, SL_PRIORITY_FILE);
+    sl_octree tree;
+    int rc = sl_octree_read(in_path, &tree, err);
+    if (rc)
+        return rc;
+    sl_priority p;
+    memset(&p, 0, sizeof p);
+    p.node_count = tree.node_count;
+    p.lod_array = malloc(tree.node_count * sizeof *p.lod_array);
+    p.area_difference = malloc(tree.node_count * sizeof *p.area_difference);
+    p.node_error = malloc(tree.node_count * sizeof *p.node_error);
+    if (!p.lod_array || !p.area_difference || !p.node_error)
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    if (rc == 0 && sl_progress_step(io->progress, "priority: metrics", 0.0))
+        rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+    if (rc == 0 && sl_priority_metrics(&tree, p.area_difference, p.node_error))
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    if (rc == 0 && sl_progress_step(io->progress, "priority: neighbours", 0.4))
+        rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+    if (rc == 0 && sl_neighbours_build(&tree, &p.neighbours))
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    if (rc == 0 && sl_progress_step(io->progress, "priority: order", 0.7))
+        rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+    if (rc == 0)
+        rc = sl_priority_order(&tree, &p.neighbours, p.area_difference, p.lod_array,
+                               &p.expansion_count, err);
+    if (rc == 0)
+        rc = sl_priority_write(out_path, &p, PRIORITY_STAGE_VERSION, err);
+    if (rc == 0) {
+        double total = 0, top = 0;
+        for (uint32_t i = 0; i < p.expansion_count; i++) {
+            total += p.area_difference[p.lod_array[i]];
+            top = fmax(top, p.area_difference[p.lod_array[i]]);
+        }
+        sl_json_u64(io->report, "expansions", p.expansion_count);
+        sl_json_double(io->report, "area_difference_total", total);
+        sl_json_double(io->report, "area_difference_max", top);
+        sl_json_double(io->report, "root_error", p.node_error[0]);
+    }
+    sl_priority_release(&p);
+    sl_octree_release(&tree);
+    return rc;
+}
+
+const sl_stage sl_priority_stage = {
+    .name = "priority",
+    .description = "octree -> area-difference priority and LOD array (paper 1 section 2.3)",
+    .version = PRIORITY_STAGE_VERSION,
+    .options = NULL,
+    .configure = priority_configure,
+    .release_config = NULL,
+    .run = priority_run,
+};

@@ -1,0 +1,209 @@
+/* LOD model on analytic closed surfaces, at every expansion count K: neighbouring frontier
+ * cells differ by less than 2 levels, the accumulation table equals the triangles actually
+ * generated, every mesh is watertight (no cracks), and a .slod roundtrip is exact. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "runtime/lod_io.h"
+#include "stages/merge/merge.h"
+#include "stages/priority/priority.h"
+#include "tests/check.h"
+
+typedef double (*sdf_fn)(const double p[3]);
+
+static double blob_sdf(const double p[3])
+{
+    /* A sphere with a bump and a dent: regions of different detail. */
+    double r = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    double bump = 3.0 * exp(-((p[0] - 8) * (p[0] - 8) + p[1] * p[1] + (p[2] - 5) * (p[2] - 5)) / 6.0);
+    double dent = 2.0 * exp(-((p[0] + 6) * (p[0] + 6) + (p[1] - 7) * (p[1] - 7) + p[2] * p[2]) / 4.0);
+    return r - 10.7 - bump + dent;
+}
+
+static double torus_sdf(const double p[3])
+{
+    double q = sqrt(p[0] * p[0] + p[1] * p[1]) - 9.0;
+    return sqrt(q * q + p[2] * p[2]) - 3.4;
+}
+
+static int build_model(sdf_fn sdf, int n, sl_lod_model *m)
+{
+    size_t cap = 4096, count = 0;
+    int32_t *coords = malloc(cap * 3 * sizeof *coords);
+    float *dist = malloc(cap * sizeof *dist);
+    for (int x = -n; x <= n; x++)
+        for (int y = -n; y <= n; y++)
+            for (int z = -n; z <= n; z++) {
+                double p[3] = {x, y, z}, d = sdf(p);
+                /* The blob's field is not a true distance: a wide band keeps every cube
+                 * the surface crosses fully sampled, as the samples stage's band does. */
+                if (fabs(d) > 4.0)
+                    continue;
+                if (count == cap) {
+                    cap *= 2;
+                    coords = realloc(coords, cap * 3 * sizeof *coords);
+                    dist = realloc(dist, cap * sizeof *dist);
+                }
+                coords[3 * count] = x;
+                coords[3 * count + 1] = y;
+                coords[3 * count + 2] = z;
+                dist[count++] = (float)d;
+            }
+    sl_sample_grid g = {count, coords, dist, NULL, 0.5, {1, 2, 3}};
+    sl_error err;
+    sl_error_init(&err);
+    sl_lod_model_init(m);
+    int rc = sl_octree_build(&g, &m->tree, NULL, &err);
+    free(coords);
+    free(dist);
+    if (rc)
+        return rc;
+    uint32_t nodes = m->tree.node_count;
+    float *area = malloc(nodes * sizeof *area), *error = malloc(nodes * sizeof *error);
+    m->lod_array = malloc(nodes * sizeof *m->lod_array);
+    uint64_t unresolved;
+    rc = sl_priority_metrics(&m->tree, area, error) || sl_neighbours_build(&m->tree, &m->neighbours) ||
+         sl_priority_order(&m->tree, &m->neighbours, area, m->lod_array, &m->expansion_count, &err) ||
+         sl_transitions_build(&m->tree, &m->transitions, &unresolved) ||
+         sl_lod_model_finish(m, error, &err);
+    free(area);
+    free(error);
+    return rc;
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+static uint64_t bad_edges(const sl_lod_mesh *m)
+{
+    uint64_t n = 3 * m->triangle_count, bad = 0;
+    uint64_t *e = malloc((n ? n : 1) * sizeof *e);
+    for (uint64_t t = 0; t < m->triangle_count; t++)
+        for (int k = 0; k < 3; k++) {
+            uint64_t a = m->indices[3 * t + k], b = m->indices[3 * t + (k + 1) % 3];
+            e[3 * t + k] = a < b ? a << 32 | b : b << 32 | a;
+        }
+    qsort(e, n, sizeof *e, cmp_u64);
+    for (uint64_t i = 0; i < n;) {
+        uint64_t j = i;
+        while (j < n && e[j] == e[i])
+            j++;
+        bad += (j - i) != 2;
+        i = j;
+    }
+    free(e);
+    return bad;
+}
+
+/* Does some frontier cell touch a frontier cell 2 or more levels coarser? A coarser
+ * frontier cell around cell a shows as the level-(a + 1) node over a neighbour position
+ * being unexpanded and not a frontier cell itself (so its own ancestors are unexpanded).
+ * (A 2-levels-coarser node over an empty position would touch a's expanded grandparent's
+ * region, which the order forbids before it expands, so level a + 1 is enough to look at.) */
+static int level_gap(const sl_lod_model *m, uint32_t k)
+{
+    uint32_t *cells = malloc(sl_lod_frontier_bound(m, k) * sizeof *cells);
+    uint64_t count = sl_lod_frontier(m, k, cells);
+    int gap = 0;
+    const sl_octree *t = &m->tree;
+    for (uint64_t i = 0; i < count && !gap; i++) {
+        const sl_octree_node *a = &t->nodes[cells[i]];
+        if (a->level + 1u > t->depth)
+            continue;
+        for (int d = 0; d < 27 && !gap; d++) {
+            int64_t q[3] = {a->x + d % 3 - 1, a->y + d / 3 % 3 - 1, a->z + d / 9 - 1};
+            if (q[0] < 0 || q[1] < 0 || q[2] < 0)
+                continue;
+            uint32_t c = sl_octree_find(t, a->level + 1u, q[0] >> 1, q[1] >> 1, q[2] >> 1);
+            if (c == SL_OCTREE_NONE || m->expansion_index[c] < k)
+                continue;
+            uint32_t parent = t->nodes[c].parent;
+            gap = parent != SL_OCTREE_NONE && m->expansion_index[parent] >= k;
+        }
+    }
+    free(cells);
+    return gap;
+}
+
+static void test_model(sdf_fn sdf, int n, const char *name)
+{
+    sl_lod_model m;
+    CHECK(build_model(sdf, n, &m) == 0);
+    CHECK(m.expansion_count > 100);
+    uint64_t mismatches = 0, cracked = 0, gaps = 0, incomplete_total = 0;
+    for (uint32_t k = 0; k <= m.expansion_count; k++) {
+        sl_lod_mesh mesh;
+        uint64_t incomplete;
+        CHECK(sl_lod_generate(&m, k, &mesh, &incomplete) == 0);
+        incomplete_total += incomplete;
+        if (mesh.triangle_count != m.accumulation[k] && mismatches++ < 3)
+            fprintf(stderr, "%s K=%u: accumulation %llu, generated %llu\n", name, k,
+                    (unsigned long long)m.accumulation[k], (unsigned long long)mesh.triangle_count);
+        uint64_t bad = bad_edges(&mesh);
+        if (bad && cracked++ < 3)
+            fprintf(stderr, "%s K=%u: %llu edges not in exactly two triangles\n", name, k,
+                    (unsigned long long)bad);
+        if (level_gap(&m, k))
+            gaps++;
+        sl_lod_mesh_release(&mesh);
+    }
+    CHECK_MSG(mismatches == 0, "%s: %llu K with accumulation != generated", name,
+              (unsigned long long)mismatches);
+    CHECK_MSG(cracked == 0, "%s: %llu K with cracks", name, (unsigned long long)cracked);
+    CHECK_MSG(gaps == 0, "%s: %llu K with neighbours 2+ levels apart", name, (unsigned long long)gaps);
+    CHECK_MSG(incomplete_total == 0, "%s: %llu cells lacked transition data", name,
+              (unsigned long long)incomplete_total);
+    CHECK(m.accumulation[0] < m.accumulation[m.expansion_count]);
+    /* Error table: non-increasing, zero at the finest level, and K(E) meets E. */
+    for (uint32_t k = 0; k < m.expansion_count; k++)
+        CHECK(m.error_after[k] >= m.error_after[k + 1]);
+    CHECK(m.error_after[m.expansion_count] == 0);
+    uint32_t k_err = sl_lod_expansions_for_error(&m, 0.1);
+    CHECK(m.error_after[k_err] <= 0.1 && (k_err == 0 || m.error_after[k_err - 1] > 0.1));
+    uint32_t k_tri = sl_lod_expansions_for_triangles(&m, m.accumulation[m.expansion_count] / 3);
+    CHECK(m.accumulation[k_tri] <= m.accumulation[m.expansion_count] / 3);
+    CHECK(sl_lod_expansions_for_percent(&m, 100) == m.expansion_count);
+    CHECK(sl_lod_expansions_for_percent(&m, 0) == 0);
+    printf("%s: %u nodes, %u expansions, triangles %llu .. %llu\n", name, m.tree.node_count,
+           m.expansion_count, (unsigned long long)m.accumulation[0],
+           (unsigned long long)m.accumulation[m.expansion_count]);
+
+    /* .slod roundtrip: same mesh at 40 %, and a flipped byte is refused. */
+    char path[] = "/tmp/scanlod-test-lod-XXXXXX";
+    int fd = mkstemp(path);
+    close(fd);
+    sl_error err;
+    sl_error_init(&err);
+    CHECK(sl_lod_model_write(path, &m, 1, &err) == 0);
+    sl_lod_model back;
+    CHECK(sl_lod_model_read(path, &back, &err) == 0);
+    uint32_t k40 = sl_lod_expansions_for_percent(&m, 40);
+    sl_lod_mesh a, b;
+    CHECK(sl_lod_generate(&m, k40, &a, NULL) == 0 && sl_lod_generate(&back, k40, &b, NULL) == 0);
+    CHECK(a.triangle_count == b.triangle_count && a.vertex_count == b.vertex_count);
+    CHECK(memcmp(a.positions, b.positions, a.vertex_count * 3 * sizeof(float)) == 0);
+    CHECK(memcmp(a.indices, b.indices, a.triangle_count * 3 * sizeof(uint32_t)) == 0);
+    sl_lod_mesh_release(&a);
+    sl_lod_mesh_release(&b);
+    sl_lod_model_release(&back);
+    FILE *f = fopen(path, "r+b");
+    fseek(f, 200, SEEK_SET);
+    fputc(0x5a, f);
+    fclose(f);
+    sl_error_init(&err);
+    CHECK(sl_lod_model_read(path, &back, &err) == SL_E_CORRUPT);
+    unlink(path);
+    sl_lod_model_release(&m);
+}
+
+int main(void)
+{
+    test_model(blob_sdf, 13, "blob");
+    test_model(torus_sdf, 14, "torus");
+    return check_report();
+}
