@@ -589,7 +589,7 @@ static int assemble(build_state *b, level_tables *levels, uint32_t depth, sl_oct
     out->leaf_size = b->samples->voxel_size;
     memcpy(out->origin, b->origin, sizeof out->origin);
     out->stats = b->stats;
-    return 0;
+    return sl_octree_index(out) ? nomem(b) : 0;
 }
 
 static int check_samples(build_state *b)
