@@ -264,6 +264,9 @@ void sl_engine_close(sl_engine *e)
     if (!e)
         return;
     sl_config_free(e->cfg);
+    for (uint64_t i = 0; i < e->item_count; i++)
+        free(e->items[i]);
+    free(e->items);
     free(e);
 }
 
@@ -315,6 +318,13 @@ int sl_engine_finish(sl_engine *e)
             exit_code = SL_EXIT_DATAERR;
         else
             exit_code = SL_EXIT_OK;
+    }
+    sl_error serr;
+    sl_error_init(&serr);
+    if (e->item_count && sl_engine_write_summary(e, &serr) != 0) {
+        char line[1600];
+        SL_LOG(SL_LOG_ERROR, NULL, NULL, "collection summary not written: %s",
+               sl_error_format(&serr, line, sizeof line));
     }
     const sl_engine_counts *k = &e->counts;
     if (k->ran == 0 && k->published == 0 && pending == 0 && !e->stop)

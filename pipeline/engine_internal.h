@@ -46,6 +46,8 @@ struct sl_engine {
     int stop;                /* storage failure: stop claiming */
     sl_error storage_error;  /* why */
     uint64_t items_total, items_settled; /* progress bar */
+    char **items;            /* item ids found by the scan (for the collection summary) */
+    uint64_t item_count, item_capacity;
 };
 
 /* engine.c */
@@ -78,6 +80,9 @@ int sl_engine_lease_renew(sl_engine *e, const char *stage, const char *name, sl_
                           sl_error *err);
 int sl_engine_lease_check(sl_engine *e, const char *stage, const char *name,
                           const sl_ticket *t, sl_error *err);
+
+/* engine_summary.c: OUTPUT/summary.json and summary.md over the scanned items. */
+int sl_engine_write_summary(sl_engine *e, sl_error *err);
 
 /* engine_gc.c */
 void sl_engine_gc(sl_engine *e);

@@ -6,9 +6,10 @@
  * the new one, never a mix. The publish record in WORK/artifacts/_publish/ITEM/ keys the
  * publication on every stage's key, so unchanged items are not rewritten.
  *
- * Published: report.json (deterministic: counts from every stage) and timings.json
+ * Published: report.json (deterministic: counts from every stage), the output files of
+ * stages marked `publish` (hard links into the work dir when possible), and timings.json
  * (wall/CPU time and peak RSS per stage: differs between runs, so it is not in the
- * record). Stages that produce user-facing files list them in their own folder (export).
+ * record).
  */
 #include "pipeline/engine_internal.h"
 
@@ -138,6 +139,52 @@ static int remove_tree(const char *dir)
     return rmdir(dir);
 }
 
+/* Hard-links (or copies) a published stage file into the staged folder. */
+static int publish_file(const char *from, const char *to, sl_error *err)
+{
+    if (link(from, to) == 0)
+        return 0;
+    char *data = NULL;
+    size_t size = 0;
+    int rc = sl_read_file(from, (uint64_t)1 << 40, &data, &size, err);
+    if (rc == 0)
+        rc = sl_write_file_atomic(to, data, size, err);
+    free(data);
+    return rc;
+}
+
+/* The files of every publishing stage, by the names in its record; their names are
+ * appended to `names` (for the publish record). */
+static int publish_stage_files(sl_engine *e, const char *ticket, const char *staged,
+                               const char **names, int *count, char (*storage)[128],
+                               sl_error *err)
+{
+    for (int s = 0; s < e->stage_count; s++) {
+        if (!e->stages[s]->publish)
+            continue;
+        char dir[PATH_MAX], record[PATH_MAX];
+        sl_artifact_dir(e, s, ticket, dir, sizeof dir);
+        sl_engine_path(record, sizeof record, "%s/%s", dir, SL_RECORD_FILE);
+        sl_record rec;
+        int rc = sl_record_read(record, &rec, err);
+        for (int i = 0; rc == 0 && i < rec.output_count; i++) {
+            const char *name = rec.outputs[i].name;
+            if (!strcmp(name, "report.json") || *count >= SL_RECORD_MAX_OUTPUTS - 1)
+                continue;
+            char from[PATH_MAX], to[PATH_MAX];
+            sl_engine_path(from, sizeof from, "%s/%s", dir, name);
+            sl_engine_path(to, sizeof to, "%s/%s", staged, name);
+            rc = publish_file(from, to, err);
+            snprintf(storage[*count], 128, "%s", name);
+            names[*count] = storage[*count];
+            (*count)++;
+        }
+        if (rc)
+            return rc;
+    }
+    return 0;
+}
+
 /* Swaps `staged` in as `final_dir`. */
 static int swap_in(const char *staged, const char *final_dir, const char *parent, sl_error *err)
 {
@@ -176,6 +223,12 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
     }
     if (rc == 0)
         rc = write_reports(e, item, ticket, source_rel, staged, err);
+    static char storage[SL_RECORD_MAX_OUTPUTS][128];
+    const char *published[SL_RECORD_MAX_OUTPUTS + 1] = {"report.json"};
+    int published_count = 1;
+    if (rc == 0)
+        rc = publish_stage_files(e, ticket, staged, published, &published_count, storage, err);
+    published[published_count] = NULL;
     if (rc == 0)
         rc = sl_fsync_dir(staged, err);
     /* The old record must not vouch for the new files, even for a moment. */
@@ -189,7 +242,6 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
         remove_tree(staged);
         return rc;
     }
-    static const char *const published[] = {"report.json", NULL};
     rc = sl_mkdirs(record_dir, err);
     if (rc == 0)
         rc = sl_record_commit(record, final_dir, published, "_publish", 1, item, key, NULL, err);

@@ -130,6 +130,16 @@ static int scan_item(sl_engine *e, const char *rel, sl_error *err)
     size_t n = strlen(rel);
     snprintf(item, sizeof item, "%.*s", (int)(n - 4), rel);
     e->counts.items++;
+    if (e->item_count == e->item_capacity) {
+        uint64_t cap = e->item_capacity ? 2 * e->item_capacity : 64;
+        char **grown = realloc(e->items, cap * sizeof *grown);
+        if (grown) {
+            e->items = grown;
+            e->item_capacity = cap;
+        }
+    }
+    if (e->item_count < e->item_capacity)
+        e->items[e->item_count++] = strdup(item);
     sl_error item_err;
     sl_error_init(&item_err);
     int rc = sl_engine_reconcile(e, item, rel, 0, &item_err);

@@ -51,6 +51,9 @@ typedef struct sl_stage {
     int (*configure)(const sl_config *cfg, void **stage_config, sl_error *err);
     void (*release_config)(void *stage_config);
     int (*run)(const void *stage_config, const sl_stage_io *io, sl_error *err);
+    /* Nonzero: the stage's output files (all but its report.json) are published with the
+     * item under [run] output/ITEM/. */
+    int publish;
 } sl_stage;
 
 /* The registered stages, in pipeline order, NULL-terminated (pipeline/registry.c). */
