@@ -12,7 +12,7 @@ inspect() { # inspect ARGS...: sets rc, out, err
   err=$(cat "$TMP/err")
 }
 
-inspect "$data/cow.ply"
+inspect "$data/scans/cow.ply"
 check "cow: exit 0" [ "$rc" -eq 0 ]
 check "cow: format" grep -qx "format: binary_little_endian 1.0 (header 258 bytes)" <<<"$out"
 check "cow: vertices" grep -qx "vertices: 2904" <<<"$out"
@@ -20,7 +20,7 @@ check "cow: faces" grep -q "^faces: 5804 declared, 5804 triangles" <<<"$out"
 check "cow: bbox" grep -q "^bbox: min -0.5 " <<<"$out"
 check "cow: nothing on stderr" [ -z "$err" ]
 
-inspect "$data/bun_zipper_res4.ply"
+inspect "$data/scans/bun_zipper_res4.ply"
 check "bunny: elements" grep -qx "elements: vertex 453 (x y z confidence intensity); face 948 (list uchar int vertex_indices)" <<<"$out"
 check "bunny: non-finite" grep -qx "non-finite vertices: 0" <<<"$out"
 

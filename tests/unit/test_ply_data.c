@@ -126,8 +126,8 @@ static void check_known(const char *path, const struct known *k)
 static void test_bundled(void)
 {
     char path[1024];
-    check_known(check_source_path("tests/data/bun_zipper_res4.ply", path, sizeof path), &known[3]);
-    check_known(check_source_path("tests/data/cow.ply", path, sizeof path), &known[12]);
+    check_known(check_source_path("tests/data/scans/bun_zipper_res4.ply", path, sizeof path), &known[3]);
+    check_known(check_source_path("tests/data/scans/cow.ply", path, sizeof path), &known[12]);
 }
 
 static void test_shared(void)
@@ -273,7 +273,7 @@ int main(void)
     sl_mesh cow;
     sl_error err;
     sl_error_init(&err);
-    if (sl_ply_read(check_source_path("tests/data/cow.ply", path, sizeof path), NULL, &cow, NULL,
+    if (sl_ply_read(check_source_path("tests/data/scans/cow.ply", path, sizeof path), NULL, &cow, NULL,
                     NULL, &err) == 0) {
         test_reencoded(&cow);
         test_write_roundtrip(&cow);

@@ -332,7 +332,7 @@ static void test_truncations_of_small_files(void)
 
 static void test_truncations_of_real_files(void)
 {
-    const char *files[] = {"tests/data/cow.ply", "tests/data/bun_zipper_res4.ply"};
+    const char *files[] = {"tests/data/scans/cow.ply", "tests/data/scans/bun_zipper_res4.ply"};
     for (int i = 0; i < 2; i++) {
         char path[1024];
         check_source_path(files[i], path, sizeof path);
