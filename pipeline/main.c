@@ -17,6 +17,7 @@ static const command commands[] = {
     {"status", sl_cmd_status, "per stage: ready / claimed / done / failed / quarantined"},
     {"verify", sl_cmd_verify, "check every commit record against its files"},
     {"inspect", sl_cmd_inspect, "what a file holds, validated"},
+    {"extract", sl_cmd_extract, "any level of detail from a built model (.slod), O(m)"},
     {"compare", sl_cmd_compare, "Hausdorff and RMS distance between two meshes"},
     {"config-reference", sl_cmd_config_reference, "print the commented reference config"},
 };

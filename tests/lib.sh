@@ -46,8 +46,17 @@ run_scanlod() {
 # Deterministic content of a work dir + output dir: every artifact and published file,
 # except the per-run timing files, as "path hash" lines.
 tree_digest() { # tree_digest WORK OUTPUT
-  (cd "$1" && find artifacts -type f ! -name '_stats.json' ! -name '.*' -print0 | sort -z |
+  (cd "$1" && find artifacts -type f ! -name '_*' ! -name '.*' -print0 | sort -z |
      xargs -0 -r sha256sum)
   (cd "$2" && find . -type f ! -name 'timings.json' ! -path '*/.*' -print0 | sort -z |
      xargs -0 -r sha256sum)
+}
+
+# same_digest "REFERENCE DIGEST" WORK OUTPUT: compares, printing the differing lines.
+same_digest() {
+  local now
+  now=$(tree_digest "$2" "$3")
+  [ "$1" = "$now" ] && return 0
+  diff <(echo "$1") <(echo "$now") | head -20 >&2
+  return 1
 }

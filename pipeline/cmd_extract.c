@@ -1,0 +1,197 @@
+/* scanlod extract: any level of detail from a built model, in O(m) (paper 1, section 3).
+ *
+ *   scanlod extract MODEL.slod (--expansions K | --triangles N | --lod-percent P |
+ *                               --max-error E) -o OUT.{ply,glb,obj}
+ *   scanlod extract OCTREE.slot --level L -o OUT.ply      (a uniform octree level)
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "pipeline/commands.h"
+#include "pipeline/error.h"
+#include "runtime/lod_io.h"
+#include "runtime/octree_io.h"
+#include "stages/export/export.h"
+
+static const char usage[] =
+    "usage: scanlod extract MODEL.slod (--expansions K | --triangles N | --lod-percent P |\n"
+    "                                   --max-error E) -o OUT.{ply,glb,obj}\n"
+    "       scanlod extract OCTREE.slot --level L -o OUT.{ply,glb,obj}\n"
+    "Cuts one level of detail from a model built by `scanlod run` (published as\n"
+    "OUTPUT/ITEM/model.slod): K expansions of the LOD array, the largest level within N\n"
+    "triangles, P percent of the LOD array (paper Table 1), or the coarsest level whose\n"
+    "geometric error is at most E (world units). Prints what it wrote.\n";
+
+typedef struct request {
+    const char *input, *output;
+    int kind; /* 'k' expansions, 't' triangles, 'p' percent, 'e' error, 'l' level */
+    double value;
+} request;
+
+static int parse(int argc, char **argv, request *r)
+{
+    memset(r, 0, sizeof *r);
+    static const struct { const char *flag; int kind; } flags[] = {
+        {"--expansions", 'k'}, {"--triangles", 't'}, {"--lod-percent", 'p'},
+        {"--max-error", 'e'},  {"--level", 'l'},
+    };
+    for (int i = 1; i < argc; i++) {
+        int matched = 0;
+        for (size_t f = 0; f < sizeof flags / sizeof flags[0]; f++) {
+            if (strcmp(argv[i], flags[f].flag) != 0)
+                continue;
+            char *end;
+            if (i + 1 >= argc || r->kind)
+                return -1;
+            r->kind = flags[f].kind;
+            r->value = strtod(argv[++i], &end);
+            if (*end || !isfinite(r->value))
+                return -1;
+            matched = 1;
+        }
+        if (matched)
+            continue;
+        if (!strcmp(argv[i], "-o") && i + 1 < argc)
+            r->output = argv[++i];
+        else if (argv[i][0] != '-' && !r->input)
+            r->input = argv[i];
+        else
+            return -1;
+    }
+    return r->input && r->output && r->kind ? 0 : -1;
+}
+
+static int fail(const sl_error *err)
+{
+    char line[1600];
+    fprintf(stderr, "scanlod: %s\n", sl_error_format(err, line, sizeof line));
+    /* For the engine a corrupt artifact is transient (it rebuilds it); a model handed to
+     * extract is the user's input: a data error. */
+    return err->code == SL_E_CORRUPT ? SL_EXIT_DATAERR : sl_error_exit_code(err->code);
+}
+
+static int bad_request(const char *fmt, double value)
+{
+    fprintf(stderr, "scanlod extract: ");
+    fprintf(stderr, fmt, value);
+    fputc('\n', stderr);
+    return SL_EXIT_USAGE;
+}
+
+static double seconds_since(const struct timespec *t0)
+{
+    struct timespec t1;
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    return (double)(t1.tv_sec - t0->tv_sec) + (t1.tv_nsec - t0->tv_nsec) * 1e-9;
+}
+
+static int extract_level(const request *r)
+{
+    sl_error err;
+    sl_error_init(&err);
+    sl_octree tree;
+    if (sl_octree_read(r->input, &tree, &err))
+        return fail(&err);
+    if (r->value < 0 || r->value > tree.depth || r->value != floor(r->value)) {
+        sl_octree_release(&tree);
+        return bad_request("--level must be an integer in [0, depth] (depth is %g)", tree.depth);
+    }
+    sl_lod_mesh mesh;
+    int rc = sl_octree_level_mesh(&tree, (uint32_t)r->value, &mesh);
+    if (rc == 0 && sl_export_write_mesh(r->output, &mesh, NULL, &err) == 0)
+        printf("level %g: %llu triangles, %llu vertices -> %s\n", r->value,
+               (unsigned long long)mesh.triangle_count, (unsigned long long)mesh.vertex_count,
+               r->output);
+    else if (rc)
+        sl_error_set(&err, SL_E_NOMEM, ENOMEM, r->input, "out of memory");
+    sl_lod_mesh_release(&mesh);
+    sl_octree_release(&tree);
+    return err.code ? fail(&err) : SL_EXIT_OK;
+}
+
+/* Turns the request into an expansion count, or prints why it cannot. */
+static int choose_k(const request *r, const sl_lod_model *m, uint32_t *k)
+{
+    uint64_t finest = m->accumulation[m->expansion_count];
+    switch (r->kind) {
+    case 'k':
+        if (r->value < 0 || r->value > m->expansion_count || r->value != floor(r->value))
+            return bad_request("--expansions must be an integer in [0, %g]", m->expansion_count);
+        *k = (uint32_t)r->value;
+        return 0;
+    case 't':
+        if (r->value < 1 || r->value != floor(r->value))
+            return bad_request("--triangles must be a whole number >= 1 (got %g)", r->value);
+        if (r->value > (double)finest) {
+            fprintf(stderr, "scanlod extract: --triangles %.0f exceeds the finest level (%llu "
+                            "triangles)\n", r->value, (unsigned long long)finest);
+            return SL_EXIT_USAGE;
+        }
+        *k = sl_lod_expansions_for_triangles(m, (uint64_t)r->value);
+        return 0;
+    case 'p':
+        if (r->value < 0 || r->value > 100)
+            return bad_request("--lod-percent must be in [0, 100] (got %g)", r->value);
+        *k = sl_lod_expansions_for_percent(m, r->value);
+        return 0;
+    case 'e':
+        if (r->value < 0)
+            return bad_request("--max-error must be >= 0 (got %g)", r->value);
+        *k = sl_lod_expansions_for_error(m, r->value);
+        return 0;
+    default:
+        return bad_request("--level applies to an octree (.slot), not a model%s", 0);
+    }
+}
+
+int sl_cmd_extract(int argc, char **argv)
+{
+    request r;
+    if (argc >= 2 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h"))) {
+        fputs(usage, stdout);
+        return SL_EXIT_OK;
+    }
+    if (parse(argc, argv, &r) != 0) {
+        fputs(usage, stderr);
+        return SL_EXIT_USAGE;
+    }
+    if (r.kind == 'l')
+        return extract_level(&r);
+    sl_error err;
+    sl_error_init(&err);
+    sl_lod_model model;
+    if (sl_lod_model_read(r.input, &model, &err))
+        return fail(&err);
+    uint32_t k = 0;
+    int rc = choose_k(&r, &model, &k);
+    if (rc) {
+        sl_lod_model_release(&model);
+        return rc;
+    }
+    struct timespec t0;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    sl_lod_mesh mesh;
+    uint64_t cracks = 0;
+    if (sl_lod_generate(&model, k, &mesh, &cracks)) {
+        sl_lod_model_release(&model);
+        sl_error_set(&err, SL_E_NOMEM, ENOMEM, r.input, "out of memory");
+        return fail(&err);
+    }
+    double generate_s = seconds_since(&t0);
+    char extras[256];
+    snprintf(extras, sizeof extras, "{\"expansions\":%u,\"of\":%u,\"max_error\":%.9g}", k,
+             model.expansion_count, (double)model.error_after[k]);
+    if (sl_export_write_mesh(r.output, &mesh, extras, &err) == 0)
+        printf("expansions %u of %u: %llu triangles, %llu vertices, max error %.6g, "
+               "generated in %.6f s -> %s\n",
+               k, model.expansion_count, (unsigned long long)mesh.triangle_count,
+               (unsigned long long)mesh.vertex_count, (double)model.error_after[k], generate_s,
+               r.output);
+    sl_lod_mesh_release(&mesh);
+    sl_lod_model_release(&model);
+    return err.code ? fail(&err) : SL_EXIT_OK;
+}

@@ -1,0 +1,195 @@
+/* Per-level work of the export stage: cut, write, measure, report (export.h). */
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "geometry/mesh_distance.h"
+#include "pipeline/atomicfile.h"
+#include "stages/export/export_internal.h"
+
+int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_config *c,
+                           sl_error *err)
+{
+    c->levels = calloc(SL_EXPORT_MAX_LEVELS, sizeof *c->levels);
+    if (!c->levels)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    const char *lists[2] = {percents, budgets};
+    for (int l = 0; l < 2; l++) {
+        const char *p = lists[l];
+        while (p && *p) {
+            char word[64];
+            size_t n = strcspn(p, ",");
+            snprintf(word, sizeof word, "%.*s", (int)(n < sizeof word ? n : sizeof word - 1), p);
+            p += n + (p[n] == ',');
+            if (!word[0])
+                continue;
+            if (c->level_count == SL_EXPORT_MAX_LEVELS)
+                return sl_error_set(err, SL_E_CONFIG, 0, "[export]", "more than %d levels",
+                                    SL_EXPORT_MAX_LEVELS);
+            sl_export_level *lv = &c->levels[c->level_count];
+            char *end;
+            if (l == 0) {
+                lv->by_percent = 1;
+                lv->percent = strtod(word, &end);
+                if (*end || lv->percent < 0 || lv->percent > 100)
+                    return sl_error_set(err, SL_E_CONFIG, 0, "[export] lod_percents",
+                                        "'%s' is not a percent in [0, 100]", word);
+                snprintf(lv->name, sizeof lv->name, "lod%g", lv->percent);
+            } else {
+                char *colon = strchr(word, ':');
+                if (!colon || colon == word || colon - word >= (long)sizeof lv->name)
+                    return sl_error_set(err, SL_E_CONFIG, 0, "[export] budgets",
+                                        "'%s' is not name:triangles", word);
+                *colon = '\0';
+                long long v = strtoll(colon + 1, &end, 10);
+                if (*end || v < 1)
+                    return sl_error_set(err, SL_E_CONFIG, 0, "[export] budgets",
+                                        "'%s': the budget must be a whole number >= 1", word);
+                snprintf(lv->name, sizeof lv->name, "%.31s", word);
+                lv->budget = (uint64_t)v;
+            }
+            c->level_count++;
+        }
+    }
+    return 0;
+}
+
+static sl_mesh mesh_view(const sl_lod_mesh *m)
+{
+    sl_mesh v;
+    sl_mesh_init(&v);
+    v.vertex_count = m->vertex_count;
+    v.positions = m->positions;
+    v.normals = m->normals;
+    v.colors = m->colors;
+    v.triangle_count = m->triangle_count;
+    v.triangles = m->indices;
+    return v;
+}
+
+static int write_files(const sl_export_config *c, const sl_export_level *lv,
+                       const sl_lod_mesh *mesh, const char *extras, const sl_stage_io *io,
+                       sl_error *err)
+{
+    static const char *const exts[3] = {"ply", "glb", "obj"};
+    const int wanted[3] = {c->write_ply, c->write_glb, c->write_obj};
+    int rc = 0;
+    for (int i = 0; i < 3 && rc == 0; i++) {
+        if (!wanted[i])
+            continue;
+        char path[PATH_MAX];
+        snprintf(path, sizeof path, "%s/%s.%s", io->out_dir, lv->name, exts[i]);
+        rc = sl_export_write_mesh(path, mesh, extras, err);
+    }
+    if (rc == 0 && c->thumbnail_size > 0) {
+        char path[PATH_MAX];
+        snprintf(path, sizeof path, "%s/%s.png", io->out_dir, lv->name);
+        rc = sl_export_thumbnail(path, mesh, c->thumbnail_size, err);
+    }
+    return rc;
+}
+
+static int measure_level(const sl_export_config *c, const sl_mesh *input, const sl_lod_mesh *mesh,
+                         const sl_stage_io *io, sl_json *r, sl_error *err)
+{
+    sl_mesh view = mesh_view(mesh);
+    sl_mesh_topology topo;
+    int rc = sl_mesh_topology_compute(&view, &topo, err);
+    if (rc)
+        return rc;
+    sl_json_u64(r, "boundary_edges", topo.boundary_edges);
+    sl_json_u64(r, "nonmanifold_edges", topo.nonmanifold_edges);
+    sl_json_bool(r, "watertight", topo.watertight);
+    if (!input || mesh->triangle_count == 0)
+        return 0;
+    sl_mesh_distance_config dc = sl_mesh_distance_default_config();
+    dc.samples = c->fidelity_samples;
+    sl_mesh_distance d;
+    sl_error derr;
+    sl_error_init(&derr);
+    rc = sl_mesh_distance_compute(input, &view, &dc, &d, io->progress, &derr);
+    if (rc == SL_E_INTERRUPTED || rc == SL_E_NOMEM) {
+        sl_error_merge(err, &derr);
+        return rc;
+    }
+    if (rc == 0) {
+        sl_json_double(r, "rms", d.fraction.rms);
+        sl_json_double(r, "hausdorff", d.fraction.hausdorff);
+        sl_json_double(r, "mean", d.fraction.mean);
+    }
+    return 0;
+}
+
+static void summary_row(FILE *md, const sl_export_level *lv, const sl_lod_mesh *mesh,
+                        uint32_t k)
+{
+    fprintf(md, " %s %llu/%llu (k=%u) |", lv->name, (unsigned long long)mesh->triangle_count,
+            (unsigned long long)mesh->vertex_count, k);
+}
+
+int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_mesh *input,
+                     const sl_stage_io *io, sl_error *err)
+{
+    sl_json *r = io->report;
+    uint64_t finest = model->accumulation[model->expansion_count];
+    sl_json_u64(r, "expansions", model->expansion_count);
+    sl_json_u64(r, "triangles_finest", finest);
+    sl_json_bool(r, "fidelity_measured", input != NULL);
+    sl_json_array_begin(r, "levels");
+    char row_path[PATH_MAX];
+    snprintf(row_path, sizeof row_path, "%s/summary-row.md", io->out_dir);
+    char *row = NULL;
+    size_t row_size = 0;
+    FILE *md = open_memstream(&row, &row_size);
+    if (!md)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    fprintf(md, "| %s |", io->item);
+    int rc = 0;
+    for (int i = 0; i < c->level_count && rc == 0; i++) {
+        const sl_export_level *lv = &c->levels[i];
+        uint32_t k = lv->by_percent ? sl_lod_expansions_for_percent(model, lv->percent)
+                                    : sl_lod_expansions_for_triangles(model, lv->budget);
+        if (sl_progress_step(io->progress, "export", (double)i / c->level_count)) {
+            rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+            break;
+        }
+        sl_lod_mesh mesh;
+        uint64_t cracks = 0;
+        if (sl_lod_generate(model, k, &mesh, &cracks)) {
+            rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+            break;
+        }
+        char extras[256];
+        snprintf(extras, sizeof extras,
+                 "{\"scanlod\":{\"level\":\"%s\",\"expansions\":%u,\"of\":%u}}", lv->name, k,
+                 model->expansion_count);
+        sl_json_object_begin(r, NULL);
+        sl_json_string(r, "name", lv->name);
+        if (lv->by_percent)
+            sl_json_double(r, "lod_percent", lv->percent);
+        else {
+            sl_json_u64(r, "budget", lv->budget);
+            sl_json_bool(r, "clamped", lv->budget >= finest);
+        }
+        sl_json_u64(r, "expansions", k);
+        sl_json_u64(r, "triangles", mesh.triangle_count);
+        sl_json_u64(r, "vertices", mesh.vertex_count);
+        sl_json_double(r, "max_error", model->error_after[k]);
+        sl_json_u64(r, "unpatched_cells", cracks);
+        rc = mesh.triangle_count ? write_files(c, lv, &mesh, extras, io, err) : 0;
+        if (rc == 0)
+            rc = measure_level(c, input, &mesh, io, r, err);
+        sl_json_object_end(r);
+        summary_row(md, lv, &mesh, k);
+        sl_lod_mesh_release(&mesh);
+    }
+    sl_json_array_end(r);
+    fputc('\n', md);
+    fclose(md);
+    if (rc == 0)
+        rc = sl_write_file_atomic(row_path, row, row_size, err);
+    free(row);
+    return rc;
+}

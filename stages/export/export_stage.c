@@ -1,0 +1,126 @@
+/* export stage entry: levels, files, fidelity and the summary row (export.h). */
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "geometry/mesh_distance.h"
+#include "geometry/ply.h"
+#include "pipeline/atomicfile.h"
+#include "runtime/lod_io.h"
+#include "stages/crack/crack.h"
+#include "stages/export/export_internal.h"
+
+#define EXPORT_STAGE_VERSION 1u
+
+static const sl_option export_options[] = {
+    {"export", "lod_percents", SL_OPT_LIST, "20,40,60,80,100", 0, 100, NULL,
+     "Levels by LOD percent, as in the paper's Table 1: P% of the LOD array is expanded "
+     "(100 = the finest level). Empty for none."},
+    {"export", "budgets", SL_OPT_LIST, "thumb:2000,low:20000,medium:100000,high:500000", 0, 0,
+     NULL,
+     "Named triangle budgets (name:triangles), as museum web viewers use: the largest level "
+     "within each budget. A budget above the finest level gives the finest (\"clamped\" in "
+     "the report). Empty for none."},
+    {"export", "formats", SL_OPT_LIST, "ply,glb", 0, 0, NULL,
+     "Mesh files written per level: any of ply, glb, obj."},
+    {"export", "thumbnail_size", SL_OPT_INT, "256", 0, 4096, NULL,
+     "Edge of the square PNG thumbnail rendered per level, in pixels; 0 = none."},
+    {"export", "fidelity", SL_OPT_BOOL, "true", 0, 0, NULL,
+     "Measure every level against the input surface (symmetric Hausdorff and RMS distance, "
+     "fractions of the input's bounding-box diagonal). Inputs without faces are not "
+     "measured."},
+    {"export", "fidelity_samples", SL_OPT_INT, "200000", 1000, 100000000, NULL,
+     "Area samples per surface for the fidelity measurement."},
+    SL_OPTION_END,
+};
+
+static void free_config(void *p)
+{
+    sl_export_config *c = p;
+    if (c) {
+        free(c->levels);
+        free(c);
+    }
+}
+
+static int export_configure(const sl_config *cfg, void **out, sl_error *err)
+{
+    sl_export_config *c = calloc(1, sizeof *c);
+    if (!c)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    int rc = sl_export_parse_levels(sl_config_string(cfg, "export", "lod_percents"),
+                                    sl_config_string(cfg, "export", "budgets"), c, err);
+    const char *formats = sl_config_string(cfg, "export", "formats");
+    c->write_ply = strstr(formats, "ply") != NULL;
+    c->write_glb = strstr(formats, "glb") != NULL;
+    c->write_obj = strstr(formats, "obj") != NULL;
+    c->thumbnail_size = (int)sl_config_int(cfg, "export", "thumbnail_size");
+    c->fidelity = sl_config_bool(cfg, "export", "fidelity");
+    c->fidelity_samples = (uint64_t)sl_config_int(cfg, "export", "fidelity_samples");
+    if (rc) {
+        free_config(c);
+        return rc;
+    }
+    *out = c;
+    return 0;
+}
+
+/* The model is published with the levels: a hard link when possible (same work dir). */
+static int publish_model(const char *from, const char *to, sl_error *err)
+{
+    unlink(to);
+    if (link(from, to) == 0)
+        return 0;
+    char *data = NULL;
+    size_t size = 0;
+    int rc = sl_read_file(from, (uint64_t)1 << 40, &data, &size, err);
+    if (rc == 0)
+        rc = sl_write_file_atomic(to, data, size, err);
+    free(data);
+    return rc;
+}
+
+static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
+{
+    const sl_export_config *c = config;
+    char model_path[PATH_MAX], published[PATH_MAX];
+    snprintf(model_path, sizeof model_path, "%s/%s", io->in_dir, SL_MODEL_FILE);
+    snprintf(published, sizeof published, "%s/%s", io->out_dir, SL_MODEL_FILE);
+    sl_lod_model model;
+    int rc = sl_lod_model_read(model_path, &model, err);
+    if (rc)
+        return rc;
+    sl_mesh input;
+    sl_mesh_init(&input);
+    int measure = c->fidelity;
+    if (measure) {
+        sl_error ierr;
+        sl_error_init(&ierr);
+        /* The range stage already validated the input; a point cloud has nothing to
+         * compare surfaces with. */
+        if (sl_ply_read(io->source_path, NULL, &input, NULL, NULL, &ierr) != 0 ||
+            input.triangle_count == 0 || sl_mesh_check_surface(&input, NULL, &ierr) != 0)
+            measure = 0;
+    }
+    rc = publish_model(model_path, published, err);
+    if (rc == 0)
+        rc = sl_export_levels(c, &model, measure ? &input : NULL, io, err);
+    sl_mesh_release(&input);
+    sl_lod_model_release(&model);
+    return rc;
+}
+
+const sl_stage sl_export_stage = {
+    .name = "export",
+    .description = "LOD model -> meshes (PLY, GLB), thumbnails, fidelity report (paper 1 3)",
+    .version = EXPORT_STAGE_VERSION,
+    .options = export_options,
+    .configure = export_configure,
+    .release_config = free_config,
+    .run = export_run,
+    .publish = 1,
+};

@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# The whole pipeline on real scans, and the LOD model from the outside: closed inputs give
+# watertight levels, every level's files exist, `extract` honours budgets, percents and
+# errors, bad requests and damaged models fail clearly, and the public C API agrees.
+source "$(dirname "$0")/../lib.sh"
+api_check="${SCANLOD_BUILD_DIR:?}/tests/api_check"
+
+mkdir -p "$TMP/in"
+cp "$SCANS/fandisk.ply" "$SCANS/rocker_arm.ply" "$SCANS/bun_zipper_res3.ply" "$TMP/in/"
+write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out" "[export]" "budgets = thumb:1000,big:99999999" "thumbnail_size = 64"
+run_scanlod run "$TMP/c.ini" -q
+check "run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
+
+report_value() { # report_value ITEM PYTHON-EXPRESSION-ON-r
+  python3 -c "import json,sys; r=json.load(open('$TMP/out/$1/report.json')); print($2)"
+}
+for item in fandisk rocker_arm; do
+  levels=$(report_value "$item" "len(r['stages']['export']['levels'])")
+  check "$item: 7 levels reported ($levels)" [ "$levels" -eq 7 ]
+  tight=$(report_value "$item" "sum(1 for l in r['stages']['export']['levels'] if l['watertight'])")
+  check "$item (closed): every level watertight ($tight of $levels)" [ "$tight" -eq "$levels" ]
+  for name in lod20 lod60 lod100 thumb big; do
+    check "$item: $name.ply, .glb and .png published" [ -s "$TMP/out/$item/$name.ply" -a -s "$TMP/out/$item/$name.glb" -a -s "$TMP/out/$item/$name.png" ]
+  done
+  clamped=$(report_value "$item" "[l for l in r['stages']['export']['levels'] if l['name']=='big'][0]['clamped']")
+  check "$item: a budget above the finest is clamped" [ "$clamped" = "True" ]
+  rms=$(report_value "$item" "[l for l in r['stages']['export']['levels'] if l['name']=='lod100'][0]['rms']")
+  check "$item: finest RMS under 0.5% of the diagonal ($rms)" python3 -c "import sys; sys.exit(0 if $rms < 0.005 else 1)"
+done
+check "summary.md lists the items" grep -q "| fandisk |" "$TMP/out/summary.md"
+
+model="$TMP/out/fandisk/model.slod"
+finest=$(report_value fandisk "r['stages']['export']['triangles_finest']")
+half=$((finest / 2))
+run_scanlod extract "$model" --triangles "$half" -o "$TMP/half.ply"
+check "extract --triangles exits 0 ($err)" [ "$rc" -eq 0 ]
+got=$(sed -n 's/.*: \([0-9]*\) triangles.*/\1/p' <<<"$out")
+check "extract --triangles $half gives at most that ($got)" [ -n "$got" ] && [ "$got" -le "$half" ]
+run_scanlod compare "$TMP/in/fandisk.ply" "$TMP/half.ply" --json
+check "compare reads the extracted mesh" [ "$rc" -eq 0 ]
+run_scanlod extract "$model" --lod-percent 20 -o "$TMP/p20.glb"
+check "extract --lod-percent 20 to GLB" [ "$rc" -eq 0 -a -s "$TMP/p20.glb" ]
+run_scanlod extract "$model" --max-error 0.01 -o "$TMP/e.obj"
+check "extract --max-error to OBJ" [ "$rc" -eq 0 -a -s "$TMP/e.obj" ]
+run_scanlod extract "$TMP/work/artifacts/merge/fandisk/octree.slot" --level 1 -o "$TMP/l1.ply"
+check "extract --level from the octree" [ "$rc" -eq 0 -a -s "$TMP/l1.ply" ]
+
+run_scanlod extract "$model" --triangles 0 -o "$TMP/x.ply"
+check "--triangles 0: usage error (rc $rc: $err)" [ "$rc" -eq 64 ] && grep -q "triangles" <<<"$err"
+run_scanlod extract "$model" --triangles $((finest + 1)) -o "$TMP/x.ply"
+check "--triangles above the finest: clear error (rc $rc: $err)" [ "$rc" -eq 64 ] && grep -q "exceeds the finest" <<<"$err"
+cp "$model" "$TMP/bad.slod"
+printf 'X' | dd of="$TMP/bad.slod" bs=1 seek=4000 conv=notrunc status=none
+run_scanlod extract "$TMP/bad.slod" --lod-percent 50 -o "$TMP/x.ply"
+check "corrupt .slod: exit 65 naming the file (rc $rc: $err)" [ "$rc" -eq 65 ] && grep -q "bad.slod.*checksum" <<<"$err"
+head -c 1000 "$model" >"$TMP/short.slod"
+run_scanlod extract "$TMP/short.slod" --lod-percent 50 -o "$TMP/x.ply"
+check "truncated .slod: exit 65 (rc $rc: $err)" [ "$rc" -eq 65 ]
+cp "$model" "$TMP/v9.slod"
+printf '\x09' | dd of="$TMP/v9.slod" bs=1 seek=8 conv=notrunc status=none
+run_scanlod extract "$TMP/v9.slod" --lod-percent 50 -o "$TMP/x.ply"
+check "another format version: exit 65 saying so (rc $rc: $err)" [ "$rc" -eq 65 ] && grep -q "format version 9" <<<"$err"
+check "no partial output was left by failed extractions" [ ! -e "$TMP/x.ply" ]
+
+check "public API on the built model" "$api_check" "$model"
+finish
