@@ -188,7 +188,8 @@ static int walk(sl_engine *e, const char *rel_dir, int depth, sl_error *err)
         names[count++] = strdup(de->d_name);
     }
     closedir(d);
-    qsort(names, count, sizeof *names, compare_strings);
+    if (count > 1)
+        qsort(names, count, sizeof *names, compare_strings);
     int rc = 0;
     for (size_t i = 0; i < count; i++) {
         char rel[PATH_MAX], full[PATH_MAX];

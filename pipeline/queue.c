@@ -153,7 +153,8 @@ int sl_queue_list(const char *work, const char *stage, int state, char ***names,
         n++;
     }
     closedir(dir);
-    qsort(list, n, sizeof *list, compare_names);
+    if (n > 1)
+        qsort(list, n, sizeof *list, compare_names);
     /* One block: pointer array followed by the strings, so the caller frees once. */
     char **block = malloc(n * sizeof *block + text + 1);
     if (!block) {
