@@ -3,10 +3,20 @@
 #include <string.h>
 
 #include "pipeline/stage.h"
+#include "stages/crack/crack.h"
+#include "stages/export/export.h"
+#include "stages/merge/merge.h"
+#include "stages/priority/priority.h"
 #include "stages/range/range.h"
+#include "stages/samples/samples.h"
 
 static const sl_stage *const registry[] = {
     &sl_range_stage,
+    &sl_samples_stage,
+    &sl_merge_stage,
+    &sl_priority_stage,
+    &sl_crack_stage,
+    &sl_export_stage,
     NULL,
 };
 

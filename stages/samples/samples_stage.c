@@ -1,0 +1,190 @@
+/* The samples stage's registry entry: options of [octree] and [samples], configure, run,
+ * report. The work itself: samples_plan.c (grid), samples_cubes.c (which vertices),
+ * samples_distance.c (the signed samples), shim/vdb_shim.cpp (the .vdb file).
+ *
+ * The report holds only deterministic counts (it is part of the stage's committed
+ * outputs); the seconds per phase go to the log and to `_phases.json` in the artifact
+ * directory, which the commit record ignores like the engine's own `_stats.json`.
+ */
+#include <omp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pipeline/atomicfile.h"
+#include "pipeline/log.h"
+#include "stages/samples/samples.h"
+
+static const sl_option samples_options[] = {
+    {"octree", "leaf_size", SL_OPT_DOUBLE, "0", 0, 1e30, NULL,
+     "Edge length of the finest (leaf) marching cubes, in the input's world units. "
+     "0 = derived from [octree] depth, or else from the point spacing (spacing_factor)."},
+    {"octree", "depth", SL_OPT_INT, "0", 0, SL_SAMPLES_MAX_DEPTH, NULL,
+     "Octree depth when leaf_size is 0: the bounding box's longest side plus the band on "
+     "both sides is cut into 2^depth leaf cubes. 0 = leaf size from the point spacing."},
+    {"octree", "spacing_factor", SL_OPT_DOUBLE, "1.5", 0.5, 64, NULL,
+     "Automatic leaf size = this x the mean nearest-neighbour spacing of the points "
+     "(docs/samples-stage.md has the measurements behind the default)."},
+    {"octree", "max_depth", SL_OPT_INT, "16", 1, SL_SAMPLES_MAX_DEPTH, NULL,
+     "Items whose leaf size needs a deeper octree are refused (limit error, quarantined): "
+     "it bounds memory on a huge extent with tiny features."},
+    {"samples", "distance", SL_OPT_ENUM, "tangent", 0, 0, "euclidean|tangent",
+     "Sample magnitude at a grid vertex v with closest point p: 'euclidean' = |v - p| "
+     "(paper 1 section 2.1); 'tangent' = |(v - p) . n_p|, the distance to p's tangent plane. "
+     "Measured in docs/samples-stage.md."},
+    {"samples", "band", SL_OPT_INT, "1", 0, SL_SAMPLES_MAX_BAND, NULL,
+     "Cubes holding points are dilated by this many cubes (26-neighbourhood) and every "
+     "vertex of the dilated set is sampled; 0 = only the cubes holding points (paper)."},
+    {"samples", "max_samples", SL_OPT_INT, "2147483648", 1, 1099511627776.0, NULL,
+     "Items needing more samples (grid vertices) are refused (limit error, quarantined) "
+     "before the memory is allocated."},
+    {"samples", "sign_neighbours", SL_OPT_INT, "1", 1, 64, NULL,
+     "1 = the sign of a sample comes from its closest point's normal (paper); k > 1 = a "
+     "vote of the k nearest points' normals weighted by inverse distance."},
+    SL_OPTION_END,
+};
+
+static const char *const samples_sections[] = {"samples", "octree", NULL};
+
+sl_samples_config sl_samples_default_config(void)
+{
+    sl_samples_config c;
+    memset(&c, 0, sizeof c);
+    c.leaf_size = 0;
+    c.depth = 0;
+    c.spacing_factor = 1.5;
+    c.max_depth = 16;
+    c.distance = SL_SAMPLES_TANGENT;
+    c.band = 1;
+    c.max_samples = (uint64_t)1 << 31;
+    c.sign_neighbours = 1;
+    return c;
+}
+
+static int samples_configure(const sl_config *cfg, void **stage_config, sl_error *err)
+{
+    sl_samples_config *c = malloc(sizeof *c);
+    if (!c)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory");
+    *c = sl_samples_default_config();
+    c->leaf_size = sl_config_double(cfg, "octree", "leaf_size");
+    c->depth = (int)sl_config_int(cfg, "octree", "depth");
+    c->spacing_factor = sl_config_double(cfg, "octree", "spacing_factor");
+    c->max_depth = (int)sl_config_int(cfg, "octree", "max_depth");
+    c->distance = strcmp(sl_config_string(cfg, "samples", "distance"), "euclidean") == 0
+                      ? SL_SAMPLES_EUCLIDEAN
+                      : SL_SAMPLES_TANGENT;
+    c->band = (int)sl_config_int(cfg, "samples", "band");
+    c->max_samples = (uint64_t)sl_config_int(cfg, "samples", "max_samples");
+    c->sign_neighbours = (int)sl_config_int(cfg, "samples", "sign_neighbours");
+    const char *file = sl_config_path(cfg);
+    if (c->depth > c->max_depth || (c->depth > 0 && (1 << c->depth) <= 2 * c->band)) {
+        sl_error_set(err, SL_E_CONFIG, 0, file[0] ? file : NULL,
+                     "[octree] depth %d needs max_depth >= depth and 2^depth > 2 x [samples] "
+                     "band (max_depth %d, band %d)", c->depth, c->max_depth, c->band);
+        free(c);
+        return SL_E_CONFIG;
+    }
+    *stage_config = c;
+    return SL_OK;
+}
+
+static void samples_release_config(void *stage_config)
+{
+    free(stage_config);
+}
+
+static void report_counts(sl_json *j, const sl_samples_config *cfg, const sl_samples_counts *c,
+                          int colors)
+{
+    const sl_samples_plan *p = &c->plan;
+    sl_json_double(j, "leaf_size", p->leaf_size);
+    sl_json_u64(j, "depth", (uint64_t)p->depth);
+    sl_json_array_begin(j, "origin");
+    for (int k = 0; k < 3; k++)
+        sl_json_double(j, NULL, p->origin[k]);
+    sl_json_array_end(j);
+    sl_json_array_begin(j, "cells");
+    for (int k = 0; k < 3; k++)
+        sl_json_u64(j, NULL, p->cells[k]);
+    sl_json_array_end(j);
+    sl_json_u64(j, "band", (uint64_t)p->band);
+    sl_json_string(j, "distance", cfg->distance == SL_SAMPLES_TANGENT ? "tangent" : "euclidean");
+    sl_json_u64(j, "sign_neighbours", (uint64_t)cfg->sign_neighbours);
+    sl_json_u64(j, "points", c->points);
+    sl_json_u64(j, "occupied_cubes", c->occupied_cubes);
+    sl_json_u64(j, "band_cubes", c->band_cubes);
+    sl_json_u64(j, "samples", c->samples);
+    sl_json_u64(j, "inside", c->inside);
+    sl_json_u64(j, "outside", c->outside);
+    sl_json_u64(j, "sign_flips", c->sign_flips);
+    sl_json_bool(j, "colors", colors);
+}
+
+/* Seconds per phase: the log and `_phases.json` (not in the report: see the top). */
+static void record_phases(const sl_stage_io *io, const sl_samples_counts *c, double write_s)
+{
+    char text[256], path[1100];
+    int n = snprintf(text, sizeof text,
+                     "{\"plan_s\":%.3f,\"cubes_s\":%.3f,\"samples_s\":%.3f,\"write_s\":%.3f}\n",
+                     c->seconds_plan, c->seconds_cubes, c->seconds_samples, write_s);
+    SL_LOG(SL_LOG_INFO, "samples", io->item,
+           "%llu samples (leaf %g, depth %d): plan %.3f s, cubes %.3f s, samples %.3f s, "
+           "write %.3f s", (unsigned long long)c->samples, c->plan.leaf_size, c->plan.depth,
+           c->seconds_plan, c->seconds_cubes, c->seconds_samples, write_s);
+    snprintf(path, sizeof path, "%s/_phases.json", io->out_dir);
+    sl_error ignored;
+    sl_error_init(&ignored);
+    if (n > 0 && (size_t)n < sizeof text)
+        sl_write_file_atomic(path, text, (size_t)n, &ignored); /* best effort: diagnostics */
+}
+
+static int samples_run(const void *stage_config, const sl_stage_io *io, sl_error *err)
+{
+    const sl_samples_config *cfg = stage_config;
+    char path[1100];
+    sl_vdb_set_threads(io->threads); /* OpenVDB's TBB pool next to our OpenMP threads */
+    const char *range_dir = sl_stage_dir(io, "range"); /* the range stage's artifacts */
+    if (!range_dir)
+        range_dir = io->in_dir ? io->in_dir : ".";
+    snprintf(path, sizeof path, "%s/%s", range_dir, SL_POINTSET_FILE);
+    sl_pointset ps;
+    int rc = sl_pointset_read(path, &ps, err);
+    if (rc != SL_OK)
+        return rc;
+    sl_vdb_samples samples;
+    sl_samples_counts counts;
+    rc = sl_samples_compute(cfg, &ps, &samples, &counts, io->progress, err);
+    if (rc != SL_OK && !err->file[0]) { /* the failure is about the points file */
+        size_t n = strlen(path) < sizeof err->file ? strlen(path) : sizeof err->file - 1;
+        memcpy(err->file, path, n);
+        err->file[n] = '\0';
+    }
+    int colors = ps.colors != NULL;
+    sl_pointset_release(&ps);
+    if (rc == SL_OK && sl_progress_step(io->progress, "write", 0.95))
+        rc = SL_E_INTERRUPTED;
+    double t0 = omp_get_wtime();
+    if (rc == SL_OK) {
+        snprintf(path, sizeof path, "%s/%s", io->out_dir, SL_SAMPLES_FILE);
+        rc = sl_vdb_samples_write(path, &samples, err);
+    }
+    sl_vdb_samples_release(&samples);
+    if (rc != SL_OK)
+        return rc;
+    report_counts(io->report, cfg, &counts, colors);
+    record_phases(io, &counts, omp_get_wtime() - t0);
+    return SL_OK;
+}
+
+const sl_stage sl_samples_stage = {
+    .name = "samples",
+    .description = "oriented points -> signed samples at leaf-cube vertices, OpenVDB grids "
+                   "(paper 1 section 2.1)",
+    .version = 1,
+    .options = samples_options,
+    .sections = samples_sections,
+    .configure = samples_configure,
+    .release_config = samples_release_config,
+    .run = samples_run,
+};
