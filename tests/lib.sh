@@ -27,10 +27,16 @@ finish() {
 }
 
 # write_config FILE INPUT WORK OUTPUT [extra lines...]
+# Unless the extra lines configure [export] themselves, the export stage is kept light
+# (one level, PLY only, no fidelity or thumbnails): these tests are about the engine, and
+# they also run under the sanitizers.
 write_config() {
   local file=$1 input=$2 work=$3 output=$4; shift 4
   { echo "[run]"; echo "input = $input"; echo "work = $work"; echo "output = $output"
-    echo "logs = $TMP/logs"; printf '%s\n' "$@"; } >"$file"
+    echo "logs = $TMP/logs"; printf '%s\n' "$@"
+    if ! printf '%s\n' "$@" | grep -q '^\[export\]'; then
+      printf '[export]\nlod_percents = 50\nbudgets =\nformats = ply\nthumbnail_size = 0\nfidelity = false\n'
+    fi; } >"$file"
 }
 
 # run_scanlod CMD CONFIG [args...]: sets $rc and $out (stdout), $err (stderr file)

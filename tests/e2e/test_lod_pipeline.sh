@@ -7,7 +7,7 @@ api_check="${SCANLOD_BUILD_DIR:?}/tests/api_check"
 
 mkdir -p "$TMP/in"
 cp "$SCANS/fandisk.ply" "$SCANS/rocker_arm.ply" "$SCANS/bun_zipper_res3.ply" "$TMP/in/"
-write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out" "[export]" "budgets = thumb:1000,big:99999999" "thumbnail_size = 64"
+write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out" "[export]" "budgets = thumb:1000,big:99999999" "thumbnail_size = 64" "fidelity_samples = 20000"
 run_scanlod run "$TMP/c.ini" -q
 check "run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
 
