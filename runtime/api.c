@@ -94,16 +94,16 @@ int scanlod_extract(scanlod_model *model, uint32_t k, float *positions, float *n
     sl_lod_mesh mesh;
     if (sl_lod_generate(&model->lod, k, &mesh, NULL) != 0)
         return -1;
-    memcpy(positions, mesh.positions, mesh.vertex_count * 3 * sizeof(float));
-    if (normals)
-        memcpy(normals, mesh.normals, mesh.vertex_count * 3 * sizeof(float));
-    if (colors) {
-        if (mesh.colors)
+    if (mesh.vertex_count) { /* the coarsest levels may be empty (arrays NULL) */
+        memcpy(positions, mesh.positions, mesh.vertex_count * 3 * sizeof(float));
+        if (normals)
+            memcpy(normals, mesh.normals, mesh.vertex_count * 3 * sizeof(float));
+        if (colors && mesh.colors)
             memcpy(colors, mesh.colors, mesh.vertex_count * 4);
-        else
+        else if (colors)
             memset(colors, 255, mesh.vertex_count * 4);
+        memcpy(indices, mesh.indices, mesh.triangle_count * 3 * sizeof(uint32_t));
     }
-    memcpy(indices, mesh.indices, mesh.triangle_count * 3 * sizeof(uint32_t));
     written->vertices = mesh.vertex_count;
     written->triangles = mesh.triangle_count;
     sl_lod_mesh_release(&mesh);
