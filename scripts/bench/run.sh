@@ -1,0 +1,140 @@
+#!/usr/bin/env bash
+# The benchmark suite (issue 3): scanlod against OpenVDB and meshoptimizer, in one run.
+#
+#   scripts/bench/run.sh [--quick] [--build DIR] [--docs DIR] [--minutes N] [--keep]
+#   scripts/bench/run.sh --report-only RESULTS_DIR [--docs DIR]
+#   scripts/bench/run.sh --resume RESULTS_DIR --phases "lod growth"   (after a --keep run)
+#
+# Builds Release (DIR, default build-bench/ in the repository), then runs the phases in
+# scripts/bench/lib/ on the same inputs (../shared/data next to the repository, or
+# $SCANLOD_SHARED_DATA):
+#   models  one reference build per input (default config): Table 1, leaf size, .slod
+#   stages  per stage wall/CPU/peak RSS at 1 and 2 threads + OpenVDB remesh timings
+#   octree  uniform levels vs OpenVDB at the same voxel size; memory at depths 8..11
+#   lod     equal-count fidelity vs meshoptimizer and OpenVDB adaptive; extraction cost
+#   growth  synthetic surfaces (gen_surface) of growing size: time, memory, fitted slope
+# and writes docs/benchmarks.md and the gnuplot PNGs in docs/bench/. Raw figures stay in
+# DIR/bench-results/STAMP/*.json (--report-only regenerates the docs from them).
+# --quick: bun_zipper, fandisk, rocker_arm, 3 repetitions, 0.2M and 1M triangles once,
+# the depth sweep once on fandisk, extraction timings x3 (a few minutes on 2 cores).
+# Full: 5 inputs, 5 repetitions, 1M/5M/20M triangles; sizes that would overrun the
+# time budget (--minutes, default 40) are skipped and the report says so.
+# Not part of CI: tests/bench/test_bench_harness.sh checks the parsing and statistics.
+set -euo pipefail
+export PYTHONDONTWRITEBYTECODE=1   # no __pycache__ in the source tree
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+lib=$here/lib
+
+quick=0 build=$root/build-bench docs=$root/docs minutes="" keep=0 report_only="" resume=""
+phases="models stages octree lod growth"
+while [ $# -gt 0 ]; do
+  case $1 in
+    --quick) quick=1 ;;
+    --build) build=$2; shift ;;
+    --docs) docs=$2; shift ;;
+    --minutes) minutes=$2; shift ;;
+    --keep) keep=1 ;;
+    --report-only) report_only=$2; shift ;;
+    --resume) resume=$2; shift ;;
+    --phases) phases=$2; shift ;;
+    -h|--help) sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "run.sh: unknown argument $1 (see --help)" >&2; exit 64 ;;
+  esac
+  shift
+done
+
+render() { # render RESULTS_DIR: docs/benchmarks.md and docs/bench/*.png
+  mkdir -p "$docs/bench"
+  python3 "$lib/plots.py" "$1" "$docs/bench"
+  python3 "$lib/report.py" "$1" "$docs/benchmarks.md"
+  echo "bench: wrote $docs/benchmarks.md and $docs/bench/*.png from $1"
+}
+run_phases() { # run_phases RESULTS_DIR: the phases named by $phases, then the docs
+  local t0 start
+  start=$(date +%s)
+  for phase in $phases; do
+    t0=$(date +%s)
+    python3 "$lib/$phase.py" "$1/context.json"
+    echo "bench: phase $phase done in $(($(date +%s) - t0)) s"
+  done
+  echo "$(($(date +%s) - start))" >"$1/elapsed_seconds"
+  cut -d' ' -f1-3 /proc/loadavg >"$1/load_end" 2>/dev/null || true
+  render "$1"
+}
+if [ -n "$report_only" ]; then
+  render "$report_only"
+  exit 0
+fi
+if [ -n "$resume" ]; then   # a fresh time budget from now
+  python3 - "$resume/context.json" <<'EOF2'
+import json, sys, time
+c = json.load(open(sys.argv[1]))
+c["deadline"] = time.time() + 60 * c["minutes"]
+json.dump(c, open(sys.argv[1], "w"), indent=1)
+EOF2
+  run_phases "$resume"
+  exit 0
+fi
+
+data=${SCANLOD_SHARED_DATA:-$root/../shared/data}
+[ -d "$data" ] || { echo "run.sh: no shared scans at $data (set SCANLOD_SHARED_DATA)" >&2; exit 64; }
+command -v gnuplot >/dev/null || { echo "run.sh: gnuplot missing (scripts/install-deps.sh)" >&2; exit 64; }
+command -v python3 >/dev/null || { echo "run.sh: python3 missing" >&2; exit 64; }
+
+# --- build (Release) -------------------------------------------------------------------
+gen=()
+[ -f "$build/CMakeCache.txt" ] || { command -v ninja >/dev/null && gen=(-G Ninja); }
+cmake -S "$root" -B "$build" "${gen[@]}" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$build" --parallel "$(nproc)" \
+  --target scanlod bench_vdb_remesh bench_meshopt_lod bench_gen_surface
+
+# --- settings ----------------------------------------------------------------------------
+if [ "$quick" = 1 ]; then
+  models="bun_zipper fandisk rocker_arm" lod_models=$models reps=3
+  sizes="200000 1000000" depth_input=fandisk depth_reps=1 full_reps_max=0
+  curve_extra="0.05" search_steps=4 extract_reps=3 minutes=${minutes:-10}
+else
+  models="bun_zipper dragon_100kf armadillo_86kf igea fandisk"
+  lod_models="bun_zipper dragon_100kf armadillo_86kf fandisk" reps=5
+  sizes="1000000 5000000 20000000" depth_input=igea depth_reps=3 full_reps_max=1000000
+  curve_extra="0.02 0.05 0.1" search_steps=8 extract_reps=5 minutes=${minutes:-40}
+fi
+for m in $models; do
+  [ -f "$data/$m.ply" ] || { echo "run.sh: no $data/$m.ply" >&2; exit 64; }
+done
+
+stamp=$(date -u +%Y%m%dT%H%M%SZ)
+[ "$quick" = 0 ] || stamp=$stamp-quick
+results=$build/bench-results/$stamp
+scratch=$build/bench-scratch/$stamp
+mkdir -p "$results" "$scratch"
+[ "$keep" = 1 ] || trap 'rm -rf "$scratch"' EXIT
+
+# The context every phase reads (lib/common.py Ctx).
+REPO=$root BUILD=$build DATA=$data RESULTS=$results SCRATCH=$scratch QUICK=$quick \
+MODELS=$models LOD_MODELS=$lod_models REPS=$reps SIZES=$sizes DEPTH_INPUT=$depth_input \
+DEPTH_REPS=$depth_reps EXTRACT_REPS=$extract_reps FULL_REPS_MAX=$full_reps_max \
+CURVE_EXTRA=$curve_extra SEARCH_STEPS=$search_steps \
+MINUTES=$minutes python3 - >"$results/context.json" <<'EOF'
+import json, os, time
+e = os.environ
+nums = lambda k, t: [t(x) for x in e[k].split()]
+print(json.dumps({
+    "repo": e["REPO"], "build": e["BUILD"], "data": e["DATA"], "results": e["RESULTS"],
+    "scratch": e["SCRATCH"], "quick": e["QUICK"] == "1",
+    "models": e["MODELS"].split(), "lod_models": e["LOD_MODELS"].split(),
+    "reps": int(e["REPS"]), "extract_reps": int(e["EXTRACT_REPS"]), "sizes": nums("SIZES", int),
+    "growth_full_reps_max": int(e["FULL_REPS_MAX"]),
+    "depth_input": e["DEPTH_INPUT"], "depths": [8, 9, 10, 11],
+    "depth_reps": int(e["DEPTH_REPS"]),
+    "budgets": [1, 2, 5, 10, 20, 50, 100], "curve_extra": nums("CURVE_EXTRA", float),
+    "compare_samples": 200000, "vdb_search_steps": int(e["SEARCH_STEPS"]),
+    "minutes": int(e["MINUTES"]), "deadline": time.time() + 60 * int(e["MINUTES"]),
+}, indent=1))
+EOF
+
+echo "bench: $stamp run, results in $results"
+python3 "$lib/machine.py" "$results/context.json"
+ln -sfn "$stamp" "$build/bench-results/latest"
+run_phases "$results"
