@@ -174,9 +174,12 @@ def derive(models, st, oc, lod, gr):
                          "at %g %% %s" % (p, fmt_range(v, "%.3g"))
                          for p, v in sorted(by_budget.items())) + ".")
     if lod:
-        mo, vd = [], []
+        mo, vd, mf = [], [], []
         for r in lod.values():
             for e in r["equal_counts"]:
+                f = e.get("meshopt_finest")
+                if f and f["rms"]:
+                    mf.append(e["scanlod"]["rms"] / f["rms"])
                 if e["meshopt"]["rms"] and not e["meshopt"].get("is_input"):
                     mo.append(e["scanlod"]["rms"] / e["meshopt"]["rms"])
                 if e["vdb"]["rms"]:
@@ -185,6 +188,10 @@ def derive(models, st, oc, lod, gr):
                      "(%s; aim <= 2); scanlod / OpenVDB adaptive: median %.2f (%s; aim <= 0.5)."
                      % (stats.median(mo) or 0, fmt_range(mo, "%.2f"),
                         stats.median(vd) or 0, fmt_range(vd, "%.2f")))
+        if mf:
+            lines.append("RMS at equal counts, scanlod LOD / meshopt_simplify of scanlod's own "
+                         "finest level (the same starting surface): median %.2f (%s)."
+                         % (stats.median(mf), fmt_range(mf, "%.2f")))
     if oc and oc.get("levels"):
         rr = {}
         for name, rows in oc["levels"].items():

@@ -4,7 +4,8 @@ Per input of ctx.lod_models, from the reference build:
 - Table 1: the LOD 20..100 % levels of report.json (triangles, vertices, RMS, Hausdorff).
 - Equal counts: the triangle counts of those levels plus extra budgets (ctx.curve_extra,
   fractions of the finest, cut with `extract --triangles`). At each count, scanlod's
-  mesh, meshopt_simplify of the input to the same count, and OpenVDB volumeToMesh at
+  mesh, meshopt_simplify of the input to the same count (and of scanlod's finest level,
+  below its count), and OpenVDB volumeToMesh at
   scanlod's leaf size with the adaptivity found by bisection (count falls as adaptivity
   rises; the closest of the tries is kept, unsigned on open scans), all measured by
   `scanlod compare` against the input.
@@ -70,10 +71,17 @@ def equal_counts(ctx, name, m, work):
     # meshopt_simplify cannot add triangles: a count above the input's is the input.
     mo = meshopt(ctx, ref, [min(t, m["input_triangles"]) for t in targets],
                  os.path.join(work, "mo"))
+    # meshopt_simplify of scanlod's own finest level too: the same starting surface as
+    # the LODs, so what differs is the simplification alone.
+    below = [t for t in targets if t < m["finest_triangles"]]
+    mf = {lv["target"]: lv["output"] for lv in
+          meshopt(ctx, m["finest_ply"], below, os.path.join(work, "mf"))["levels"]} \
+        if below else {}
     vd, tried = vdb_search(ctx, name, m, targets, work)
     for (n, ply, label), mo_level in zip(points, mo["levels"]):
         row = {"label": label, "triangles": n, "scanlod": compare(ctx, ref, ply),
-               "meshopt": compare(ctx, ref, mo_level["output"]), "vdb": vd[str(n)]}
+               "meshopt": compare(ctx, ref, mo_level["output"]), "vdb": vd[str(n)],
+               "meshopt_finest": compare(ctx, ref, mf[n]) if n in mf else None}
         row["meshopt"]["reached"] = mo_level["reached"]
         row["meshopt"]["is_input"] = n >= m["input_triangles"]   # nothing to simplify
         rows.append(row)

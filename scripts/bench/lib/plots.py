@@ -16,7 +16,7 @@ import stats  # noqa: E402
 
 TERM = 'set terminal pngcairo size %d,%d font "sans,11" linewidth 1.5\n'
 COLORS = {"scanlod": "#1f77b4", "uniform": "#9467bd", "meshopt": "#ff7f0e",
-          "vdb": "#2ca02c"}
+          "finest": "#d62728", "vdb": "#2ca02c"}
 
 
 def write(path, rows):
@@ -48,13 +48,15 @@ def error_plot(lod, oc, tmp, out):
           'set xlabel "triangles (log)"\nset ylabel "RMS error (% of bbox diagonal, log)"\n'
           'set format x "%.0s%c"\n')
     for name in names:
-        series = {"scanlod": [], "meshopt": [], "vdb": [], "uniform": []}
+        series = {"scanlod": [], "meshopt": [], "vdb": [], "uniform": [], "finest": []}
         for e in lod[name]["equal_counts"]:
+            if e.get("meshopt_finest"):
+                series["finest"].append((e["triangles"], 100 * e["meshopt_finest"]["rms"]))
             for k in ("scanlod", "meshopt", "vdb"):
                 if k == "meshopt" and e[k].get("is_input"):
                     continue   # the input itself: no simplification, RMS 0
                 series[k].append((e[k]["triangles"], 100 * e[k]["rms"]))
-        lo = min(x[0] for x in series["scanlod"] + series["meshopt"] + series["vdb"])
+        lo = min(x[0] for k in ("scanlod", "meshopt", "vdb") for x in series[k])
         for r in (oc or {}).get("levels", {}).get(name, []):
             if r["triangles"] >= lo / 2:
                 series["uniform"].append((r["triangles"], 100 * r["scanlod"]["rms"]))
@@ -68,7 +70,8 @@ def error_plot(lod, oc, tmp, out):
             % (os.path.join(tmp, "err_%s_%s.dat" % (name, k)), pt, COLORS[k], title)
             for k, pt, title in (("scanlod", 7, "scanlod LOD (adaptive)"),
                                  ("uniform", 6, "scanlod uniform octree level"),
-                                 ("meshopt", 5, "meshoptimizer simplify"),
+                                 ("meshopt", 5, "meshoptimizer simplify of the input"),
+                                 ("finest", 4, "meshoptimizer of scanlod's finest"),
                                  ("vdb", 9, vdb_label)) if series[k]) + "\n"
     s += "unset multiplot\n"
     gnuplot(s, tmp, "error")
@@ -121,7 +124,7 @@ def extract_plot(h, lod, tmp, out):
     s += ('set logscale xy\nset title "scanlod extract vs meshopt\\\\_simplify from the '
           'finest mesh"\nset xlabel "output triangles (log)"\nset ylabel "time (s, log)"\n'
           'set yrange [*:*]\nset format y "10^{%L}"\nset format x "%.0s%c"\n'
-          'set key top left box opaque font ",9"\n')
+          'set key bottom right box opaque font ",9"\n')
     s += "plot " + ", ".join(right) + "\nunset multiplot\n"
     gnuplot(s, tmp, "extract")
 
@@ -136,8 +139,10 @@ def growth_plot(h, tmp, out):
     s += 'set output "%s"\n' % os.path.join(out, "growth.png")
     s += ('set multiplot layout 1,2 title "Cost growth on synthetic closed surfaces '
           '(gen\\\\_surface, 2 threads)"\n')
-    s += ('set logscale xy\nset grid\nset key top left box opaque font ",9"\n'
-          'set xlabel "input triangles (log)"\nset format x "%.0s%c"\n')
+    lo, hi = g["rows"][0]["triangles"] / 2.0, g["rows"][-1]["triangles"] * 2.0
+    s += ('set logscale xy\nset grid\nset key bottom right box opaque font ",9"\n'
+          'set xlabel "input triangles (log)"\nset format x "%%.0s%%c"\n'
+          'set xrange [%g:%g]\n' % (lo, hi))
     slope = g["slopes"]["total time"]
     s += 'set title "wall time (total grows as N^{%.2f})"\nset ylabel "wall time (s, log)"\n' % (
         slope if slope is not None else float("nan"))
@@ -150,7 +155,7 @@ def growth_plot(h, tmp, out):
                      % (f, i + 4, i + 4, i + 1, st))
     s += "plot " + ", ".join(plots) + "\n"
     rs = g["slopes"]["peak RSS"]
-    s += ('set title "peak RSS of the largest stage (grows as N^{%.2f})"\n'
+    s += ('set key top left\nset title "peak RSS of the largest stage (grows as N^{%.2f})"\n'
           'set ylabel "peak RSS (MB, log)"\n' % (rs if rs is not None else float("nan")))
     r0 = g["rows"][0]["peak_rss_kb"] / 1024.0
     s += ('plot "%s" using 1:3 with linespoints pt 7 lc rgb "black" title "peak RSS", '

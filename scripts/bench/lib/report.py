@@ -196,12 +196,15 @@ def section_lod(out, lod, h):
                "with the adaptivity (found by bisection, closest try kept; unsigned on open "
                "scans) that lands nearest the count (†: more than 10 % off, the nearest any "
                "adaptivity in [0, 1] reaches). meshoptimizer cannot add triangles: at a count "
-               "above the input's it returns the input, and no ratio is given. RMS ratio < 1: "
-               "scanlod closer.\n")
+               "above the input's it returns the input, and no ratio is given. *meshopt of "
+               "finest*: meshopt_simplify of scanlod's own finest level (lod100) to the "
+               "count, so both start from the same resampled surface and only the "
+               "simplification differs. RMS ratio < 1: scanlod closer.\n")
     for name, r in lod.items():
         body = []
         for e in r["equal_counts"]:
             s, m, v = e["scanlod"], e["meshopt"], e["vdb"]
+            f = e.get("meshopt_finest") or {}
             is_input = m.get("is_input")
             off = abs(v["triangles"] - e["triangles"]) > 0.1 * e["triangles"]
             body.append([e["label"], e["triangles"], pct(s["rms"]), pct(s["hausdorff"]),
@@ -212,11 +215,13 @@ def section_lod(out, lod, h):
                          pct(v["hausdorff"]),
                          num(s["rms"] / m["rms"] if m["rms"] and not is_input else None,
                              "%.2f"),
-                         num(s["rms"] / v["rms"] if v["rms"] else None, "%.2f")])
+                         num(s["rms"] / v["rms"] if v["rms"] else None, "%.2f"),
+                         pct(f.get("rms")),
+                         num(s["rms"] / f["rms"] if f.get("rms") else None, "%.2f")])
         out.append("**%s**\n" % name)
         table(out, ["level", "triangles", "RMS", "Hausdorff", "meshopt tris", "RMS",
                     "Hausdorff", "OpenVDB tris", "RMS", "Hausdorff", "RMS / meshopt",
-                    "RMS / OpenVDB"], body)
+                    "RMS / OpenVDB", "meshopt of finest: RMS", "RMS / it"], body)
     out.append("### Extraction time per output triangle\n")
     out.append("`scanlod extract MODEL.slod --triangles N`, the printed \"generated in\" "
                "time (the O(m) generation, no file writing), median [min–max] of "
