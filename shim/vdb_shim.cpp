@@ -32,7 +32,6 @@ extern "C" {
 #include <memory>
 #include <mutex>
 #include <new>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -147,6 +146,26 @@ void unpack_rgba(int32_t packed, uint8_t *c)
         c[k] = (uint8_t)(v >> (8 * k));
 }
 
+// An output std::streambuf appending to a string we own: OpenVDB serialises into it and
+// we patch and write those very bytes (an ostringstream would hand out a second copy).
+class StringSink : public std::streambuf {
+public:
+    std::string bytes;
+
+protected:
+    std::streamsize xsputn(const char *data, std::streamsize n) override
+    {
+        bytes.append(data, (size_t)n);
+        return n;
+    }
+    int_type overflow(int_type c) override
+    {
+        if (!traits_type::eq_int_type(c, traits_type::eof()))
+            bytes.push_back(traits_type::to_char_type(c));
+        return traits_type::not_eof(c);
+    }
+};
+
 int write_samples(const char *path, const sl_vdb_samples *s, sl_error *err)
 {
     int rc = check_samples(path, s, err);
@@ -173,12 +192,17 @@ int write_samples(const char *path, const sl_vdb_samples *s, sl_error *err)
     }
     openvdb::MetaMap meta;
     meta.insertMeta(kVersionKey, openvdb::Int32Metadata(SL_VDB_SAMPLES_VERSION));
-    std::ostringstream os(std::ios_base::out | std::ios_base::binary);
+    StringSink sink;
+    std::ostream os(&sink);
     openvdb::io::Stream vdb(os);
     vdb.setGridStatsMetadataEnabled(false); // no derived metadata: bytes = f(samples)
     vdb.setCompression(openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
     vdb.write(grids, meta);
-    std::string bytes = os.str();
+    grids.clear(); // the trees are serialised: give their memory back before the write
+    distance.reset();
+    std::string &bytes = sink.bytes;
+    if (!os.good())
+        return sl_error_set(err, SL_E_INTERNAL, 0, path, "OpenVDB could not serialise the grids");
     if (!header_looks_right(bytes))
         return sl_error_set(err, SL_E_INTERNAL, 0, path,
                             "OpenVDB %s wrote a header of an unexpected layout (the UUID "
