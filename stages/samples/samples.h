@@ -83,7 +83,8 @@ typedef struct sl_samples_counts {
     uint64_t inside, outside;     /* samples with value < 0 / >= 0 */
     uint64_t sign_flips;          /* sign_neighbours > 1: votes that overruled the
                                      closest point's sign */
-    double seconds_plan, seconds_cubes, seconds_samples; /* wall time per phase */
+    double seconds_plan, seconds_cubes; /* wall time per phase: grid; cubes and vertices */
+    double seconds_tree, seconds_samples; /* k-d tree build; closest points (parallel) */
 } sl_samples_counts;
 
 /* Chooses leaf size, origin and depth for `ps` (no allocation). SL_E_BADINPUT when no

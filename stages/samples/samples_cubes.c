@@ -5,9 +5,10 @@
  * x << 40 | y << 20 | z), so memory follows the surface, never the bounding volume, and
  * the order is the (x, y, z) lexicographic order the samples file wants. The occupied
  * cubes are the only set that needs a sort (the key tables' LSD radix sort). Everything
- * after is a dilation, done one axis at a time: the
- * union of copies of a sorted array shifted by constants is a k-way merge of sorted
- * arrays, O(n k) with no sort. The band is the occupied set dilated by -band..band along
+ * after is a dilation, done one axis at a time: the union of copies of a sorted array
+ * shifted by constants is a k-way merge of sorted arrays, O(n k) with no sort, and it runs
+ * in parallel over ranges of output keys (counted first, then written at their prefix-sum
+ * offsets). The band is the occupied set dilated by -band..band along
  * x, then y, then z (= the 26-neighbourhood, applied band times); the vertices of a set
  * of cubes are the set dilated by 0..1 along each axis. Each merge counts its result
  * first and refuses it above the cap before allocating it.
@@ -17,7 +18,7 @@
 
 #include "stages/samples/samples_internal.h"
 
-enum { MAX_OFFSETS = 2 * SL_SAMPLES_MAX_BAND + 1 };
+enum { MAX_OFFSETS = 2 * SL_SAMPLES_MAX_BAND + 1, MAX_CHUNKS = 256 };
 
 void samples_keys_release(samples_keys *k)
 {
@@ -53,41 +54,81 @@ int samples_occupied_cubes(const sl_samples_plan *plan, const sl_pointset *ps, s
     return SL_OK;
 }
 
-/* One k-way merge of `src` shifted by `delta[0..m)` (ascending): writes the union into
- * dst (if not NULL) and returns its size. */
-static uint64_t merge_shifted(const uint64_t *src, uint64_t n, const int64_t *delta, int m,
-                              uint64_t *dst)
+/* First index i with src[i] + delta >= key (src ascending; keys and shifted keys are
+ * below 2^61, so signed arithmetic cannot overflow). */
+static uint64_t lower_bound_shifted(const uint64_t *src, uint64_t n, int64_t delta, int64_t key)
 {
-    uint64_t at[MAX_OFFSETS] = {0}, count = 0, last = 0;
+    uint64_t lo = 0, hi = n;
+    while (lo < hi) {
+        uint64_t mid = lo + (hi - lo) / 2;
+        if ((int64_t)src[mid] + delta < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* The k-way merge of `src` shifted by `delta[0..m)`, restricted to output keys in
+ * [lo, hi): writes the union into dst (if not NULL) and returns its size. */
+static uint64_t merge_shifted(const uint64_t *src, uint64_t n, const int64_t *delta, int m,
+                              int64_t lo, int64_t hi, uint64_t *dst)
+{
+    uint64_t at[MAX_OFFSETS], count = 0;
+    for (int j = 0; j < m; j++)
+        at[j] = lower_bound_shifted(src, n, delta[j], lo);
+    int64_t last = -1;
     for (;;) {
-        uint64_t best = UINT64_MAX;
+        int64_t best = INT64_MAX;
         for (int j = 0; j < m; j++)
-            if (at[j] < n && src[at[j]] + (uint64_t)delta[j] < best)
-                best = src[at[j]] + (uint64_t)delta[j];
-        if (best == UINT64_MAX)
+            if (at[j] < n && (int64_t)src[at[j]] + delta[j] < best)
+                best = (int64_t)src[at[j]] + delta[j];
+        if (best >= hi)
             return count;
         for (int j = 0; j < m; j++)
-            if (at[j] < n && src[at[j]] + (uint64_t)delta[j] == best)
+            if (at[j] < n && (int64_t)src[at[j]] + delta[j] == best)
                 at[j]++;
-        if (count == 0 || best != last) {
+        if (best != last) {
             if (dst)
-                dst[count] = best;
+                dst[count] = (uint64_t)best;
             count++;
             last = best;
         }
     }
 }
 
+/* Output key ranges for the parallel merge: chunk c covers [split[c], split[c + 1]),
+ * cut at evenly spaced input keys. Any cut gives the same union, so the result does not
+ * depend on the number of chunks or threads. */
+static int merge_splits(const uint64_t *src, uint64_t n, int64_t delta0, int64_t *split)
+{
+    int chunks = (int)(n / 16384);
+    chunks = chunks < 1 ? 1 : chunks > MAX_CHUNKS ? MAX_CHUNKS : chunks;
+    split[0] = INT64_MIN;
+    for (int c = 1; c < chunks; c++)
+        split[c] = (int64_t)src[n / (uint64_t)chunks * (uint64_t)c] + delta0;
+    split[chunks] = INT64_MAX;
+    return chunks;
+}
+
 int samples_dilate(samples_keys *k, int axis, const int *offsets, int offset_count,
                    uint64_t max_count, sl_error *err)
 {
-    int64_t delta[MAX_OFFSETS];
+    int64_t delta[MAX_OFFSETS], split[MAX_CHUNKS + 1];
+    uint64_t start[MAX_CHUNKS + 1] = {0};
     int64_t stride = (int64_t)1 << (SL_COORD_BITS * (2 - axis));
     if (offset_count < 1 || offset_count > MAX_OFFSETS)
         return sl_error_set(err, SL_E_INTERNAL, 0, NULL, "dilation by %d offsets", offset_count);
     for (int j = 0; j < offset_count; j++)
-        delta[j] = offsets[j] * stride; /* two's complement: adding wraps to a subtraction */
-    uint64_t n = merge_shifted(k->keys, k->count, delta, offset_count, NULL);
+        delta[j] = offsets[j] * stride; /* offsets ascend, so do the deltas */
+    int chunks = merge_splits(k->keys, k->count, delta[0], split);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int c = 0; c < chunks; c++)
+        start[c + 1] = merge_shifted(k->keys, k->count, delta, offset_count, split[c],
+                                     split[c + 1], NULL);
+    for (int c = 0; c < chunks; c++)
+        start[c + 1] += start[c];
+    uint64_t n = start[chunks];
     if (n > max_count)
         return sl_error_set(err, SL_E_LIMIT, 0, NULL,
                             "the band needs more than %llu grid vertices ([samples] "
@@ -97,7 +138,10 @@ int samples_dilate(samples_keys *k, int axis, const int *offsets, int offset_cou
     if (!dst)
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory for %llu keys",
                             (unsigned long long)n);
-    merge_shifted(k->keys, k->count, delta, offset_count, dst);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int c = 0; c < chunks; c++)
+        merge_shifted(k->keys, k->count, delta, offset_count, split[c], split[c + 1],
+                      dst + start[c]);
     free(k->keys);
     k->keys = dst;
     k->count = n;

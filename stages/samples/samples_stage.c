@@ -126,12 +126,14 @@ static void record_phases(const sl_stage_io *io, const sl_samples_counts *c, dou
 {
     char text[256], path[1100];
     int n = snprintf(text, sizeof text,
-                     "{\"plan_s\":%.3f,\"cubes_s\":%.3f,\"samples_s\":%.3f,\"write_s\":%.3f}\n",
-                     c->seconds_plan, c->seconds_cubes, c->seconds_samples, write_s);
+                     "{\"plan_s\":%.3f,\"cubes_s\":%.3f,\"tree_s\":%.3f,\"samples_s\":%.3f,"
+                     "\"write_s\":%.3f}\n", c->seconds_plan, c->seconds_cubes, c->seconds_tree,
+                     c->seconds_samples, write_s);
     SL_LOG(SL_LOG_INFO, "samples", io->item,
-           "%llu samples (leaf %g, depth %d): plan %.3f s, cubes %.3f s, samples %.3f s, "
-           "write %.3f s", (unsigned long long)c->samples, c->plan.leaf_size, c->plan.depth,
-           c->seconds_plan, c->seconds_cubes, c->seconds_samples, write_s);
+           "%llu samples (leaf %g, depth %d): plan %.3f s, cubes %.3f s, tree %.3f s, "
+           "samples %.3f s, write %.3f s", (unsigned long long)c->samples, c->plan.leaf_size,
+           c->plan.depth, c->seconds_plan, c->seconds_cubes, c->seconds_tree, c->seconds_samples,
+           write_s);
     snprintf(path, sizeof path, "%s/_phases.json", io->out_dir);
     sl_error ignored;
     sl_error_init(&ignored);

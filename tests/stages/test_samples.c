@@ -141,7 +141,7 @@ static void test_sphere(int distance, int sign_neighbours)
     sl_samples_config cfg = sl_samples_default_config();
     cfg.distance = distance;
     cfg.sign_neighbours = sign_neighbours;
-    cfg.leaf_size = 0.05;
+    cfg.leaf_size = 0.03; /* ~80000 samples: the parallel merges use several chunks */
     sl_vdb_samples s;
     sl_samples_counts counts;
     sl_error err;
