@@ -38,7 +38,7 @@ int samples_occupied_cubes(const sl_samples_plan *plan, const sl_pointset *ps, s
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory for %llu cube keys",
                             (unsigned long long)n);
     const float *p = ps->positions;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > 65536)
     for (int64_t i = 0; i < (int64_t)n; i++)
         keys[i] = sl_vertex_key(samples_cube_of(plan, p[3 * i], 0),
                                  samples_cube_of(plan, p[3 * i + 1], 1),
@@ -122,7 +122,7 @@ int samples_dilate(samples_keys *k, int axis, const int *offsets, int offset_cou
     for (int j = 0; j < offset_count; j++)
         delta[j] = offsets[j] * stride; /* offsets ascend, so do the deltas */
     int chunks = merge_splits(k->keys, k->count, delta[0], split);
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (chunks > 1)
     for (int c = 0; c < chunks; c++)
         start[c + 1] = merge_shifted(k->keys, k->count, delta, offset_count, split[c],
                                      split[c + 1], NULL);
@@ -138,7 +138,7 @@ int samples_dilate(samples_keys *k, int axis, const int *offsets, int offset_cou
     if (!dst)
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory for %llu keys",
                             (unsigned long long)n);
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (chunks > 1)
     for (int c = 0; c < chunks; c++)
         merge_shifted(k->keys, k->count, delta, offset_count, split[c], split[c + 1],
                       dst + start[c]);

@@ -100,7 +100,7 @@ static int eval_all(const eval_ctx *c, uint64_t n, sl_progress *progress, uint64
     int64_t blocks = (int64_t)((n + BLOCK - 1) / BLOCK);
     int stop = 0;
     uint64_t flipped = 0;
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : flipped)
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : flipped) if (blocks > 1)
     for (int64_t b = 0; b < blocks; b++) {
         int stopped;
 #pragma omp atomic read
