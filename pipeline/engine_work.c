@@ -19,6 +19,9 @@
 #include "pipeline/log.h"
 #include "pipeline/progress.h"
 
+/* A claimed ticket still without a lease after this long is abandoned (seconds). */
+#define UNLEASED_CLAIM_S 10
+
 static void random_nonce(char out[33])
 {
     unsigned char bytes[16];
@@ -98,9 +101,14 @@ static void reclaim_stale(sl_engine *e, int s)
             /* Torn or still being renamed in: judge by age alone. */
             struct stat st;
             stale = stat(path, &st) == 0 && st.st_ctime + e->lease_seconds < now;
+        } else if (t.expires == 0) {
+            /* Renamed in but never leased: its claimer died (or ran out of space) between
+             * the rename and the lease write, which a live claimer does at once. */
+            struct stat st;
+            stale = stat(path, &st) == 0 && st.st_ctime + UNLEASED_CLAIM_S < now;
         } else {
             int alive = sl_identity_alive(&e->self, &t);
-            stale = alive == 0 || (alive < 0 && t.expires > 0 && t.expires < now);
+            stale = alive == 0 || (alive < 0 && t.expires < now);
             if (alive == 1 && t.pid == e->self.pid)
                 stale = 0;
         }
@@ -149,8 +157,14 @@ static int claim_one(sl_engine *e, int s, char *name, size_t name_size, sl_ticke
         random_nonce(t->nonce);
         stamp_lease(e, t);
         rc = sl_queue_put(e->work, stage, SL_STATE_CLAIMED, names[i], t, err);
-        if (rc)
+        if (rc) {
+            /* No lease could be written (full disk): hand the ticket back at once
+             * rather than leave an ownerless claim (a rename needs no space). */
+            sl_error ignored;
+            sl_error_init(&ignored);
+            sl_queue_move(e->work, stage, names[i], SL_STATE_CLAIMED, SL_STATE_READY, &ignored);
             break;
+        }
         snprintf(name, name_size, "%s", names[i]);
         claimed = 1;
     }
