@@ -143,7 +143,7 @@ check "report: merge stage median [min-max] and 1->2 speed-up" has "$md" "| merg
 check "report: OpenVDB / scanlod pair ratios (6/5, 9/5, 3/5)" has "$md" "| toy | signed | 5 [5–5] | 6 [3–9] | 1.20 [0.60–1.80] | 1.20 [1.20–1.20] |"
 check "report: depth sweep ratios" has "$md" "| 9 | 0.0001953 | 4000 | 4.00 |"
 check "report: equal-count RMS ratios" has "$md" "| 2.00 | 0.50 | 0.200 % | 0.25 |"
-check "report: extraction flatness" has "$md" "max/min of the per-triangle cost: 1.20"
+check "report: extraction flatness and fit" has "$md" "max/min of the per-triangle cost: 1.20; time ~ m^0.96 "
 check "report: speed-up vs meshopt" has "$md" "250 [200–300]"
 check "report: linear growth fitted" has "$md" "time ~ N^1.00 (about linear)"
 check "report: skipped size said" has "$md" "Skipped 20000000 triangles: predicted 9999 s."

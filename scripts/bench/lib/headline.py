@@ -103,7 +103,9 @@ def ladder(lod):
         for x, orig in zip(rows, r["ladder"]):
             x["seconds"] = orig["seconds"]   # the summary again, for the table
             x["rate"] = 1e9 / x["ns_per_triangle"] if x["ns_per_triangle"] else None
-        out[name] = {"rows": rows, "flatness": flat}
+        fit = stats.loglog_slope([x["triangles"] for x in rows],
+                                 [x["seconds_median"] for x in rows])
+        out[name] = {"rows": rows, "flatness": flat, "fit": fit}
     return out
 
 
@@ -164,10 +166,15 @@ def derive(models, st, oc, lod, gr):
                                    h["ladder"].items() if v["flatness"]),
                          ", ".join("%s %.3g" % (n, v["rows"][-1]["rate"]) for n, v in
                                    h["ladder"].items() if v["rows"][-1]["rate"])))
+        fits = ["%s %.2f" % (n, v["fit"]) for n, v in h["ladder"].items() if v["fit"]]
+        if fits:
+            lines.append("extraction time against output triangles m, fitted exponent b of "
+                         "time ~ m^b (log-log, 1 = exactly O(m); below 1: small budgets cost "
+                         "more per triangle): " + ", ".join(fits) + ".")
         by_budget = {}
         for v in h["ladder"].values():
             for x in v["rows"]:
-                if x["speedup"]["median"]:
+                if x["speedup"]["median"] and x["percent"] < 100:
                     by_budget.setdefault(x["percent"], []).append(x["speedup"]["median"])
         lines.append("extraction vs meshopt_simplify from the finest mesh to the same count, "
                      "times faster (range over inputs; aim >= 100x): " + ", ".join(

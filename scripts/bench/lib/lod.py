@@ -102,7 +102,7 @@ def ladder(ctx, name, m, work):
             counts[p] = e["triangles"]
         # meshopt from the finest mesh to each count below it (at the finest count it
         # would have nothing to do), paired with this repetition's extractions.
-        simplify = [p for p, _ in budgets if counts[p] < finest]
+        simplify = [p for p, _ in budgets if p < 100 and counts[p] < finest]
         if rep < ctx.reps and simplify:
             mo = meshopt(ctx, m["finest_ply"], [counts[p] for p in simplify])
             for p, lv in zip(simplify, mo["levels"]):

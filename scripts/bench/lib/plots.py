@@ -46,7 +46,7 @@ def error_plot(lod, oc, tmp, out):
           'counts (lower is better)"\n' % (rows, cols))
     s += ('set logscale xy\nset grid\nset key bottom left box opaque font ",9"\n'
           'set xlabel "triangles (log)"\nset ylabel "RMS error (% of bbox diagonal, log)"\n'
-          'set format x "%.0s%c"\n')
+          'set format x "%.0s%c"\nset format y "%g"\n')
     for name in names:
         series = {"scanlod": [], "meshopt": [], "vdb": [], "uniform": [], "finest": []}
         for e in lod[name]["equal_counts"]:
@@ -64,6 +64,8 @@ def error_plot(lod, oc, tmp, out):
             write(os.path.join(tmp, "err_%s_%s.dat" % (name, k)), sorted(v))
         vdb_label = "OpenVDB adaptive%s" % (" (unsigned)" if lod[name]["equal_counts"][0]
                                             ["vdb"].get("unsigned") else "")
+        ys = [y for v in series.values() for _, y in v if y > 0]
+        s += 'set yrange [%g:%g]\n' % (min(ys) / 30.0, max(ys) * 2.0)   # room for the key
         s += 'set title "%s"\n' % name.replace("_", "\\\\_")
         s += "plot " + ", ".join(
             '"%s" using 1:2 with linespoints pt %d ps 1.2 lc rgb "%s" title "%s"'
@@ -111,8 +113,8 @@ def extract_plot(h, lod, tmp, out):
     left, right = [], []   # per-triangle cost; absolute times beside meshopt
     for i, name in enumerate(names):
         f = os.path.join(tmp, "ladder_%s.dat" % name)
-        write(f, [(x["percent"], x["ns_per_triangle"], x["triangles"],
-                   x["seconds"]["median"], x["meshopt_seconds"]["median"])
+        write(f, [(x["percent"], x["ns_per_triangle"], x["triangles"], x["seconds"]["median"],
+                   x["meshopt_seconds"]["median"] if x["percent"] < 100 else None)
                   for x in h["ladder"][name]["rows"]])
         label = name.replace("_", "\\\\_")
         left.append('"%s" using 1:2 with linespoints pt 7 lc %d title "%s"' % (f, i + 1, label))

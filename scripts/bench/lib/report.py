@@ -230,13 +230,16 @@ def section_lod(out, lod, h):
                "welded) to the same count, simplify time only (none at 100 %: nothing to "
                "simplify). Speed-up = meshopt / scanlod per repetition, median.\n")
     for name, r in h["ladder"].items():
-        out.append("**%s** — max/min of the per-triangle cost: %s\n"
-                   % (name, num(r["flatness"], "%.2f")))
+        fit = ("; time ~ m^%.2f (log-log fit over the budgets)" % r["fit"]
+               if r.get("fit") else "")
+        out.append("**%s** — max/min of the per-triangle cost: %s%s\n"
+                   % (name, num(r["flatness"], "%.2f"), fit))
         table(out, ["budget", "triangles", "generated in (ms)", "ns / triangle",
                     "triangles/s", "meshopt (ms)", "speed-up vs meshopt"],
               [["%g %%" % x["percent"], x["triangles"], spread(x["seconds"], "%.3g", 1e3),
                 num(x["ns_per_triangle"], "%.0f"), num(x["rate"], "%.3g"),
-                spread(x["meshopt_seconds"], "%.3g", 1e3), spread(x["speedup"], "%.3g")]
+                spread(x["meshopt_seconds"], "%.3g", 1e3) if x["percent"] < 100 else "–",
+                spread(x["speedup"], "%.3g") if x["percent"] < 100 else "–"]
                for x in r["rows"]])
 
 
