@@ -310,3 +310,17 @@ int sl_read_file(const char *path, uint64_t max_size, char **data, size_t *size,
     *size = got;
     return 0;
 }
+
+int sl_link_or_copy(const char *from, const char *to, sl_error *err)
+{
+    unlink(to);
+    if (link(from, to) == 0)
+        return 0;
+    char *data = NULL;
+    size_t size = 0;
+    int rc = sl_read_file(from, (uint64_t)1 << 40, &data, &size, err);
+    if (rc == 0)
+        rc = sl_write_file_atomic(to, data, size, err);
+    free(data);
+    return rc;
+}

@@ -52,6 +52,10 @@ int sl_fsync_dir(const char *dir, sl_error *err);
 /* mkdir -p with an fsync of each parent that gained an entry. */
 int sl_mkdirs(const char *path, sl_error *err);
 
+/* Hard-links `from` as `to` (replacing it), or copies it durably when linking fails
+ * (another filesystem). */
+int sl_link_or_copy(const char *from, const char *to, sl_error *err);
+
 /* Reads a whole file (capped at max_size bytes; SL_E_LIMIT beyond). *data is malloc'd,
  * NUL-terminated for convenience; *size excludes the NUL. */
 int sl_read_file(const char *path, uint64_t max_size, char **data, size_t *size, sl_error *err);

@@ -139,20 +139,6 @@ static int remove_tree(const char *dir)
     return rmdir(dir);
 }
 
-/* Hard-links (or copies) a published stage file into the staged folder. */
-static int publish_file(const char *from, const char *to, sl_error *err)
-{
-    if (link(from, to) == 0)
-        return 0;
-    char *data = NULL;
-    size_t size = 0;
-    int rc = sl_read_file(from, (uint64_t)1 << 40, &data, &size, err);
-    if (rc == 0)
-        rc = sl_write_file_atomic(to, data, size, err);
-    free(data);
-    return rc;
-}
-
 /* The files of every publishing stage, by the names in its record; their names are
  * appended to `names` (for the publish record). */
 static int publish_stage_files(sl_engine *e, const char *ticket, const char *staged,
@@ -174,7 +160,7 @@ static int publish_stage_files(sl_engine *e, const char *ticket, const char *sta
             char from[PATH_MAX], to[PATH_MAX];
             sl_engine_path(from, sizeof from, "%s/%s", dir, name);
             sl_engine_path(to, sizeof to, "%s/%s", staged, name);
-            rc = publish_file(from, to, err);
+            rc = sl_link_or_copy(from, to, err);
             snprintf(storage[*count], 128, "%s", name);
             names[*count] = storage[*count];
             (*count)++;

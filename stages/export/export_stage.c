@@ -69,21 +69,6 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
     return 0;
 }
 
-/* The model is published with the levels: a hard link when possible (same work dir). */
-static int publish_model(const char *from, const char *to, sl_error *err)
-{
-    unlink(to);
-    if (link(from, to) == 0)
-        return 0;
-    char *data = NULL;
-    size_t size = 0;
-    int rc = sl_read_file(from, (uint64_t)1 << 40, &data, &size, err);
-    if (rc == 0)
-        rc = sl_write_file_atomic(to, data, size, err);
-    free(data);
-    return rc;
-}
-
 static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
 {
     const sl_export_config *c = config;
@@ -106,7 +91,7 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
             input.triangle_count == 0 || sl_mesh_check_surface(&input, NULL, &ierr) != 0)
             measure = 0;
     }
-    rc = publish_model(model_path, published, err);
+    rc = sl_link_or_copy(model_path, published, err);
     if (rc == 0)
         rc = sl_export_levels(c, &model, measure ? &input : NULL, io, err);
     sl_mesh_release(&input);
