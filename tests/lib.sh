@@ -13,6 +13,8 @@ cleanup() {
   rm -rf "$TMP"
 }
 trap cleanup EXIT
+# A command failing under errexit ends the test; say which one, so a CI log is never silent.
+trap '[[ $- != *e* ]] || echo "ERROR: ${BASH_SOURCE[0]}:$LINENO: \"$BASH_COMMAND\" exited $?" >&2' ERR
 passed=0
 failed=0
 
