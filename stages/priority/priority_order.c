@@ -1,5 +1,5 @@
-/* Area-difference metric, node errors and the expansion order (paper 1, section 2.3;
- * priority.h). */
+/* Area difference, node errors, the expansion keys and the expansion order (paper 1,
+ * section 2.3; priority.h; docs/lod.md "The priority metric"). */
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -41,6 +41,17 @@ static double node_area(const sl_octree *t, const sl_octree_node *n)
     return area;
 }
 
+/* Squared distance from p to the nearest of `count` triangles. */
+static double point_to_triangles(const double p[3], double tri[][3][3], int count)
+{
+    double best = INFINITY, q[3];
+    for (int i = 0; i < count; i++) {
+        double d2 = sl_closest_point_triangle(p, tri[i][0], tri[i][1], tri[i][2], q);
+        best = d2 < best ? d2 : best;
+    }
+    return best;
+}
+
 /* Largest distance from the children's crossing points to the node's own triangles. */
 static double node_error(const sl_octree *t, const sl_octree_node *n)
 {
@@ -59,17 +70,27 @@ static double node_error(const sl_octree *t, const sl_octree_node *n)
             uint32_t id = sl_octree_crossing(t, child, e);
             double p[3] = {t->crossing_position[3 * (size_t)id], t->crossing_position[3 * (size_t)id + 1],
                            t->crossing_position[3 * (size_t)id + 2]};
-            double best = INFINITY, q[3];
-            for (int i = 0; i < count; i++) {
-                double d2 = sl_closest_point_triangle(p, tri[i][0], tri[i][1], tri[i][2], q);
-                best = d2 < best ? d2 : best;
-            }
-            worst = fmax(worst, sqrt(best));
+            worst = fmax(worst, sqrt(point_to_triangles(p, tri, count)));
         }
     }
     if (count == 0 && child_points > 0) /* the node draws nothing its children draw */
         return t->leaf_size * (double)(1u << n->level) * sqrt(3.0);
     return worst;
+}
+
+static const char *const metric_names[] = {"error", "hausdorff", "area"};
+
+int sl_priority_metric_parse(const char *name)
+{
+    for (int i = 0; i < 3; i++)
+        if (!strcmp(name, metric_names[i]))
+            return i;
+    return -1;
+}
+
+const char *sl_priority_metric_name(sl_priority_metric metric)
+{
+    return metric_names[metric];
 }
 
 int sl_priority_metrics(const sl_octree *t, float *area_difference, float *error)
@@ -94,6 +115,127 @@ int sl_priority_metrics(const sl_octree *t, float *area_difference, float *error
     return 0;
 }
 
+/* ---- error-driven keys ------------------------------------------------------------- */
+
+/* The leaves under node i: the contiguous range [*lo, *hi) of level 0 (each level is in
+ * Morton order, so a subtree's nodes on any level are contiguous). */
+static void leaf_range(const sl_octree *t, uint32_t i, uint32_t *lo, uint32_t *hi)
+{
+    uint32_t a = i, b = i;
+    while (t->nodes[a].level > 0 && t->nodes[a].child_mask)
+        a = t->nodes[a].first_child;
+    while (t->nodes[b].level > 0 && t->nodes[b].child_mask)
+        b = t->nodes[b].first_child + (uint32_t)__builtin_popcount(t->nodes[b].child_mask) - 1u;
+    *lo = a;
+    *hi = t->nodes[a].level == 0 && t->nodes[b].level == 0 ? b + 1 : a;
+}
+
+/* How far node i's own triangles are from the finest surface under it (its leaves'
+ * triangles), both ways: leaf triangle centroids and corners against the node's triangles,
+ * and the node's triangle centroids and corners against the leaf triangles. *worst = the
+ * largest of these distances (a Hausdorff estimate), *squares = the area-weighted sum of
+ * squared centroid distances of both sides (the node's share of the squared error behind
+ * an RMS figure). A node that draws nothing where its leaves draw, or draws where they
+ * draw nothing, is charged its cell edge per point. */
+static void deep_error(const sl_octree *t, uint32_t i, double *worst, double *squares)
+{
+    double own[SL_MC_MAX_TRIANGLES][3][3], leaf[SL_MC_MAX_TRIANGLES][3][3];
+    int count = node_triangles(t, &t->nodes[i], own);
+    double missing = t->leaf_size * (double)(1u << t->nodes[i].level);
+    /* Own samples (centroids, then corners) and their nearest leaf triangle so far. */
+    double own_point[4 * SL_MC_MAX_TRIANGLES][3], own_best[4 * SL_MC_MAX_TRIANGLES];
+    for (int k = 0; k < count; k++)
+        for (int a = 0; a < 3; a++) {
+            own_point[k][a] = (own[k][0][a] + own[k][1][a] + own[k][2][a]) / 3.0;
+            for (int v = 0; v < 3; v++)
+                own_point[count + 3 * k + v][a] = own[k][v][a];
+        }
+    for (int k = 0; k < 4 * count; k++)
+        own_best[k] = missing * missing;
+    uint32_t lo, hi;
+    leaf_range(t, i, &lo, &hi);
+    double w = 0, s = 0;
+    for (uint32_t l = lo; l < hi; l++) {
+        int lc = node_triangles(t, &t->nodes[l], leaf);
+        for (int k = 0; k < lc; k++) {
+            double c[3];
+            for (int a = 0; a < 3; a++)
+                c[a] = (leaf[k][0][a] + leaf[k][1][a] + leaf[k][2][a]) / 3.0;
+            double d2 = count ? point_to_triangles(c, own, count) : missing * missing;
+            s += triangle_area(leaf[k]) * d2;
+            for (int v = 0; v < 3 && count; v++)
+                d2 = fmax(d2, point_to_triangles(leaf[k][v], own, count));
+            w = fmax(w, d2);
+        }
+        for (int p = 0; p < 4 * count; p++)
+            own_best[p] = fmin(own_best[p], point_to_triangles(own_point[p], leaf, lc));
+    }
+    for (int k = 0; k < count; k++) {
+        s += triangle_area(own[k]) * own_best[k];
+        for (int v = 0; v < 3; v++)
+            w = fmax(w, own_best[count + 3 * k + v]);
+    }
+    *worst = sqrt(w);
+    *squares = s;
+}
+
+/* key[r] = max(key[r], its children's keys), finest level first: a node with a costly
+ * region anywhere below it comes before nodes whose whole subtree is cheaper. */
+static void saturate(const sl_octree *t, float *key)
+{
+    for (uint32_t l = 1; l <= t->depth; l++) {
+        uint32_t first = t->level_first[l], count = t->level_count[l];
+#pragma omp parallel for schedule(static)
+        for (uint32_t i = first; i < first + count; i++) {
+            const sl_octree_node *r = &t->nodes[i];
+            for (int c = 0; c < __builtin_popcount(r->child_mask); c++)
+                key[i] = fmaxf(key[i], key[r->first_child + (uint32_t)c]);
+        }
+    }
+}
+
+int sl_priority_keys(const sl_octree *t, sl_priority_metric metric, const float *area_difference,
+                     float *key)
+{
+    uint32_t n = t->node_count;
+    if (metric == SL_PRIORITY_AREA) {
+        memcpy(key, area_difference, (size_t)n * sizeof *key);
+        return 0;
+    }
+    double *worst = malloc((n ? n : 1) * sizeof *worst), *squares = malloc((n ? n : 1) * sizeof *squares);
+    if (!worst || !squares) {
+        free(worst);
+        free(squares);
+        return -1;
+    }
+#pragma omp parallel for schedule(dynamic, 16)
+    for (uint32_t i = 0; i < n; i++) {
+        worst[i] = squares[i] = 0;
+        if (t->nodes[i].child_mask)
+            deep_error(t, i, &worst[i], &squares[i]);
+    }
+    const sl_mc_triangles *table = sl_mc_uniform_table();
+#pragma omp parallel for schedule(static)
+    for (uint32_t i = 0; i < n; i++) {
+        const sl_octree_node *r = &t->nodes[i];
+        int kids = __builtin_popcount(r->child_mask);
+        double removed = squares[i], added = -(double)table[r->inside].count;
+        for (int c = 0; c < kids; c++) {
+            removed -= squares[r->first_child + (uint32_t)c];
+            added += table[t->nodes[r->first_child + (uint32_t)c].inside].count;
+        }
+        /* error: squared error removed per triangle added (an expansion that adds none is
+         * charged one: it comes early, without a division by zero or a negative) */
+        double k = metric == SL_PRIORITY_HAUSDORFF ? worst[i] : removed / fmax(added, 1.0);
+        key[i] = kids ? (float)k : 0.0f;
+    }
+    free(worst);
+    free(squares);
+    if (metric == SL_PRIORITY_HAUSDORFF)
+        saturate(t, key);
+    return 0;
+}
+
 /* ---- the expansion order ----------------------------------------------------------- */
 
 typedef struct heap_entry {
@@ -101,7 +243,7 @@ typedef struct heap_entry {
     uint32_t node;
 } heap_entry;
 
-/* a before b: larger area difference first, then smaller index (deterministic). */
+/* a before b: larger key first, then smaller index (deterministic). */
 static int before(heap_entry a, heap_entry b)
 {
     return a.key > b.key || (a.key == b.key && a.node < b.node);
@@ -165,52 +307,105 @@ static uint32_t blocker(const sl_octree *t, const sl_neighbours *nb, const uint3
     return SL_OCTREE_NONE;
 }
 
-int sl_priority_order(const sl_octree *t, const sl_neighbours *nb, const float *area_difference,
+enum { NOT_YET, IN_HEAP, WAITING, EXPANDED };
+
+typedef struct order_state {
+    heap_entry *heap;
+    uint32_t size, cap;
+    float *key;         /* current (possibly raised) key per node */
+    uint8_t *state;
+    uint32_t *wait_on;  /* WAITING: the node it waits on */
+    uint32_t *wait_head, *wait_next;
+} order_state;
+
+static int push(order_state *o, uint32_t node, float key)
+{
+    if (o->size == o->cap) {
+        uint32_t cap = o->cap * 2;
+        heap_entry *h = realloc(o->heap, (size_t)cap * sizeof *h);
+        if (!h)
+            return -1;
+        o->heap = h;
+        o->cap = cap;
+    }
+    o->key[node] = key;
+    o->state[node] = IN_HEAP;
+    heap_push(o->heap, &o->size, (heap_entry){key, node});
+    return 0;
+}
+
+/* Priority inheritance: node b holds back a node of key k, so b (and whatever holds b
+ * back) is expanded no later than a node of key k would be. */
+static int raise_key(order_state *o, uint32_t b, float k)
+{
+    while (o->key[b] < k) {
+        if (o->state[b] == IN_HEAP)
+            return push(o, b, k); /* the old entry goes stale */
+        o->key[b] = k;
+        if (o->state[b] != WAITING)
+            return 0;
+        b = o->wait_on[b];
+    }
+    return 0;
+}
+
+int sl_priority_order(const sl_octree *t, const sl_neighbours *nb, const float *key, int inherit,
                       uint32_t *lod_array, uint32_t *expansion_count, sl_error *err)
 {
-    uint32_t n = t->node_count, size = 0, k = 0;
-    heap_entry *heap = malloc((n ? n : 1) * sizeof *heap);
-    uint32_t *expanded_at = malloc((n ? n : 1) * sizeof *expanded_at);
-    uint32_t *wait_head = malloc((n ? n : 1) * sizeof *wait_head);
-    uint32_t *wait_next = malloc((n ? n : 1) * sizeof *wait_next);
-    if (!heap || !expanded_at || !wait_head || !wait_next) {
-        free(heap);
-        free(expanded_at);
-        free(wait_head);
-        free(wait_next);
-        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory ordering the LOD");
+    uint32_t n = t->node_count, k = 0;
+    size_t slots = n ? n : 1;
+    order_state o = {malloc(slots * sizeof *o.heap), 0, (uint32_t)slots, malloc(slots * sizeof *o.key),
+                     calloc(slots, 1), malloc(slots * sizeof *o.wait_on),
+                     malloc(slots * sizeof *o.wait_head), malloc(slots * sizeof *o.wait_next)};
+    uint32_t *expanded_at = malloc(slots * sizeof *expanded_at);
+    int rc = !o.heap || !o.key || !o.state || !o.wait_on || !o.wait_head || !o.wait_next ||
+             !expanded_at;
+    if (!rc) {
+        memset(expanded_at, 0xff, (size_t)n * sizeof *expanded_at);
+        memset(o.wait_head, 0xff, (size_t)n * sizeof *o.wait_head);
+        if (t->nodes[0].child_mask)
+            rc = push(&o, 0, key[0]);
     }
-    memset(expanded_at, 0xff, (size_t)n * sizeof *expanded_at);
-    memset(wait_head, 0xff, (size_t)n * sizeof *wait_head);
-    if (t->nodes[0].child_mask)
-        heap_push(heap, &size, (heap_entry){area_difference[0], 0});
-    while (size > 0) {
-        uint32_t node = heap_pop(heap, &size).node;
+    while (!rc && o.size > 0) {
+        heap_entry top = heap_pop(o.heap, &o.size);
+        uint32_t node = top.node;
+        if (o.state[node] != IN_HEAP || top.key != o.key[node])
+            continue; /* stale: the node was raised, or already expanded */
         uint32_t b = blocker(t, nb, expanded_at, node);
         if (b != SL_OCTREE_NONE) { /* wait until the coarser neighbour expands */
-            wait_next[node] = wait_head[b];
-            wait_head[b] = node;
+            o.state[node] = WAITING;
+            o.wait_on[node] = b;
+            o.wait_next[node] = o.wait_head[b];
+            o.wait_head[b] = node;
+            if (inherit)
+                rc = raise_key(&o, b, o.key[node]);
             continue;
         }
+        o.state[node] = EXPANDED;
         expanded_at[node] = k;
         lod_array[k++] = node;
         const sl_octree_node *p = &t->nodes[node];
-        for (int c = 0; c < __builtin_popcount(p->child_mask); c++) {
+        for (int c = 0; c < __builtin_popcount(p->child_mask) && !rc; c++) {
             uint32_t child = p->first_child + (uint32_t)c;
             if (t->nodes[child].child_mask)
-                heap_push(heap, &size, (heap_entry){area_difference[child], child});
+                rc = push(&o, child, key[child]);
         }
-        for (uint32_t w = wait_head[node]; w != SL_OCTREE_NONE; w = wait_next[w])
-            heap_push(heap, &size, (heap_entry){area_difference[w], w});
-        wait_head[node] = SL_OCTREE_NONE;
+        for (uint32_t w = o.wait_head[node]; w != SL_OCTREE_NONE && !rc; w = o.wait_next[w])
+            rc = push(&o, w, o.key[w]);
+        o.wait_head[node] = SL_OCTREE_NONE;
     }
+    free(o.heap);
+    free(o.key);
+    free(o.state);
+    free(o.wait_on);
+    free(o.wait_head);
+    free(o.wait_next);
+    free(expanded_at);
+    if (rc)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory ordering the LOD");
     uint32_t internal = 0;
     for (uint32_t i = 0; i < n; i++)
         internal += t->nodes[i].child_mask != 0;
-    free(heap);
-    free(expanded_at);
-    free(wait_head);
-    free(wait_next);
     *expansion_count = k;
     if (k != internal)
         return sl_error_set(err, SL_E_INTERNAL, 0, NULL,

@@ -11,7 +11,7 @@
 #include "stages/merge/merge.h"
 #include "stages/priority/priority.h"
 
-#define PRIORITY_STAGE_VERSION 1u
+#define PRIORITY_STAGE_VERSION 2u /* 2: error-driven order by default */
 #define PRIORITY_MAGIC "SLPRIORI"
 #define PRIORITY_FORMAT_VERSION 1u
 
@@ -120,17 +120,40 @@ int sl_priority_read(const char *path, const sl_octree *t, sl_priority *out, sl_
     return rc;
 }
 
+typedef struct priority_config {
+    sl_priority_metric metric;
+} priority_config;
+
+static const sl_option priority_options[] = {
+    {"priority", "metric", SL_OPT_ENUM, "error", 0, 0, "error|hausdorff|area",
+     "What orders the node expansions, so what the levels between the coarsest and the "
+     "finest look like. error: the squared distance to the finest surface that an "
+     "expansion removes, per triangle it adds (lowest RMS at a triangle count); hausdorff: "
+     "the largest distance to the finest surface anywhere below a node first; area: the "
+     "paper's area difference M_r, in the paper's order (docs/lod.md, \"The priority "
+     "metric\")."},
+    SL_OPTION_END,
+};
+
 static int priority_configure(const sl_config *cfg, void **out, sl_error *err)
 {
-    (void)cfg;
-    (void)err;
-    *out = NULL;
+    priority_config *c = calloc(1, sizeof *c);
+    if (!c)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    const char *name = sl_config_string(cfg, "priority", "metric");
+    int metric = sl_priority_metric_parse(name);
+    if (metric < 0) {
+        free(c);
+        return sl_error_set(err, SL_E_CONFIG, 0, "[priority] metric", "unknown metric '%s'", name);
+    }
+    c->metric = (sl_priority_metric)metric;
+    *out = c;
     return 0;
 }
 
 static int priority_run(const void *config, const sl_stage_io *io, sl_error *err)
 {
-    (void)config;
+    const priority_config *c = config;
     char in_path[PATH_MAX], out_path[PATH_MAX];
     snprintf(in_path, sizeof in_path, "%s/%s", io->in_dir, SL_OCTREE_FILE);
     snprintf(out_path, sizeof out_path, "%s/%s", io->out_dir, SL_PRIORITY_FILE);
@@ -150,15 +173,21 @@ static int priority_run(const void *config, const sl_stage_io *io, sl_error *err
         rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
     if (rc == 0 && sl_priority_metrics(&tree, p.area_difference, p.node_error))
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    if (rc == 0 && sl_progress_step(io->progress, "priority: neighbours", 0.4))
+    if (rc == 0 && sl_progress_step(io->progress, "priority: neighbours", 0.3))
         rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
     if (rc == 0 && sl_neighbours_build(&tree, &p.neighbours))
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    if (rc == 0 && sl_progress_step(io->progress, "priority: order", 0.7))
+    if (rc == 0 && sl_progress_step(io->progress, "priority: keys", 0.4))
+        rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+    float *key = rc == 0 ? malloc((tree.node_count ? tree.node_count : 1) * sizeof *key) : NULL;
+    if (rc == 0 && (!key || sl_priority_keys(&tree, c->metric, p.area_difference, key)))
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    if (rc == 0 && sl_progress_step(io->progress, "priority: order", 0.8))
         rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
     if (rc == 0)
-        rc = sl_priority_order(&tree, &p.neighbours, p.area_difference, p.lod_array,
-                               &p.expansion_count, err);
+        rc = sl_priority_order(&tree, &p.neighbours, key, c->metric != SL_PRIORITY_AREA,
+                               p.lod_array, &p.expansion_count, err);
+    free(key);
     if (rc == 0)
         rc = sl_priority_write(out_path, &p, PRIORITY_STAGE_VERSION, err);
     if (rc == 0) {
@@ -167,6 +196,7 @@ static int priority_run(const void *config, const sl_stage_io *io, sl_error *err
             total += p.area_difference[p.lod_array[i]];
             top = fmax(top, p.area_difference[p.lod_array[i]]);
         }
+        sl_json_string(io->report, "metric", sl_priority_metric_name(c->metric));
         sl_json_u64(io->report, "expansions", p.expansion_count);
         sl_json_double(io->report, "area_difference_total", total);
         sl_json_double(io->report, "area_difference_max", top);
@@ -179,10 +209,10 @@ static int priority_run(const void *config, const sl_stage_io *io, sl_error *err
 
 const sl_stage sl_priority_stage = {
     .name = "priority",
-    .description = "octree -> area-difference priority and LOD array (paper 1 section 2.3)",
+    .description = "octree -> error-driven (or area-difference) LOD array (paper 1 section 2.3)",
     .version = PRIORITY_STAGE_VERSION,
-    .options = NULL,
+    .options = priority_options,
     .configure = priority_configure,
-    .release_config = NULL,
+    .release_config = free,
     .run = priority_run,
 };

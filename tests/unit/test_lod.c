@@ -1,7 +1,9 @@
-/* LOD model on analytic closed surfaces, at every expansion count K: neighbouring frontier
- * cells differ by less than 2 levels, the accumulation table equals the triangles actually
- * generated, every mesh is watertight (no cracks), and a .slod roundtrip is exact. */
+/* LOD model on analytic closed surfaces, under every priority metric, at every expansion
+ * count K: neighbouring frontier cells differ by less than 2 levels, the accumulation table
+ * equals the triangles actually generated, every mesh is watertight (no cracks), and a
+ * .slod roundtrip is exact. The order is the same on 1 and 2 threads. */
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -29,7 +31,7 @@ static double torus_sdf(const double p[3])
     return sqrt(q * q + p[2] * p[2]) - 3.4;
 }
 
-static int build_model(sdf_fn sdf, int n, sl_lod_model *m)
+static int build_model(sdf_fn sdf, int n, sl_priority_metric metric, sl_lod_model *m)
 {
     size_t cap = 4096, count = 0;
     int32_t *coords = malloc(cap * 3 * sizeof *coords);
@@ -63,14 +65,28 @@ static int build_model(sdf_fn sdf, int n, sl_lod_model *m)
         return rc;
     uint32_t nodes = m->tree.node_count;
     float *area = malloc(nodes * sizeof *area), *error = malloc(nodes * sizeof *error);
+    float *key = malloc(nodes * sizeof *key);
+    uint32_t *one_thread = malloc(nodes * sizeof *one_thread), count_one = 0;
     m->lod_array = malloc(nodes * sizeof *m->lod_array);
     uint64_t unresolved;
-    rc = sl_priority_metrics(&m->tree, area, error) || sl_neighbours_build(&m->tree, &m->neighbours) ||
-         sl_priority_order(&m->tree, &m->neighbours, area, m->lod_array, &m->expansion_count, &err) ||
+    int inherit = metric != SL_PRIORITY_AREA;
+    omp_set_num_threads(1);
+    rc = sl_priority_metrics(&m->tree, area, error) ||
+         sl_priority_keys(&m->tree, metric, area, key) || sl_neighbours_build(&m->tree, &m->neighbours) ||
+         sl_priority_order(&m->tree, &m->neighbours, key, inherit, one_thread, &count_one, &err);
+    omp_set_num_threads(2);
+    rc = rc || sl_priority_metrics(&m->tree, area, error) ||
+         sl_priority_keys(&m->tree, metric, area, key) ||
+         sl_priority_order(&m->tree, &m->neighbours, key, inherit, m->lod_array, &m->expansion_count, &err) ||
          sl_transitions_build(&m->tree, &m->transitions, &unresolved) ||
          sl_lod_model_finish(m, error, &err);
+    CHECK_MSG(rc || (count_one == m->expansion_count &&
+                     memcmp(one_thread, m->lod_array, count_one * sizeof *one_thread) == 0),
+              "metric %s: the order differs between 1 and 2 threads", sl_priority_metric_name(metric));
     free(area);
     free(error);
+    free(key);
+    free(one_thread);
     return rc;
 }
 
@@ -105,10 +121,12 @@ static int level_gap(const sl_lod_model *m, uint32_t k)
     return gap;
 }
 
-static void test_model(sdf_fn sdf, int n, const char *name)
+static void test_model(sdf_fn sdf, int n, sl_priority_metric metric, const char *shape)
 {
+    char name[64];
+    snprintf(name, sizeof name, "%s/%s", shape, sl_priority_metric_name(metric));
     sl_lod_model m;
-    CHECK(build_model(sdf, n, &m) == 0);
+    CHECK(build_model(sdf, n, metric, &m) == 0);
     CHECK(m.expansion_count > 100);
     uint64_t mismatches = 0, cracked = 0, gaps = 0, incomplete_total = 0;
     for (uint32_t k = 0; k <= m.expansion_count; k++) {
@@ -178,7 +196,9 @@ static void test_model(sdf_fn sdf, int n, const char *name)
 
 int main(void)
 {
-    test_model(blob_sdf, 13, "blob");
-    test_model(torus_sdf, 14, "torus");
+    for (int metric = SL_PRIORITY_ERROR; metric <= SL_PRIORITY_AREA; metric++) {
+        test_model(blob_sdf, 13, (sl_priority_metric)metric, "blob");
+        test_model(torus_sdf, 14, (sl_priority_metric)metric, "torus");
+    }
     return check_report();
 }
