@@ -258,9 +258,10 @@ static double dot3(const double a[3], const double b[3])
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-/* Closest point on segment ab to p; returns the squared distance. */
+/* Closest point on segment ab to p; returns the squared distance. *end = 0 inside the
+ * segment, 1 at a, 2 at b. */
 static double closest_point_segment(const double p[3], const double a[3], const double b[3],
-                                    double out[3])
+                                    double out[3], int *end)
 {
     double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     double ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
@@ -269,6 +270,7 @@ static double closest_point_segment(const double p[3], const double a[3], const 
         t = dot3(ap, ab) / len_sq;
         t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
     }
+    *end = t <= 0.0 ? 1 : t >= 1.0 ? 2 : 0;
     double d_sq = 0.0;
     for (int i = 0; i < 3; i++) {
         out[i] = a[i] + t * ab[i];
@@ -281,16 +283,21 @@ static double closest_point_segment(const double p[3], const double a[3], const 
  * well-conditioned plane; its closest point is taken on its edges instead, which is off
  * by at most the sliver's height (1e-6 of its edge length). */
 static double closest_point_sliver(const double p[3], const double a[3], const double b[3],
-                                   const double c[3], double out[3])
+                                   const double c[3], double out[3], int *feature)
 {
-    double q[3], best = closest_point_segment(p, a, b, out), d;
-    if ((d = closest_point_segment(p, b, c, q)) < best) {
-        best = d;
-        memcpy(out, q, sizeof q);
-    }
-    if ((d = closest_point_segment(p, c, a, q)) < best) {
-        best = d;
-        memcpy(out, q, sizeof q);
+    /* edge k runs from corner k to corner k + 1 (mod 3) */
+    static const int edge_feature[3] = {SL_FEATURE_EDGE_AB, SL_FEATURE_EDGE_BC,
+                                        SL_FEATURE_EDGE_CA};
+    const double *corner[3] = {a, b, c};
+    double q[3], best = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        int end;
+        double d = closest_point_segment(p, corner[k], corner[(k + 1) % 3], q, &end);
+        if (d < best) {
+            best = d;
+            memcpy(out, q, sizeof q);
+            *feature = end == 0 ? edge_feature[k] : SL_FEATURE_VERTEX_A + (k + end - 1) % 3;
+        }
     }
     return best;
 }
@@ -310,6 +317,13 @@ static void set_lerp(double out[3], const double a[3], const double d[3], double
 double sl_closest_point_triangle(const double p[3], const double a[3], const double b[3],
                                  const double c[3], double out[3])
 {
+    int feature;
+    return sl_closest_point_triangle_feature(p, a, b, c, out, &feature);
+}
+
+double sl_closest_point_triangle_feature(const double p[3], const double a[3], const double b[3],
+                                         const double c[3], double out[3], int *feature)
+{
     double ab[3], ac[3], ap[3], bp[3], cp[3], n[3];
     for (int i = 0; i < 3; i++) {
         ab[i] = b[i] - a[i];
@@ -323,43 +337,50 @@ double sl_closest_point_triangle(const double p[3], const double a[3], const dou
     n[2] = ab[0] * ac[1] - ab[1] * ac[0];
     double area_sq = dot3(n, n);
     if (!(area_sq > 1e-12 * dot3(ab, ab) * dot3(ac, ac)))
-        return closest_point_sliver(p, a, b, c, out);
+        return closest_point_sliver(p, a, b, c, out, feature);
 
     /* Ericson 5.1.5: find the Voronoi region of p among vertices, edges and face. */
     double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
     if (d1 <= 0.0 && d2 <= 0.0) {
+        *feature = SL_FEATURE_VERTEX_A;
         memcpy(out, a, 3 * sizeof *out);
         return finish(p, out);
     }
     double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
     if (d3 >= 0.0 && d4 <= d3) {
+        *feature = SL_FEATURE_VERTEX_B;
         memcpy(out, b, 3 * sizeof *out);
         return finish(p, out);
     }
     double vc = d1 * d4 - d3 * d2;
     if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+        *feature = SL_FEATURE_EDGE_AB;
         set_lerp(out, a, ab, d1 / (d1 - d3));
         return finish(p, out);
     }
     double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
     if (d6 >= 0.0 && d5 <= d6) {
+        *feature = SL_FEATURE_VERTEX_C;
         memcpy(out, c, 3 * sizeof *out);
         return finish(p, out);
     }
     double vb = d5 * d2 - d1 * d6;
     if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+        *feature = SL_FEATURE_EDGE_CA;
         set_lerp(out, a, ac, d2 / (d2 - d6));
         return finish(p, out);
     }
     double va = d3 * d6 - d5 * d4;
     if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
         double bc[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
+        *feature = SL_FEATURE_EDGE_BC;
         set_lerp(out, b, bc, (d4 - d3) / ((d4 - d3) + (d5 - d6)));
         return finish(p, out);
     }
     double sum = va + vb + vc;
     if (!(sum > 0.0)) /* rounding with p far away from a thin triangle */
-        return closest_point_sliver(p, a, b, c, out);
+        return closest_point_sliver(p, a, b, c, out, feature);
+    *feature = SL_FEATURE_FACE;
     double v = vb / sum, w = vc / sum;
     for (int i = 0; i < 3; i++)
         out[i] = a[i] + ab[i] * v + ac[i] * w;
@@ -386,11 +407,13 @@ static void try_triangle(const sl_triangle_bvh *bvh, const double p[3], uint32_t
     const float *f = &bvh->corners[9 * (uint64_t)t];
     double a[3] = {f[0], f[1], f[2]}, b[3] = {f[3], f[4], f[5]}, c[3] = {f[6], f[7], f[8]};
     double q[3];
-    double d_sq = sl_closest_point_triangle(p, a, b, c, q);
+    int feature;
+    double d_sq = sl_closest_point_triangle_feature(p, a, b, c, q, &feature);
     if (d_sq < best->distance_sq) {
         best->distance_sq = d_sq;
         memcpy(best->point, q, sizeof q);
         best->triangle = t;
+        best->feature = feature;
     }
 }
 
@@ -403,6 +426,7 @@ void sl_triangle_bvh_closest(const sl_triangle_bvh *bvh, const double p[3], uint
     int top = 0;
     out->distance_sq = INFINITY;
     out->triangle = 0;
+    out->feature = SL_FEATURE_FACE;
     if (hint < bvh->triangle_count)
         try_triangle(bvh, p, hint, out);
     stack[top++] = (struct entry){0, box_distance_sq(&bvh->nodes[0], p)};

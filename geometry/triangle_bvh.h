@@ -40,11 +40,23 @@ typedef struct sl_triangle_bvh {
     uint32_t *source;     /* triangle_count: index in the mesh of each leaf-order triangle */
 } sl_triangle_bvh;
 
+/* Where on triangle (a, b, c) a closest point lies: its Voronoi region. Signed distance
+ * needs it: the sign of (p - q) . N is exact for a closed, consistently wound mesh when N
+ * is the pseudonormal of that region (Baerentzen and Aanaes, IEEE TVCG 11(3), 2005): the
+ * face normal inside the face, the sum of the adjacent face normals on an edge, the
+ * angle-weighted sum at a vertex. */
+enum sl_triangle_feature {
+    SL_FEATURE_FACE = 0,
+    SL_FEATURE_VERTEX_A = 1, SL_FEATURE_VERTEX_B = 2, SL_FEATURE_VERTEX_C = 3,
+    SL_FEATURE_EDGE_AB = 4, SL_FEATURE_EDGE_BC = 5, SL_FEATURE_EDGE_CA = 6
+};
+
 /* Result of one query. */
 typedef struct sl_closest {
     double distance_sq;   /* squared distance to the closest point, world^2 */
     double point[3];      /* the closest point, world */
     uint32_t triangle;    /* its triangle, leaf order (bvh->source maps it to the mesh) */
+    int feature;          /* enum sl_triangle_feature, in that triangle's corner order */
 } sl_closest;
 
 /* Builds the tree over every triangle of `mesh` (positions must be finite; the caller
@@ -62,5 +74,9 @@ void sl_triangle_bvh_closest(const sl_triangle_bvh *bvh, const double p[3], uint
  * handled as their longest edge); returns the squared distance. */
 double sl_closest_point_triangle(const double p[3], const double a[3], const double b[3],
                                  const double c[3], double out[3]);
+/* The same, also naming the region the point lies in (*feature: enum sl_triangle_feature).
+ * A sliver's closest point is on an edge or a vertex. */
+double sl_closest_point_triangle_feature(const double p[3], const double a[3], const double b[3],
+                                         const double c[3], double out[3], int *feature);
 
 #endif

@@ -60,6 +60,7 @@ static int merge_run(const void *config, const sl_stage_io *io, sl_error *err)
     snprintf(in_path, sizeof in_path, "%s/%s", io->in_dir, SL_SAMPLES_FILE);
     snprintf(out_path, sizeof out_path, "%s/%s", io->out_dir, SL_OCTREE_FILE);
     sl_vdb_samples samples;
+    sl_vdb_set_threads(io->threads); /* OpenVDB's TBB pool reads the grids: cap it */
     int rc = sl_vdb_samples_read(in_path, (uint64_t)c->max_samples, &samples, err);
     if (rc)
         return rc;

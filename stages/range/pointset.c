@@ -7,11 +7,14 @@
  *   12  6xf32 bbox min xyz, max xyz
  *   36  f64  mean_spacing
  *   44  u32  normal_source (enum sl_normal_source)
- *   48  f32  positions[3 * count]
+ *   48  u64  triangle_count (0 for point clouds)
+ *   56  f32  positions[3 * count]
  *       f32  normals[3 * count]
  *       u8   colours[4 * count] RGBA (only with flag bit 0)
- * The reader checks that the body size is exactly what count and flags imply (overflow-
- * checked) before it allocates anything.
+ *       u32  triangles[3 * triangle_count], point indices, wound so that their normals
+ *            face the same way as the points' (outwards on a closed mesh)
+ * The reader checks that the body size is exactly what the counts and flags imply
+ * (overflow-checked) before it allocates anything, and every triangle index.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -20,7 +23,7 @@
 #include "stages/range/range.h"
 
 #define POINTSET_MAGIC "SLPOINTS"
-#define POINTSET_HEAD 48u
+#define POINTSET_HEAD 56u
 #define POINTSET_HAS_COLORS 1u
 #define POINTSET_MAX_BODY (1ull << 40)
 
@@ -45,22 +48,26 @@ static float get_f32(const unsigned char *p)
     return f;
 }
 
-/* Floats as LE bytes: the array itself on LE hosts, else a converted copy in *copy. */
-static const void *le_floats(const float *v, uint64_t n, unsigned char **copy)
+/* 4-byte words (floats or u32) as LE bytes: the array itself on LE hosts, else a
+ * converted copy in *copy. */
+static const void *le_words(const void *v, uint64_t n, unsigned char **copy)
 {
     *copy = NULL;
     if (host_is_little_endian())
         return v;
     *copy = malloc(4 * n + 1);
     if (*copy)
-        for (uint64_t i = 0; i < n; i++)
-            put_f32(*copy + 4 * i, v[i]);
+        for (uint64_t i = 0; i < n; i++) {
+            uint32_t bits;
+            memcpy(&bits, (const unsigned char *)v + 4 * i, sizeof bits);
+            sl_put_u32(*copy + 4 * i, bits);
+        }
     return *copy;
 }
 
-static uint64_t body_size(uint64_t count, int colors)
+static uint64_t body_size(uint64_t count, int colors, uint64_t triangles)
 {
-    return POINTSET_HEAD + count * (24u + (colors ? 4u : 0u));
+    return POINTSET_HEAD + count * (24u + (colors ? 4u : 0u)) + 12u * triangles;
 }
 
 int sl_pointset_write(const char *path, const sl_pointset *ps, sl_error *err)
@@ -77,25 +84,29 @@ int sl_pointset_write(const char *path, const sl_pointset *ps, sl_error *err)
     memcpy(&spacing_bits, &ps->mean_spacing, sizeof spacing_bits);
     sl_put_u64(head + 36, spacing_bits);
     sl_put_u32(head + 44, ps->normal_source);
+    sl_put_u64(head + 48, ps->triangle_count);
 
-    unsigned char *pos_copy, *nrm_copy;
-    const void *pos = le_floats(ps->positions, 3 * ps->count, &pos_copy);
-    const void *nrm = le_floats(ps->normals, 3 * ps->count, &nrm_copy);
+    unsigned char *pos_copy, *nrm_copy, *tri_copy;
+    const void *pos = le_words(ps->positions, 3 * ps->count, &pos_copy);
+    const void *nrm = le_words(ps->normals, 3 * ps->count, &nrm_copy);
+    const void *tri = le_words(ps->triangles, 3 * ps->triangle_count, &tri_copy);
     int rc;
-    if (!pos || !nrm) {
+    if (!pos || !nrm || (ps->triangle_count && !tri)) {
         rc = sl_error_set(err, SL_E_NOMEM, 0, path, "out of memory");
     } else {
-        sl_artifact_part parts[4] = {
+        sl_artifact_part parts[5] = {
             {head, sizeof head},
             {pos, (size_t)(12 * ps->count)},
             {nrm, (size_t)(12 * ps->count)},
             {ps->colors, colors ? (size_t)(4 * ps->count) : 0},
+            {tri, (size_t)(12 * ps->triangle_count)},
         };
         rc = sl_artifact_write(path, POINTSET_MAGIC, SL_POINTSET_FORMAT_VERSION,
-                               sl_range_stage.version, parts, colors ? 4 : 3, err);
+                               sl_range_stage.version, parts, 5, err);
     }
     free(pos_copy);
     free(nrm_copy);
+    free(tri_copy);
     return rc;
 }
 
@@ -104,9 +115,9 @@ static int corrupt(sl_error *err, const char *path, const char *what)
     return sl_error_set(err, SL_E_CORRUPT, 0, path, "point set: %s", what);
 }
 
-/* Checks the fixed head against the body size; OUT: count, colors. */
+/* Checks the fixed head against the body size; OUT: count, colors, triangles. */
 static int check_head(const unsigned char *body, uint64_t size, const char *path,
-                      uint64_t *count, int *colors, sl_error *err)
+                      uint64_t *count, int *colors, uint64_t *triangles, sl_error *err)
 {
     if (size < POINTSET_HEAD)
         return corrupt(err, path, "body shorter than its header");
@@ -115,12 +126,16 @@ static int check_head(const unsigned char *body, uint64_t size, const char *path
     if (flags & ~POINTSET_HAS_COLORS)
         return corrupt(err, path, "unknown flags");
     *colors = (flags & POINTSET_HAS_COLORS) != 0;
-    uint64_t per_point = 24u + (*colors ? 4u : 0u);
-    if (n > (size - POINTSET_HEAD) / per_point || body_size(n, *colors) != size)
-        return corrupt(err, path, "point count disagrees with the body size");
+    uint64_t per_point = 24u + (*colors ? 4u : 0u), t = sl_get_u64(body + 48);
+    if (n > (size - POINTSET_HEAD) / per_point ||
+        t > (size - POINTSET_HEAD - n * per_point) / 12u || body_size(n, *colors, t) != size)
+        return corrupt(err, path, "point or triangle count disagrees with the body size");
+    if (t && n > UINT32_MAX)
+        return corrupt(err, path, "triangles over more than 2^32 points");
     if (sl_get_u32(body + 44) > SL_NORMALS_RANGE_GRID)
         return corrupt(err, path, "unknown normal source");
     *count = n;
+    *triangles = t;
     return SL_OK;
 }
 
@@ -134,9 +149,9 @@ int sl_pointset_read(const char *path, sl_pointset *out, sl_error *err)
     if (rc != SL_OK)
         return rc;
     const unsigned char *body = raw;
-    uint64_t n = 0;
+    uint64_t n = 0, t = 0;
     int colors = 0;
-    if ((rc = check_head(body, size, path, &n, &colors, err)) != SL_OK) {
+    if ((rc = check_head(body, size, path, &n, &colors, &t, err)) != SL_OK) {
         free(raw);
         return rc;
     }
@@ -151,7 +166,9 @@ int sl_pointset_read(const char *path, sl_pointset *out, sl_error *err)
     out->positions = malloc(12 * n + 1);
     out->normals = malloc(12 * n + 1);
     out->colors = colors ? malloc(4 * n + 1) : NULL;
-    if (!out->positions || !out->normals || (colors && !out->colors)) {
+    out->triangle_count = t;
+    out->triangles = t ? malloc(12 * t) : NULL;
+    if (!out->positions || !out->normals || (colors && !out->colors) || (t && !out->triangles)) {
         free(raw);
         sl_pointset_release(out);
         return sl_error_set(err, SL_E_NOMEM, 0, path, "out of memory (%llu points)",
@@ -166,6 +183,15 @@ int sl_pointset_read(const char *path, sl_pointset *out, sl_error *err)
     p += 12 * n;
     if (colors)
         memcpy(out->colors, p, 4 * n);
+    p += colors ? 4 * n : 0;
+    for (uint64_t i = 0; i < 3 * t; i++) {
+        out->triangles[i] = sl_get_u32(p + 4 * i);
+        if (out->triangles[i] >= n) {
+            free(raw);
+            sl_pointset_release(out);
+            return corrupt(err, path, "triangle index out of range");
+        }
+    }
     free(raw);
     return SL_OK;
 }
@@ -177,6 +203,7 @@ void sl_pointset_release(sl_pointset *ps)
     free(ps->positions);
     free(ps->normals);
     free(ps->colors);
+    free(ps->triangles);
     memset(ps, 0, sizeof *ps);
 }
 

@@ -27,7 +27,7 @@
 #include "pipeline/stage.h"
 
 #define SL_POINTSET_FILE "points.slpts"
-#define SL_POINTSET_FORMAT_VERSION 1u
+#define SL_POINTSET_FORMAT_VERSION 2u
 
 extern const sl_stage sl_range_stage;
 
@@ -40,6 +40,9 @@ typedef struct sl_pointset {
     float bbox_min[3], bbox_max[3];
     double mean_spacing; /* mean nearest-neighbour distance (world units) */
     uint32_t normal_source; /* enum sl_normal_source */
+    uint64_t triangle_count; /* the input's kept triangles (0 for point clouds) */
+    uint32_t *triangles;     /* 3 * triangle_count point indices, wound like the normals
+                                (outwards on a closed mesh); NULL for point clouds */
 } sl_pointset;
 
 enum sl_normal_source {
@@ -94,20 +97,18 @@ typedef struct sl_range_counts {
 
 /* The stage's work on an in-memory mesh: `mesh` is consumed (its arrays may be changed or
  * taken; release it afterwards as usual). Textures named by mesh->texture_file are looked
- * up in `texture_dir` (NULL: no texture). OUT: *out (release with sl_pointset_release),
- * *counts, and when `triangles` is not NULL the kept triangles in point indices
- * (*triangles malloc'd, 3 * *triangle_count; NULL for point clouds). Returns 0,
- * SL_E_BADINPUT (nothing usable, too many non-finite vertices), SL_E_NOMEM or
- * SL_E_INTERRUPTED. */
+ * up in `texture_dir` (NULL: no texture). OUT: *out (release with sl_pointset_release;
+ * out->triangles holds the kept triangles in point indices, wound like the normals) and
+ * *counts. Returns 0, SL_E_BADINPUT (nothing usable, too many non-finite vertices),
+ * SL_E_NOMEM or SL_E_INTERRUPTED. */
 int sl_range_points_from_mesh(const sl_range_config *cfg, sl_mesh *mesh, const char *texture_dir,
-                              sl_pointset *out, sl_range_counts *counts, uint32_t **triangles,
-                              uint64_t *triangle_count, sl_progress *progress, sl_error *err);
+                              sl_pointset *out, sl_range_counts *counts, sl_progress *progress,
+                              sl_error *err);
 
-/* Writes the six range images (docs/range-stage.md) of `ps` into `dir`; `triangles`
- * (point indices, may be NULL) are rasterised, else points are splatted. */
-int sl_range_images_write(const char *dir, const sl_pointset *ps, const uint32_t *triangles,
-                          uint64_t triangle_count, int size, sl_progress *progress,
-                          sl_error *err);
+/* Writes the six range images (docs/range-stage.md) of `ps` into `dir`; its triangles are
+ * rasterised, or for a point cloud its points splatted. */
+int sl_range_images_write(const char *dir, const sl_pointset *ps, int size,
+                          sl_progress *progress, sl_error *err);
 
 int sl_pointset_write(const char *path, const sl_pointset *ps, sl_error *err);
 /* Validates magic, versions, sizes (against the file size) and checksum. */

@@ -122,10 +122,11 @@ static void setup_view(raster *r, const view *v, const sl_pointset *ps, int size
         pixels[i] = NAN;
 }
 
-int sl_range_images_write(const char *dir, const sl_pointset *ps, const uint32_t *triangles,
-                          uint64_t triangle_count, int size, sl_progress *progress,
-                          sl_error *err)
+int sl_range_images_write(const char *dir, const sl_pointset *ps, int size,
+                          sl_progress *progress, sl_error *err)
 {
+    const uint32_t *triangles = ps->triangles;
+    uint64_t triangle_count = ps->triangle_count;
     size_t per_view = 4 * (size_t)size * (size_t)size;
     float *pixels = malloc(6 * per_view * sizeof *pixels);
     if (!pixels)

@@ -147,13 +147,11 @@ static int compute_normals(const sl_range_config *cfg, const sl_mesh *mesh,
 }
 
 int sl_range_points_from_mesh(const sl_range_config *cfg, sl_mesh *mesh, const char *texture_dir,
-                              sl_pointset *out, sl_range_counts *counts, uint32_t **triangles,
-                              uint64_t *triangle_count, sl_progress *progress, sl_error *err)
+                              sl_pointset *out, sl_range_counts *counts, sl_progress *progress,
+                              sl_error *err)
 {
     memset(out, 0, sizeof *out);
     memset(counts, 0, sizeof *counts);
-    if (triangles)
-        *triangles = NULL, *triangle_count = 0;
     counts->input_vertices = mesh->vertex_count;
     counts->input_faces = mesh->triangle_count;
     counts->polygons_triangulated = mesh->stats.polygons_triangulated;
@@ -197,9 +195,17 @@ int sl_range_points_from_mesh(const sl_range_config *cfg, sl_mesh *mesh, const c
         goto done;
     counts->points = n;
     counts->normal_source = out->normal_source;
-    if (triangles && clean.triangle_count) {
-        *triangles = clean.triangles;
-        *triangle_count = clean.triangle_count;
+    if (clean.triangle_count) {
+        /* An inside-out mesh had its normals flipped; its triangles turn with them, so
+         * the winding and the normals agree (the samples stage signs by the winding). */
+        if (counts->normals_flipped)
+            for (uint64_t t = 0; t < clean.triangle_count; t++) {
+                uint32_t swap = clean.triangles[3 * t + 1];
+                clean.triangles[3 * t + 1] = clean.triangles[3 * t + 2];
+                clean.triangles[3 * t + 2] = swap;
+            }
+        out->triangles = clean.triangles;
+        out->triangle_count = clean.triangle_count;
         clean.triangles = NULL;
     }
 done:

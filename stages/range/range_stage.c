@@ -142,11 +142,7 @@ static int range_run(const void *stage_config, const sl_stage_io *io, sl_error *
     directory_of(io->source_path, dir, sizeof dir);
     sl_pointset ps;
     sl_range_counts counts;
-    uint32_t *triangles = NULL;
-    uint64_t triangle_count = 0;
-    rc = sl_range_points_from_mesh(cfg, &mesh, dir, &ps, &counts,
-                                   cfg->range_images ? &triangles : NULL, &triangle_count,
-                                   io->progress, err);
+    rc = sl_range_points_from_mesh(cfg, &mesh, dir, &ps, &counts, io->progress, err);
     sl_mesh_release(&mesh);
     if (rc != SL_OK) {
         if (!err->file[0])
@@ -161,12 +157,11 @@ static int range_run(const void *stage_config, const sl_stage_io *io, sl_error *
     if ((rc = sl_pointset_write(path, &ps, err)) != SL_OK)
         goto done;
     if (cfg->range_images &&
-        (rc = sl_range_images_write(io->out_dir, &ps, triangles, triangle_count,
-                                    cfg->range_image_size, io->progress, err)) != SL_OK)
+        (rc = sl_range_images_write(io->out_dir, &ps, cfg->range_image_size, io->progress,
+                                    err)) != SL_OK)
         goto done;
     report_counts(io->report, &counts, &ps, cfg->range_images);
 done:
-    free(triangles);
     sl_pointset_release(&ps);
     return rc;
 }
@@ -174,7 +169,7 @@ done:
 const sl_stage sl_range_stage = {
     .name = "range",
     .description = "PLY mesh or point cloud -> oriented, coloured point set (paper 1 section 4)",
-    .version = 1,
+    .version = 2,
     .options = range_options,
     .configure = range_configure,
     .release_config = range_release_config,

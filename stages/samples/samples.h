@@ -1,17 +1,23 @@
 /* samples stage (paper 1, section 2.1 "Marching Cube Node"; ARCHITECTURE section 5
  * "Samples").
  *
- * Oriented points (the range stage's points.slpts) -> signed samples at the grid vertices
+ * Oriented points and triangles (the range stage's points.slpts) -> signed samples at the grid vertices
  * of the leaf cubes, written as sparse OpenVDB grids (samples.vdb, shim/vdb_shim.h):
  *   - leaf size: [octree] leaf_size, or from [octree] depth, or spacing_factor x the
  *     mean nearest-neighbour spacing of the points (docs/samples-stage.md);
- *   - occupied cubes = leaf cubes holding at least one point; the band = occupied cubes
- *     dilated by [samples] band cubes (26-neighbourhood); every grid vertex of every band
- *     cube is sampled once (one sample per vertex, shared by the cubes meeting there, so
+ *   - occupied cubes = leaf cubes holding at least one point (meshes: also points laid
+ *     on every triangle longer than a leaf); the band = occupied cubes dilated by
+ *     [samples] band cubes (26-neighbourhood); every grid vertex of every band cube is
+ *     sampled once (one sample per vertex, shared by the cubes meeting there, so
  *     neighbouring cubes agree and the surface closes);
- *   - at vertex v: p = the closest point (exact, geometry/kdtree.h), sign s =
- *     sign((v - p) . n_p) with 0 -> +, distance |v - p| (paper, `euclidean`) or
- *     |(v - p) . n_p| (`tangent`); stored s * d; colour = p's colour.
+ *   - meshes ([samples] closest = triangles): p = the closest point of the triangles
+ *     (geometry/triangle_bvh.h), sign from the pseudonormal of the face, edge or vertex
+ *     it lies on, sample = the exact signed distance; on closed meshes the signs are then
+ *     made consistent by the distance balls (samples_signs.c);
+ *   - point clouds (or closest = points, the paper): p = the closest point (exact,
+ *     geometry/kdtree.h), sign s = sign((v - p) . n_p) with 0 -> +, distance |v - p|
+ *     (paper, `euclidean`) or |(v - p) . n_p| (`tangent`); stored s * d;
+ *   - colour = p's colour.
  *
  * Grid (all samples inside one octree root): index (0,0,0) is at `origin` = bounding-box
  * minimum - band * leaf_size; the occupied cubes' indices start at `band`; every sample
@@ -50,12 +56,18 @@ enum sl_samples_distance {
     SL_SAMPLES_TANGENT = 1    /* |(v - p) . n_p|: distance to p's tangent plane */
 };
 
+enum sl_samples_closest {
+    SL_SAMPLES_CLOSEST_TRIANGLES = 0, /* nearest point of the input's triangles (meshes) */
+    SL_SAMPLES_CLOSEST_POINTS = 1     /* nearest input point (paper 1 section 2.1) */
+};
+
 /* The resolved [octree] + [samples] options (table: stages/samples/samples_stage.c). */
 typedef struct sl_samples_config {
     double leaf_size;      /* world units; 0 = from depth, else from spacing */
     int depth;             /* octree depth when > 0 (and leaf_size is 0) */
     double spacing_factor; /* auto leaf size = this x mean point spacing */
     int max_depth;         /* refuse leaf sizes needing a deeper octree (SL_E_LIMIT) */
+    int closest;           /* enum sl_samples_closest; point clouds always use points */
     int distance;          /* enum sl_samples_distance */
     int band;              /* dilation of the occupied cubes, in cubes (0 = paper) */
     uint64_t max_samples;  /* refuse more samples than this (SL_E_LIMIT) */
@@ -79,10 +91,16 @@ typedef struct sl_samples_plan {
 typedef struct sl_samples_counts {
     sl_samples_plan plan;
     uint64_t points;
+    uint64_t triangles;           /* triangles the samples were measured against (0: the
+                                     points were) */
+    uint64_t triangle_keys;       /* extra occupancy keys from triangles larger than a leaf */
     uint64_t occupied_cubes, band_cubes, samples;
     uint64_t inside, outside;     /* samples with value < 0 / >= 0 */
     uint64_t sign_flips;          /* sign_neighbours > 1: votes that overruled the
                                      closest point's sign */
+    int closed_surface;           /* the triangles are closed and consistently wound */
+    uint64_t sign_repairs;        /* closest = triangles: signs outvoted by their region
+                                     (stages/samples/samples_signs.c) */
     double seconds_plan, seconds_cubes; /* wall time per phase: grid; cubes and vertices */
     double seconds_tree, seconds_samples; /* k-d tree build; closest points (parallel) */
 } sl_samples_counts;

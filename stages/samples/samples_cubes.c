@@ -13,6 +13,7 @@
  * of cubes are the set dilated by 0..1 along each axis. Each merge counts its result
  * first and refuses it above the cap before allocating it.
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -27,30 +28,103 @@ void samples_keys_release(samples_keys *k)
     k->count = 0;
 }
 
-int samples_occupied_cubes(const sl_samples_plan *plan, const sl_pointset *ps, samples_keys *out,
+/* Steps per edge of the grid of points laid on triangle t: ceil(longest edge / leaf),
+ * capped so the count cannot overflow (such a triangle is refused by the caller's cap). */
+static uint32_t triangle_steps(const sl_samples_plan *plan, const sl_pointset *ps, uint64_t t)
+{
+    const uint32_t *tri = ps->triangles + 3 * t;
+    double longest = 0;
+    for (int k = 0; k < 3; k++) {
+        const float *p = ps->positions + 3 * (uint64_t)tri[k];
+        const float *q = ps->positions + 3 * (uint64_t)tri[(k + 1) % 3];
+        double d2 = 0;
+        for (int a = 0; a < 3; a++)
+            d2 += ((double)q[a] - p[a]) * ((double)q[a] - p[a]);
+        longest = d2 > longest ? d2 : longest;
+    }
+    double steps = ceil(sqrt(longest) / plan->leaf_size);
+    return steps <= 1 ? 1u : steps > 1e6 ? 1000000u : (uint32_t)steps;
+}
+
+/* Points of an n-step grid on a triangle, corners excluded (they are points already). */
+static uint64_t grid_points(uint32_t n)
+{
+    return n <= 1 ? 0 : (uint64_t)(n + 1) * (n + 2) / 2 - 3;
+}
+
+/* Writes the cube keys of the grid points of triangle t (grid_points(n) of them). */
+static void triangle_keys(const sl_samples_plan *plan, const sl_pointset *ps, uint64_t t,
+                          uint32_t n, uint64_t *out)
+{
+    const uint32_t *tri = ps->triangles + 3 * t;
+    const float *a = ps->positions + 3 * (uint64_t)tri[0];
+    const float *b = ps->positions + 3 * (uint64_t)tri[1];
+    const float *c = ps->positions + 3 * (uint64_t)tri[2];
+    uint64_t at = 0;
+    for (uint32_t i = 0; i <= n; i++)
+        for (uint32_t j = 0; i + j <= n; j++) {
+            if ((i == 0 && j == 0) || i == n || j == n)
+                continue; /* corners */
+            double u = (double)i / n, v = (double)j / n, w = 1 - u - v;
+            uint32_t g[3];
+            for (int k = 0; k < 3; k++)
+                g[k] = samples_cube_of(plan, w * a[k] + u * b[k] + v * c[k], k);
+            out[at++] = sl_vertex_key(g[0], g[1], g[2]);
+        }
+}
+
+int samples_occupied_cubes(const sl_samples_plan *plan, const sl_pointset *ps, int use_triangles,
+                           uint64_t max_count, samples_keys *out, uint64_t *extra_keys,
                            sl_error *err)
 {
     out->keys = NULL;
     out->count = 0;
-    uint64_t n = ps->count;
-    uint64_t *keys = malloc(n * sizeof *keys + 1);
-    if (!keys)
+    *extra_keys = 0;
+    uint64_t n = ps->count, t_count = use_triangles ? ps->triangle_count : 0, extra = 0;
+    uint32_t *steps = t_count ? malloc(t_count * sizeof *steps) : NULL;
+    if (t_count && !steps)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory for %llu triangles",
+                            (unsigned long long)t_count);
+#pragma omp parallel for schedule(static) reduction(+ : extra) if (t_count > 65536)
+    for (int64_t t = 0; t < (int64_t)t_count; t++) {
+        steps[t] = triangle_steps(plan, ps, (uint64_t)t);
+        extra += grid_points(steps[t]);
+    }
+    if (extra > max_count) {
+        free(steps);
+        return sl_error_set(err, SL_E_LIMIT, 0, NULL,
+                            "triangles much larger than the leaf (%g) need %llu occupancy "
+                            "points, above [samples] max_samples %llu; set a larger "
+                            "[octree] leaf_size", plan->leaf_size, (unsigned long long)extra,
+                            (unsigned long long)max_count);
+    }
+    uint64_t *keys = malloc((n + extra) * sizeof *keys + 1);
+    if (!keys) {
+        free(steps);
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory for %llu cube keys",
-                            (unsigned long long)n);
+                            (unsigned long long)(n + extra));
+    }
     const float *p = ps->positions;
 #pragma omp parallel for schedule(static) if (n > 65536)
     for (int64_t i = 0; i < (int64_t)n; i++)
         keys[i] = sl_vertex_key(samples_cube_of(plan, p[3 * i], 0),
                                  samples_cube_of(plan, p[3 * i + 1], 1),
                                  samples_cube_of(plan, p[3 * i + 2], 2));
-    if (sl_sort_keys(keys, n, 3 * SL_COORD_BITS) != 0) {
+    for (uint64_t t = 0, at = n; extra && t < t_count; t++) /* few triangles: serial */
+        if (steps[t] > 1) {
+            triangle_keys(plan, ps, t, steps[t], keys + at);
+            at += grid_points(steps[t]);
+        }
+    free(steps);
+    if (sl_sort_keys(keys, n + extra, 3 * SL_COORD_BITS) != 0) {
         free(keys);
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory sorting %llu cube keys",
-                            (unsigned long long)n);
+                            (unsigned long long)(n + extra));
     }
-    out->count = sl_unique_keys(keys, n);
+    out->count = sl_unique_keys(keys, n + extra);
     uint64_t *shrunk = realloc(keys, out->count * sizeof *keys + 1);
     out->keys = shrunk ? shrunk : keys;
+    *extra_keys = extra;
     return SL_OK;
 }
 

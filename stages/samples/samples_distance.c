@@ -10,6 +10,9 @@
  * is instead a vote of the k nearest points, each weighted by 1 / (distance + leaf/16):
  * on noisy scans one point with a flipped normal then cannot flip a vertex alone.
  *
+ * Meshes ([samples] closest = triangles, the default) take p from the triangles instead:
+ * samples_surface.c.
+ *
  * Parallelism: the vertices are sorted before this phase (samples_cubes.c); blocks of
  * them are evaluated in parallel into arrays indexed by vertex position, and the counts
  * are integer sums, so the result is identical for any thread count.
@@ -28,7 +31,8 @@ typedef struct eval_ctx {
     const sl_samples_config *cfg;
     const sl_samples_plan *plan;
     const sl_pointset *ps;
-    const sl_kdtree *tree;
+    const sl_kdtree *tree;          /* closest = points */
+    const samples_surface *surface; /* closest = triangles */
     const uint64_t *keys;
     sl_vdb_samples *out;
 } eval_ctx;
@@ -64,8 +68,16 @@ static int vote_sign(const eval_ctx *c, const float q[3], const double v[3])
     return vote >= 0 ? 1 : -1;
 }
 
-/* Evaluates vertex i; returns 1 when a vote overruled the closest point's sign. */
-static int eval_vertex(const eval_ctx *c, uint64_t i)
+static void store(sl_vdb_samples *out, uint64_t i, double value)
+{
+    out->distance[i] = (float)value;
+    if (out->distance[i] == 0)
+        out->distance[i] = 0.0f; /* no -0: "0 -> +" and identical bytes */
+}
+
+/* Evaluates vertex i; returns 1 when a vote overruled the closest point's sign. *hint:
+ * the previous vertex's closest triangle (closest = triangles). */
+static int eval_vertex(const eval_ctx *c, uint64_t i, uint32_t *hint)
 {
     const sl_samples_plan *plan = c->plan;
     uint32_t g[3];
@@ -77,6 +89,11 @@ static int eval_vertex(const eval_ctx *c, uint64_t i)
         v[k] = plan->origin[k] + plan->leaf_size * g[k];
         q[k] = (float)v[k];
     }
+    if (c->surface) {
+        uint8_t *rgba = c->out->colors ? c->out->colors + 4 * i : NULL;
+        store(c->out, i, samples_surface_signed_distance(c->surface, v, hint, rgba));
+        return 0;
+    }
     uint32_t p = sl_kdtree_nearest(c->tree, q, NULL);
     double dist2 = 0, dot = dot_to(c->ps, p, v, &dist2);
     int sign = dot >= 0 ? 1 : -1, flipped = 0;
@@ -86,9 +103,7 @@ static int eval_vertex(const eval_ctx *c, uint64_t i)
         sign = voted;
     }
     double d = c->cfg->distance == SL_SAMPLES_TANGENT ? fabs(dot) : sqrt(dist2);
-    c->out->distance[i] = (float)(sign * d);
-    if (c->out->distance[i] == 0)
-        c->out->distance[i] = 0.0f; /* no -0: "0 -> +" and identical bytes */
+    store(c->out, i, sign * d);
     if (c->out->colors)
         memcpy(c->out->colors + 4 * i, c->ps->colors + 4 * (uint64_t)p, 4);
     return flipped;
@@ -112,8 +127,9 @@ static int eval_all(const eval_ctx *c, uint64_t n, sl_progress *progress, uint64
             stop = 1;
         }
         uint64_t end = (uint64_t)(b + 1) * BLOCK < n ? (uint64_t)(b + 1) * BLOCK : n;
+        uint32_t hint = UINT32_MAX; /* per block: the same for any thread count */
         for (uint64_t i = (uint64_t)b * BLOCK; i < end; i++)
-            flipped += (uint64_t)eval_vertex(c, i);
+            flipped += (uint64_t)eval_vertex(c, i, &hint);
     }
     *flips = flipped;
     return stop || sl_progress_interrupted(progress) ? SL_E_INTERRUPTED : SL_OK;
@@ -137,18 +153,33 @@ static int compute_samples(const sl_samples_config *cfg, const sl_pointset *ps,
                            sl_samples_counts *counts, sl_progress *progress, sl_error *err)
 {
     sl_kdtree *tree = NULL;
+    samples_surface surface, *use_surface = NULL;
+    int closed = 0;
     double t0 = omp_get_wtime();
-    int rc = sl_kdtree_build(&tree, ps->positions, ps->count, err);
+    int rc;
+    if (counts->triangles) {
+        rc = samples_surface_build(&surface, ps, err);
+        use_surface = rc == SL_OK ? &surface : NULL;
+        closed = use_surface && surface.closed;
+    } else {
+        rc = sl_kdtree_build(&tree, ps->positions, ps->count, err);
+    }
     counts->seconds_tree = omp_get_wtime() - t0;
     if (rc == SL_OK)
         rc = alloc_samples(out, vertices->count, ps->colors != NULL, err);
     if (rc == SL_OK) {
-        eval_ctx c = {cfg, &counts->plan, ps, tree, vertices->keys, out};
+        eval_ctx c = {cfg, &counts->plan, ps, tree, use_surface, vertices->keys, out};
         out->voxel_size = counts->plan.leaf_size;
         memcpy(out->origin, counts->plan.origin, sizeof out->origin);
         rc = eval_all(&c, vertices->count, progress, &counts->sign_flips);
     }
     sl_kdtree_free(tree);
+    if (use_surface)
+        samples_surface_release(use_surface);
+    counts->closed_surface = closed;
+    if (rc == SL_OK && closed) /* open scans have no inside: nothing to repair against */
+        rc = samples_repair_signs(vertices->keys, out, counts->plan.leaf_size,
+                                  &counts->sign_repairs, err);
     if (rc != SL_OK)
         return rc;
     for (uint64_t i = 0; i < out->count; i++)
@@ -163,6 +194,8 @@ int sl_samples_compute(const sl_samples_config *cfg, const sl_pointset *ps, sl_v
     memset(out, 0, sizeof *out);
     memset(counts, 0, sizeof *counts);
     counts->points = ps->count;
+    if (cfg->closest == SL_SAMPLES_CLOSEST_TRIANGLES)
+        counts->triangles = ps->triangle_count;
     if (cfg->sign_neighbours < 1 || cfg->sign_neighbours > MAX_SIGN_NEIGHBOURS ||
         cfg->band < 0 || cfg->band > SL_SAMPLES_MAX_BAND || cfg->max_depth > SL_SAMPLES_MAX_DEPTH)
         return sl_error_set(err, SL_E_INTERNAL, 0, NULL, "samples config out of range");
@@ -175,7 +208,8 @@ int sl_samples_compute(const sl_samples_config *cfg, const sl_pointset *ps, sl_v
     if (sl_progress_step(progress, "cubes", 0.0))
         return SL_E_INTERRUPTED;
     samples_keys keys;
-    if ((rc = samples_occupied_cubes(&counts->plan, ps, &keys, err)) != SL_OK)
+    if ((rc = samples_occupied_cubes(&counts->plan, ps, counts->triangles > 0, cfg->max_samples,
+                                     &keys, &counts->triangle_keys, err)) != SL_OK)
         return rc;
     counts->occupied_cubes = keys.count;
     rc = samples_band_vertices(&counts->plan, &keys, cfg->max_samples, &counts->band_cubes, err);

@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdint.h>
 
+#include "geometry/triangle_bvh.h"
 #include "stages/merge/key_table.h"
 #include "stages/samples/samples.h"
 
@@ -25,9 +26,42 @@ static inline uint32_t samples_cube_of(const sl_samples_plan *plan, double p, in
     return (uint32_t)(c < lo ? lo : c > hi ? hi : c);
 }
 
-/* Occupied cubes: the cubes of every point, sorted and unique. */
-int samples_occupied_cubes(const sl_samples_plan *plan, const sl_pointset *ps, samples_keys *out,
+/* Occupied cubes: the cubes of every point, sorted and unique. With `use_triangles`, also
+ * the cubes of a regular grid of points on every triangle longer than a leaf (steps of at
+ * most a leaf, so each point of the triangle is less than a leaf from one of them, and
+ * every cube the triangle passes through is within one cube of an occupied one: the band
+ * covers it). *triangle_keys counts those extra points; above `max_count` of them the
+ * item is refused (SL_E_LIMIT) before they are allocated. */
+int samples_occupied_cubes(const sl_samples_plan *plan, const sl_pointset *ps, int use_triangles,
+                           uint64_t max_count, samples_keys *out, uint64_t *triangle_keys,
                            sl_error *err);
+
+/* The input's triangles as a signed-distance source (samples_surface.c). */
+typedef struct samples_surface {
+    const sl_pointset *ps;     /* borrowed: positions, triangles, colours */
+    sl_triangle_bvh bvh;
+    float *vertex_normals;     /* 3 per point: angle-weighted pseudonormal (not unit) */
+    uint64_t *incident_first;  /* points + 1: start of each point's triangles */
+    uint32_t *incident;        /* 3 per triangle: triangles around each point, ascending */
+    int closed;                /* every edge is used as often in one direction as in
+                                  the other: inside and outside are well defined */
+} samples_surface;
+
+int samples_surface_build(samples_surface *s, const sl_pointset *ps, sl_error *err);
+void samples_surface_release(samples_surface *s);
+
+/* The signed distance from v to the triangles (> 0 outside: the side the winding faces),
+ * and when rgba is not NULL and the points have colours, the closest point's colour.
+ * *hint: a triangle to try first (UINT32_MAX: none); set to this query's triangle. */
+double samples_surface_signed_distance(const samples_surface *s, const double v[3],
+                                       uint32_t *hint, uint8_t rgba[4]);
+
+/* Makes the signs of `s` (exact unsigned distances; `keys` their sorted vertex keys)
+ * consistent: axis neighbours of which one lies more than `leaf` from the surface are
+ * on the same side, so each region so linked takes its majority sign
+ * (samples_signs.c). *repaired: samples whose sign changed. */
+int samples_repair_signs(const uint64_t *keys, sl_vdb_samples *s, double leaf,
+                         uint64_t *repaired, sl_error *err);
 
 /* Replaces `k` by its union with copies shifted by each of `offsets` (grid steps) along
  * `axis`; keys must stay in range (the caller's invariant). Refuses (SL_E_LIMIT) a result

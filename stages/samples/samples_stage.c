@@ -28,8 +28,16 @@ static const sl_option samples_options[] = {
     {"octree", "max_depth", SL_OPT_INT, "16", 1, SL_SAMPLES_MAX_DEPTH, NULL,
      "Items whose leaf size needs a deeper octree are refused (limit error, quarantined): "
      "it bounds memory on a huge extent with tiny features."},
+    {"samples", "closest", SL_OPT_ENUM, "triangles", 0, 0, "triangles|points",
+     "Where a grid vertex's closest point comes from. 'triangles' (meshes; point clouds "
+     "always use their points): the nearest point of the input's triangles, signed by the "
+     "pseudonormal of the face, edge or vertex it lies on, sample = the exact signed "
+     "distance; every cube the surface passes through is sampled, so a closed mesh gives a "
+     "closed surface. 'points': the nearest input point (paper 1 section 2.1), with "
+     "[samples] distance and sign_neighbours."},
     {"samples", "distance", SL_OPT_ENUM, "tangent", 0, 0, "euclidean|tangent",
-     "Sample magnitude at a grid vertex v with closest point p: 'euclidean' = |v - p| "
+     "closest = points only. Sample magnitude at a grid vertex v with closest point p: "
+     "'euclidean' = |v - p| "
      "(paper 1 section 2.1); 'tangent' = |(v - p) . n_p|, the distance to p's tangent plane. "
      "Measured in docs/samples-stage.md."},
     {"samples", "band", SL_OPT_INT, "1", 0, SL_SAMPLES_MAX_BAND, NULL,
@@ -39,7 +47,8 @@ static const sl_option samples_options[] = {
      "Items needing more samples (grid vertices) are refused (limit error, quarantined) "
      "before the memory is allocated."},
     {"samples", "sign_neighbours", SL_OPT_INT, "1", 1, 64, NULL,
-     "1 = the sign of a sample comes from its closest point's normal (paper); k > 1 = a "
+     "closest = points only. 1 = the sign of a sample comes from its closest point's "
+     "normal (paper); k > 1 = a "
      "vote of the k nearest points' normals weighted by inverse distance."},
     SL_OPTION_END,
 };
@@ -54,6 +63,7 @@ sl_samples_config sl_samples_default_config(void)
     c.depth = 0;
     c.spacing_factor = 1.5;
     c.max_depth = 16;
+    c.closest = SL_SAMPLES_CLOSEST_TRIANGLES;
     c.distance = SL_SAMPLES_TANGENT;
     c.band = 1;
     c.max_samples = (uint64_t)1 << 31;
@@ -74,6 +84,9 @@ static int samples_configure(const sl_config *cfg, void **stage_config, sl_error
     c->distance = strcmp(sl_config_string(cfg, "samples", "distance"), "euclidean") == 0
                       ? SL_SAMPLES_EUCLIDEAN
                       : SL_SAMPLES_TANGENT;
+    c->closest = strcmp(sl_config_string(cfg, "samples", "closest"), "points") == 0
+                     ? SL_SAMPLES_CLOSEST_POINTS
+                     : SL_SAMPLES_CLOSEST_TRIANGLES;
     c->band = (int)sl_config_int(cfg, "samples", "band");
     c->max_samples = (uint64_t)sl_config_int(cfg, "samples", "max_samples");
     c->sign_neighbours = (int)sl_config_int(cfg, "samples", "sign_neighbours");
@@ -109,7 +122,12 @@ static void report_counts(sl_json *j, const sl_samples_config *cfg, const sl_sam
         sl_json_u64(j, NULL, p->cells[k]);
     sl_json_array_end(j);
     sl_json_u64(j, "band", (uint64_t)p->band);
-    sl_json_string(j, "distance", cfg->distance == SL_SAMPLES_TANGENT ? "tangent" : "euclidean");
+    sl_json_string(j, "closest", c->triangles ? "triangles" : "points");
+    sl_json_u64(j, "triangles", c->triangles);
+    sl_json_u64(j, "triangle_cube_keys", c->triangle_keys);
+    sl_json_string(j, "distance", c->triangles ? "exact"
+                                  : cfg->distance == SL_SAMPLES_TANGENT ? "tangent"
+                                                                        : "euclidean");
     sl_json_u64(j, "sign_neighbours", (uint64_t)cfg->sign_neighbours);
     sl_json_u64(j, "points", c->points);
     sl_json_u64(j, "occupied_cubes", c->occupied_cubes);
@@ -118,6 +136,8 @@ static void report_counts(sl_json *j, const sl_samples_config *cfg, const sl_sam
     sl_json_u64(j, "inside", c->inside);
     sl_json_u64(j, "outside", c->outside);
     sl_json_u64(j, "sign_flips", c->sign_flips);
+    sl_json_bool(j, "closed_surface", c->closed_surface);
+    sl_json_u64(j, "sign_repairs", c->sign_repairs);
     sl_json_bool(j, "colors", colors);
 }
 
@@ -183,7 +203,7 @@ const sl_stage sl_samples_stage = {
     .name = "samples",
     .description = "oriented points -> signed samples at leaf-cube vertices, OpenVDB grids "
                    "(paper 1 section 2.1)",
-    .version = 1,
+    .version = 2,
     .options = samples_options,
     .sections = samples_sections,
     .configure = samples_configure,

@@ -475,7 +475,9 @@ static void measure_one(const char *name, const sl_mesh *input, const sl_pointse
         return;
     }
     printf("| %s | %s | %d | %d | %.2f | %.4g | %llu | %llu | %.5f | %.5f | %.5f | %.2f | %llu |\n", name,
-           cfg->distance == SL_SAMPLES_TANGENT ? "tangent" : "euclidean", cfg->sign_neighbours,
+           counts.triangles ? "triangles"
+           : cfg->distance == SL_SAMPLES_TANGENT ? "points, tangent" : "points, euclidean",
+           cfg->sign_neighbours,
            cfg->band, cfg->spacing_factor, counts.plan.leaf_size, (unsigned long long)s.count,
            (unsigned long long)mc.triangle_count, dist.a_to_b.fraction.rms, dist.fraction.rms,
            dist.fraction.hausdorff, dist.a_to_b.world.hausdorff / counts.plan.leaf_size,
@@ -493,24 +495,22 @@ static int load_input(const char *rel, sl_mesh *input, sl_pointset *ps, sl_error
     sl_mesh work;
     sl_range_counts rc;
     sl_range_config rcfg = sl_range_default_config();
-    uint32_t *tris = NULL;
-    uint64_t tri_count = 0;
     if (!check_shared_path(rel, buf, sizeof buf))
         return sl_error_set(err, SL_E_IO, 0, rel, "no shared data");
     int rc1 = sl_ply_read(buf, NULL, input, NULL, NULL, err);
     if (rc1 || (rc1 = sl_ply_read(buf, NULL, &work, NULL, NULL, err)))
         return rc1;
-    rc1 = sl_range_points_from_mesh(&rcfg, &work, NULL, ps, &rc, &tris, &tri_count, NULL, err);
+    rc1 = sl_range_points_from_mesh(&rcfg, &work, NULL, ps, &rc, NULL, err);
     sl_mesh_release(&work);
-    if (rc1 == SL_OK && input->triangle_count == 0 && tri_count > 0) {
+    if (rc1 == SL_OK && input->triangle_count == 0 && ps->triangle_count > 0) {
         sl_mesh_release(input);
         input->vertex_count = ps->count;
         input->positions = malloc(12 * ps->count);
         memcpy(input->positions, ps->positions, 12 * ps->count);
-        input->triangles = tris, input->triangle_count = tri_count;
-        tris = NULL;
+        input->triangle_count = ps->triangle_count;
+        input->triangles = malloc(12 * ps->triangle_count);
+        memcpy(input->triangles, ps->triangles, 12 * ps->triangle_count);
     }
-    free(tris);
     return rc1;
 }
 
@@ -521,15 +521,17 @@ void run_measurements(void)
     enum { FULL = 5 }; /* the first FULL inputs get every variant */
     static const char *const inputs[] = {"fandisk.ply", "armadillo_86kf.ply", "bun_zipper.ply",
                                          "igea.ply", "bunny_range/bun000.ply", "dragon_100kf.ply",
-                                         "rocker_arm.ply", "cow.ply", "happy_buddha_100kf.ply",
+                                         "rocker_arm.ply", "cow.ply", "happy_buddha_100kf.ply", "horse.ply",
                                          NULL};
-    /* distance, sign_neighbours, band, spacing_factor; the first row is the default */
-    static const struct { int distance, k, band; double factor; } variants[] = {
-        {SL_SAMPLES_TANGENT, 1, 1, 1.5}, {SL_SAMPLES_EUCLIDEAN, 1, 1, 1.5},
-        {SL_SAMPLES_TANGENT, 8, 1, 1.5}, {SL_SAMPLES_TANGENT, 1, 2, 1.5},
-        {SL_SAMPLES_TANGENT, 8, 2, 1.5}, {SL_SAMPLES_TANGENT, 8, 2, 1.0},
-        {SL_SAMPLES_TANGENT, 8, 2, 2.0}, {SL_SAMPLES_TANGENT, 8, 2, 3.0}};
-    printf("| input | distance | sign k | band | spacing factor | leaf | samples | triangles | RMS "
+    /* closest, distance, sign_neighbours, band, spacing_factor; the first row is the
+     * default, the second the paper */
+    enum { T = SL_SAMPLES_CLOSEST_TRIANGLES, P = SL_SAMPLES_CLOSEST_POINTS };
+    static const struct { int closest, distance, k, band; double factor; } variants[] = {
+        {T, SL_SAMPLES_TANGENT, 1, 1, 1.5}, {P, SL_SAMPLES_TANGENT, 1, 1, 1.5},
+        {P, SL_SAMPLES_EUCLIDEAN, 1, 1, 1.5}, {P, SL_SAMPLES_TANGENT, 8, 1, 1.5},
+        {P, SL_SAMPLES_TANGENT, 1, 2, 1.5}, {P, SL_SAMPLES_TANGENT, 8, 2, 1.5},
+        {T, SL_SAMPLES_TANGENT, 1, 1, 1.0}, {T, SL_SAMPLES_TANGENT, 1, 1, 2.0}};
+    printf("| input | closest, distance | sign k | band | spacing factor | leaf | samples | triangles | RMS "
            "in->mc | RMS sym | Hausdorff sym | Hausdorff in->mc / leaf | boundary edges |\n");
     for (int i = 0; inputs[i]; i++) {
         const char *rel = inputs[i];
@@ -541,9 +543,10 @@ void run_measurements(void)
             printf("| %s | failed: %s |\n", rel, err.message);
             return;
         }
-        int count = i < FULL ? (int)(sizeof variants / sizeof variants[0]) : 5;
+        int count = i < FULL ? (int)(sizeof variants / sizeof variants[0]) : 2;
         for (int v = 0; v < count; v++) {
             sl_samples_config cfg = sl_samples_default_config();
+            cfg.closest = variants[v].closest;
             cfg.distance = variants[v].distance;
             cfg.sign_neighbours = variants[v].k;
             cfg.band = variants[v].band;

@@ -25,7 +25,7 @@ static int run(sl_range_config *cfg, sl_mesh *m, const char *dir, sl_pointset *p
 {
     sl_error err;
     sl_error_init(&err);
-    int rc = sl_range_points_from_mesh(cfg, m, dir, ps, c, NULL, NULL, NULL, &err);
+    int rc = sl_range_points_from_mesh(cfg, m, dir, ps, c, NULL, &err);
     if (rc != SL_OK)
         fprintf(stderr, "  (range: %s: %s)\n", sl_error_name(rc), err.message);
     return rc;
