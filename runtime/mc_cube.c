@@ -42,76 +42,21 @@ void sl_mc_face_edges(int f, int edges[4])
         edges[k] = edge_between(corners[k], corners[(k + 1) % 4]);
 }
 
-/* A walk around one face or sub-face: sample signs and the point id of the piece that
- * leaves each sample (towards the next one). */
-typedef struct walk {
-    int count;
-    uint8_t inside[8];
-    uint8_t piece[8];
-} walk;
+/* Per face, what a walk needs (built once from the functions above): its corners and
+ * edges, and the half-edge point ids at the start and the end of each boundary edge. Per
+ * point id, the faces it lies on. */
+typedef struct face_tables {
+    uint8_t corners[6][4], edges[6][4], half_start[6][4], half_end[6][4];
+    uint8_t point_faces[SL_MC_MAX_POINTS];
+} face_tables;
 
-static void walk_push(walk *w, int inside, int piece)
-{
-    w->inside[w->count] = (uint8_t)(inside != 0);
-    w->piece[w->count] = (uint8_t)piece;
-    w->count++;
-}
+static face_tables ft;
+static pthread_once_t ft_once = PTHREAD_ONCE_INIT;
 
 /* Half of edge e that touches corner `corner`. */
 static int half_at(int e, int corner)
 {
     return SL_MC_HALF_POINT(e, corner == sl_mc_edge_c0(e) ? 0 : 1);
-}
-
-static void pair_runs(const walk *w, int next[SL_MC_MAX_POINTS])
-{
-    int n = w->count, start = -1;
-    for (int i = 0; i < n; i++)
-        if (!w->inside[i]) {
-            start = i;
-            break;
-        }
-    if (start < 0)
-        return; /* all inside: no crossing */
-    int entry = -1;
-    for (int step = 0; step < n; step++) {
-        int i = (start + step) % n, j = (i + 1) % n;
-        if (!w->inside[i] && w->inside[j])
-            entry = w->piece[i];
-        else if (w->inside[i] && !w->inside[j])
-            next[w->piece[i]] = entry; /* exit -> entry of the same inside run */
-    }
-}
-
-static void walk_face(const sl_mc_cell *cell, int f, int next[SL_MC_MAX_POINTS])
-{
-    int corners[4], edges[4];
-    sl_mc_face_corners(f, corners);
-    sl_mc_face_edges(f, edges);
-    if (!(cell->split_faces >> f & 1)) {
-        walk w = {0};
-        for (int k = 0; k < 4; k++) {
-            int c = corners[k], e = edges[k];
-            if (cell->split_edges >> e & 1) {
-                walk_push(&w, cell->inside >> c & 1, half_at(e, c));
-                walk_push(&w, cell->mid_inside >> e & 1, half_at(e, corners[(k + 1) % 4]));
-            } else {
-                walk_push(&w, cell->inside >> c & 1, SL_MC_EDGE_POINT(e));
-            }
-        }
-        pair_runs(&w, next);
-        return;
-    }
-    int centre = cell->centre_inside >> f & 1;
-    for (int k = 0; k < 4; k++) { /* the sub-face at corner k */
-        int c = corners[k], e_out = edges[k], e_in = edges[(k + 3) % 4];
-        walk w = {0};
-        walk_push(&w, cell->inside >> c & 1, half_at(e_out, c));
-        walk_push(&w, cell->mid_inside >> e_out & 1, SL_MC_SPOKE_POINT(f, k));
-        walk_push(&w, centre, SL_MC_SPOKE_POINT(f, (k + 3) % 4));
-        walk_push(&w, cell->mid_inside >> e_in & 1, half_at(e_in, c));
-        pair_runs(&w, next);
-    }
 }
 
 /* Faces a point id lies on (bit f). */
@@ -122,6 +67,94 @@ static unsigned faces_of_point(int p)
     int e = p < 12 ? p : (p - 12) / 2;
     int a = e / 4, c0 = sl_mc_edge_c0(e), b = (a + 1) % 3, c = (a + 2) % 3;
     return (1u << (2 * b + ((c0 >> b) & 1))) | (1u << (2 * c + ((c0 >> c) & 1)));
+}
+
+static void build_face_tables(void)
+{
+    for (int f = 0; f < 6; f++) {
+        int corners[4], edges[4];
+        sl_mc_face_corners(f, corners);
+        sl_mc_face_edges(f, edges);
+        for (int k = 0; k < 4; k++) {
+            ft.corners[f][k] = (uint8_t)corners[k];
+            ft.edges[f][k] = (uint8_t)edges[k];
+            ft.half_start[f][k] = (uint8_t)half_at(edges[k], corners[k]);
+            ft.half_end[f][k] = (uint8_t)half_at(edges[k], corners[(k + 1) % 4]);
+        }
+    }
+    for (int p = 0; p < SL_MC_MAX_POINTS; p++)
+        ft.point_faces[p] = (uint8_t)faces_of_point(p);
+}
+
+/* A walk around one face or sub-face: sample signs (bit i) and the point id of the piece
+ * that leaves each sample (towards the next one). */
+typedef struct walk {
+    int count;
+    unsigned inside;
+    uint8_t piece[8];
+} walk;
+
+static inline void walk_push(walk *w, unsigned inside, int piece)
+{
+    w->inside |= (inside & 1u) << w->count;
+    w->piece[w->count++] = (uint8_t)piece;
+}
+
+/* The segments found so far: next[p] for every point p with bit p of `from` set. */
+typedef struct links {
+    int8_t next[SL_MC_MAX_POINTS];
+    uint64_t from;
+} links;
+
+static void pair_runs(const walk *w, links *l)
+{
+    int n = w->count;
+    unsigned in = w->inside, all = (1u << n) - 1u;
+    if (in == all)
+        return; /* all inside: no crossing */
+    if (in == 0)
+        return; /* all outside: no crossing either */
+    int start = __builtin_ctz(~in & all), entry = -1;
+    for (int step = 0, i = start; step < n; step++) {
+        int j = i + 1 == n ? 0 : i + 1;
+        unsigned a = in >> i & 1, b = in >> j & 1;
+        if (!a && b)
+            entry = w->piece[i];
+        else if (a && !b) { /* exit -> entry of the same inside run */
+            l->next[w->piece[i]] = (int8_t)entry;
+            l->from |= 1ull << w->piece[i];
+        }
+        i = j;
+    }
+}
+
+static void walk_face(const sl_mc_cell *cell, int f, links *l)
+{
+    const uint8_t *corners = ft.corners[f], *edges = ft.edges[f];
+    if (!(cell->split_faces >> f & 1)) {
+        walk w = {0, 0, {0}};
+        for (int k = 0; k < 4; k++) {
+            int c = corners[k], e = edges[k];
+            if (cell->split_edges >> e & 1) {
+                walk_push(&w, cell->inside >> c, ft.half_start[f][k]);
+                walk_push(&w, cell->mid_inside >> e, ft.half_end[f][k]);
+            } else {
+                walk_push(&w, cell->inside >> c, SL_MC_EDGE_POINT(e));
+            }
+        }
+        pair_runs(&w, l);
+        return;
+    }
+    unsigned centre = cell->centre_inside >> f & 1;
+    for (int k = 0; k < 4; k++) { /* the sub-face at corner k */
+        int c = corners[k], e_out = edges[k], e_in = edges[(k + 3) % 4];
+        walk w = {0, 0, {0}};
+        walk_push(&w, cell->inside >> c, ft.half_start[f][k]);
+        walk_push(&w, cell->mid_inside >> e_out, SL_MC_SPOKE_POINT(f, k));
+        walk_push(&w, centre, SL_MC_SPOKE_POINT(f, (k + 3) % 4));
+        walk_push(&w, cell->mid_inside >> e_in, ft.half_end[f][(k + 3) % 4]);
+        pair_runs(&w, l);
+    }
 }
 
 static void add_triangle(sl_mc_triangles *out, int a, int b, int c)
@@ -145,13 +178,19 @@ static void triangulate_loop(const int *loop, int n, int loop_index, sl_mc_trian
         return;
     }
     for (int apex = 0; apex < n; apex++) {
+        unsigned faces = ft.point_faces[loop[apex]];
         int ok = 1;
-        for (int j = 2; j < n - 1 && ok; j++)
-            ok = !(faces_of_point(loop[apex]) & faces_of_point(loop[(apex + j) % n]));
+        for (int j = 2, q = apex + 2 < n ? apex + 2 : apex + 2 - n; j < n - 1 && ok; j++) {
+            ok = !(faces & ft.point_faces[loop[q]]);
+            q = q + 1 == n ? 0 : q + 1;
+        }
         if (!ok)
             continue;
-        for (int j = 1; j + 1 < n; j++)
-            add_triangle(out, loop[apex], loop[(apex + j) % n], loop[(apex + j + 1) % n]);
+        for (int j = 1, q = apex + 1 < n ? apex + 1 : 0; j + 1 < n; j++) {
+            int r = q + 1 == n ? 0 : q + 1;
+            add_triangle(out, loop[apex], loop[q], loop[r]);
+            q = r;
+        }
         return;
     }
     int centre = SL_MC_CENTROID_POINT(loop_index);
@@ -162,20 +201,25 @@ static void triangulate_loop(const int *loop, int n, int loop_index, sl_mc_trian
 
 void sl_mc_triangulate(const sl_mc_cell *cell, sl_mc_triangles *out)
 {
-    int next[SL_MC_MAX_POINTS];
-    for (int i = 0; i < SL_MC_MAX_POINTS; i++)
-        next[i] = -1;
+    pthread_once(&ft_once, build_face_tables);
+    links l;
+    l.from = 0;
     for (int f = 0; f < 6; f++)
-        walk_face(cell, f, next);
-    memset(out, 0, sizeof *out);
-    uint8_t used[SL_MC_MAX_POINTS] = {0};
+        walk_face(cell, f, &l);
+    /* Only the counts are reset: the arrays are valid up to them. */
+    out->count = 0;
+    out->loops = 0;
+    out->centroids = 0;
+    /* Loops start at the smallest point id with a segment not yet in one; a point without
+     * a segment of its own ends its loop. */
+    uint64_t used = 0;
     int loops = 0;
-    for (int start = 0; start < SL_MC_MAX_POINTS; start++) {
-        if (next[start] < 0 || used[start])
-            continue;
+    while (l.from & ~used) {
+        int start = __builtin_ctzll(l.from & ~used);
         int *loop = out->loop_points[loops], n = 0;
-        for (int p = start; p >= 0 && !used[p] && n < SL_MC_MAX_POINTS; p = next[p]) {
-            used[p] = 1;
+        for (int p = start; p >= 0 && !(used >> p & 1) && n < SL_MC_MAX_POINTS;
+             p = (l.from >> p & 1) ? l.next[p] : -1) {
+            used |= 1ull << p;
             loop[n++] = p;
         }
         out->loop_sizes[loops] = (uint8_t)n;
