@@ -29,11 +29,12 @@ int sl_mesh_builder_init(sl_mesh_builder *b, const sl_octree *tree, uint32_t *sc
     return 0;
 }
 
-static int grow(void **p, uint64_t *cap, uint64_t need, size_t elem)
+/* Capacity for `need` elements: exactly that many when `exact`, else doubling. */
+static int grow(void **p, uint64_t *cap, uint64_t need, size_t elem, int exact)
 {
     if (need <= *cap)
         return 0;
-    uint64_t n = *cap ? *cap : 1024;
+    uint64_t n = exact ? need : *cap ? *cap : 1024;
     while (n < need)
         n *= 2;
     void *q = realloc(*p, (size_t)n * elem);
@@ -44,32 +45,45 @@ static int grow(void **p, uint64_t *cap, uint64_t need, size_t elem)
     return 0;
 }
 
-static int reserve_vertices(sl_mesh_builder *b, uint64_t need)
+static int reserve_vertices(sl_mesh_builder *b, uint64_t need, int exact)
 {
     sl_lod_mesh *m = &b->mesh;
     uint64_t cap = b->vertex_capacity, c1 = cap, c2 = cap, c3 = cap;
-    if (grow((void **)&m->positions, &c1, need, 3 * sizeof(float)) ||
-        grow((void **)&b->used, &c2, need, sizeof(uint32_t)) ||
-        (b->tree->crossing_color && grow((void **)&m->colors, &c3, need, 4)))
+    if (grow((void **)&m->positions, &c1, need, 3 * sizeof(float), exact) ||
+        grow((void **)&b->used, &c2, need, sizeof(uint32_t), exact) ||
+        (b->tree->crossing_color && grow((void **)&m->colors, &c3, need, 4, exact)))
         return -1;
     b->vertex_capacity = c1;
     return 0;
 }
 
+void sl_mesh_builder_reserve(sl_mesh_builder *b, uint64_t triangles)
+{
+    /* A closed surface has about half as many vertices as triangles; an open scan's
+     * boundary and loop centroids add a few: estimate, the builder grows past it. */
+    uint64_t cap = b->triangle_capacity;
+    if (grow((void **)&b->mesh.indices, &cap, triangles, 3 * sizeof(uint32_t), 1) == 0)
+        b->triangle_capacity = cap;
+    reserve_vertices(b, triangles / 2 + triangles / 16 + 64, 1);
+}
+
 /* Vertex index of a crossing, mapping it on first use. */
-static uint32_t vertex_of(sl_mesh_builder *b, uint32_t crossing)
+static inline uint32_t vertex_of(sl_mesh_builder *b, uint32_t crossing)
 {
     uint32_t v = b->vertex_of_crossing[crossing];
     if (v != SL_OCTREE_NONE)
         return v;
     sl_lod_mesh *m = &b->mesh;
-    if (reserve_vertices(b, m->vertex_count + 1)) {
+    if (m->vertex_count >= b->vertex_capacity && reserve_vertices(b, m->vertex_count + 1, 0)) {
         b->failed = 1;
         return 0;
     }
     v = (uint32_t)m->vertex_count++;
-    memcpy(m->positions + 3 * (size_t)v, b->tree->crossing_position + 3 * (size_t)crossing,
-           3 * sizeof(float));
+    const float *p = b->tree->crossing_position + 3 * (size_t)crossing;
+    float *q = m->positions + 3 * (size_t)v;
+    q[0] = p[0];
+    q[1] = p[1];
+    q[2] = p[2];
     if (m->colors)
         memcpy(m->colors + 4 * (size_t)v, b->tree->crossing_color + 4 * (size_t)crossing, 4);
     b->used[v] = crossing;
@@ -82,7 +96,7 @@ static uint32_t centroid_vertex(sl_mesh_builder *b, const sl_mc_triangles *tri, 
                                 const uint32_t point_crossing[SL_MC_MAX_POINTS])
 {
     sl_lod_mesh *m = &b->mesh;
-    if (reserve_vertices(b, m->vertex_count + 1)) {
+    if (reserve_vertices(b, m->vertex_count + 1, 0)) {
         b->failed = 1;
         return 0;
     }
@@ -106,31 +120,58 @@ static uint32_t centroid_vertex(sl_mesh_builder *b, const sl_mc_triangles *tri, 
     return v;
 }
 
+/* Room for `count` more triangles; 0, or -1 (and failed) when out of memory. */
+static int reserve_triangles(sl_mesh_builder *b, int count)
+{
+    sl_lod_mesh *m = &b->mesh;
+    if (m->triangle_count + (uint64_t)count <= b->triangle_capacity)
+        return 0;
+    uint64_t cap = b->triangle_capacity;
+    if (grow((void **)&m->indices, &cap, m->triangle_count + (uint64_t)count,
+             3 * sizeof(uint32_t), 0)) {
+        b->failed = 1;
+        return -1;
+    }
+    b->triangle_capacity = cap;
+    return 0;
+}
+
+void sl_mesh_builder_add_triangles(sl_mesh_builder *b, int count, const uint8_t *points,
+                                   const uint32_t *point_crossing)
+{
+    if (b->failed || count == 0 || reserve_triangles(b, count))
+        return;
+    sl_lod_mesh *m = &b->mesh;
+    uint32_t *out = m->indices + 3 * (size_t)m->triangle_count;
+    for (int i = 0; i < 3 * count; i++)
+        out[i] = vertex_of(b, point_crossing[points[i]]);
+    m->triangle_count += (uint64_t)count;
+}
+
 void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
                               const uint32_t point_crossing[SL_MC_MAX_POINTS])
 {
     if (b->failed || tri->count == 0)
         return;
+    if (!tri->centroids) { /* every point is a crossing */
+        sl_mesh_builder_add_triangles(b, tri->count, &tri->points[0][0], point_crossing);
+        return;
+    }
     uint32_t centroid[SL_MC_MAX_LOOPS];
     for (int l = 0; l < tri->loops; l++)
         if (tri->centroids >> l & 1)
             centroid[l] = centroid_vertex(b, tri, l, point_crossing);
-    sl_lod_mesh *m = &b->mesh;
-    uint64_t cap = b->triangle_capacity;
-    if (grow((void **)&m->indices, &cap, m->triangle_count + tri->count, 3 * sizeof(uint32_t))) {
-        b->failed = 1;
+    if (reserve_triangles(b, tri->count))
         return;
-    }
-    b->triangle_capacity = cap;
-    for (int t = 0; t < tri->count; t++) {
-        uint32_t *out = m->indices + 3 * (size_t)m->triangle_count;
+    sl_lod_mesh *m = &b->mesh;
+    uint32_t *out = m->indices + 3 * (size_t)m->triangle_count;
+    for (int t = 0; t < tri->count; t++, out += 3)
         for (int k = 0; k < 3; k++) {
             int p = tri->points[t][k];
             out[k] = p >= SL_MC_MAX_POINTS ? centroid[p - SL_MC_MAX_POINTS]
                                            : vertex_of(b, point_crossing[p]);
         }
-        m->triangle_count++;
-    }
+    m->triangle_count += tri->count;
 }
 
 static void compute_normals(sl_lod_mesh *m)

@@ -35,10 +35,16 @@ typedef struct sl_mesh_builder {
 /* `scratch` may be NULL (allocated here, O(crossings) once) or a caller-kept array of
  * crossing_count entries all SL_OCTREE_NONE, which lets repeated extractions stay O(m). */
 int sl_mesh_builder_init(sl_mesh_builder *b, const sl_octree *tree, uint32_t *scratch);
+/* Sizes the output for about `triangles` triangles (a hint: the builder grows past it). */
+void sl_mesh_builder_reserve(sl_mesh_builder *b, uint64_t triangles);
 /* Adds the triangles of one cell: `point_id` maps the cell's point ids to crossing ids;
  * centroid points (SL_MC_CENTROID_POINT) become new vertices at their loop's mean. */
 void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
                               const uint32_t point_crossing[SL_MC_MAX_POINTS]);
+/* Adds `count` triangles whose corners are crossings: points[3 t + i] is a point id that
+ * `point_crossing` maps to a crossing id (a cell without centroid vertices). */
+void sl_mesh_builder_add_triangles(sl_mesh_builder *b, int count, const uint8_t *points,
+                                   const uint32_t *point_crossing);
 /* Finishes normals, resets the scratch, moves the mesh to *out. Returns -1 on OOM. */
 int sl_mesh_builder_finish(sl_mesh_builder *b, sl_lod_mesh *out);
 void sl_mesh_builder_abort(sl_mesh_builder *b);
