@@ -7,6 +7,7 @@
  * the cell's precomputed transition record. Cost O(k + m): no search, no sorting.
  */
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -26,6 +27,7 @@ void sl_lod_model_release(sl_lod_model *m)
     free(m->accumulation);
     free(m->error_after);
     free(m->scratch);
+    free(m->split_expansion);
     sl_neighbours_release(&m->neighbours);
     sl_transitions_release(&m->transitions);
     sl_lod_model_init(m);
@@ -49,9 +51,94 @@ static void edge_directions(int e, int dirs[3])
     dirs[2] = sl_direction(off_b[0] + off_c[0], off_b[1] + off_c[1], off_b[2] + off_c[2]);
 }
 
-static int expanded(const uint32_t *expansion_index, uint32_t node, uint32_t k)
+/* Per neighbour direction: the faces (bit f) and edges (bit e) of a cell that must be
+ * split when the neighbour in that direction is expanded (a face neighbour: that face and
+ * its 4 edges; any of the 3 neighbours around an edge: that edge; a corner neighbour:
+ * nothing). The directions that split anything, in increasing order, are the model's
+ * split_expansion slots. */
+typedef struct split_table {
+    uint8_t faces[27];
+    uint16_t edges[27];
+    uint32_t split_dirs;
+    int slot_of_dir[27];
+    uint8_t slot_faces[SL_LOD_SPLIT_DIRS];
+    uint16_t slot_edges[SL_LOD_SPLIT_DIRS];
+} split_table;
+
+static split_table splits;
+static pthread_once_t splits_once = PTHREAD_ONCE_INIT;
+
+static void build_split_table(void)
 {
-    return node != SL_OCTREE_NONE && expansion_index[node] < k;
+    for (int f = 0; f < 6; f++) {
+        int edges[4], d = face_direction(f);
+        sl_mc_face_edges(f, edges);
+        splits.faces[d] |= (uint8_t)(1u << f);
+        for (int i = 0; i < 4; i++)
+            splits.edges[d] |= (uint16_t)(1u << edges[i]);
+    }
+    for (int e = 0; e < 12; e++) {
+        int dirs[3];
+        edge_directions(e, dirs);
+        for (int i = 0; i < 3; i++)
+            splits.edges[dirs[i]] |= (uint16_t)(1u << e);
+    }
+    int slot = 0;
+    for (int d = 0; d < 27; d++) {
+        splits.slot_of_dir[d] = -1;
+        if (!splits.edges[d])
+            continue;
+        splits.split_dirs |= 1u << d;
+        splits.slot_of_dir[d] = slot;
+        splits.slot_faces[slot] = splits.faces[d];
+        splits.slot_edges[slot] = splits.edges[d];
+        slot++;
+    }
+}
+
+static const split_table *split_table_get(void)
+{
+    pthread_once(&splits_once, build_split_table);
+    return &splits;
+}
+
+int sl_lod_model_prepare(sl_lod_model *m)
+{
+    const sl_octree *t = &m->tree;
+    uint32_t n = t->node_count, internal = 0;
+    for (uint32_t i = 0; i < n; i++)
+        if (t->nodes[i].level > 0)
+            internal = i + 1; /* internal nodes come first (sorted by level) */
+    free(m->expansion_index);
+    free(m->scratch);
+    free(m->split_expansion);
+    m->split_nodes = internal;
+    m->expansion_index = malloc((n ? n : 1) * sizeof *m->expansion_index);
+    m->scratch = malloc((t->crossing_count ? t->crossing_count : 1) * sizeof *m->scratch);
+    m->split_expansion = malloc(((size_t)internal * SL_LOD_SPLIT_DIRS + 1) *
+                                sizeof *m->split_expansion);
+    if (!m->expansion_index || !m->scratch || !m->split_expansion)
+        return -1;
+    memset(m->scratch, 0xff, (size_t)t->crossing_count * sizeof *m->scratch);
+    memset(m->expansion_index, 0xff, (size_t)n * sizeof *m->expansion_index);
+    for (uint32_t i = 0; i < m->expansion_count; i++)
+        m->expansion_index[m->lod_array[i]] = i;
+    const split_table *st = split_table_get();
+    const sl_neighbours *nb = &m->neighbours;
+#pragma omp parallel for schedule(static)
+    for (uint32_t i = 0; i < internal; i++) {
+        uint32_t *slots = m->split_expansion + (size_t)i * SL_LOD_SPLIT_DIRS;
+        for (int j = 0; j < SL_LOD_SPLIT_DIRS; j++)
+            slots[j] = SL_OCTREE_NONE;
+        uint32_t mask = nb->mask[i];
+        const uint32_t *index = nb->index + nb->base[i];
+        for (int j = 0; mask; mask &= mask - 1u, j++) {
+            int slot = st->slot_of_dir[__builtin_ctz(mask)];
+            if (slot >= 0)
+                slots[slot] = m->expansion_index[index[j]];
+        }
+    }
+    return 0;
 }
 
 typedef struct record_view {
@@ -148,36 +235,43 @@ static int split_face(const record_view *r, int f, sl_mc_cell *cell,
     return 0;
 }
 
-int sl_lod_cell(const sl_octree *t, const sl_neighbours *nb, const sl_transitions *tr,
-                const uint32_t *expansion_index, uint32_t k, uint32_t n, sl_mc_cell *cell,
-                uint32_t point_crossing[SL_MC_MAX_POINTS])
+/* The node's own signs and edge crossings (its node_crossings run in edge order). */
+static void cell_own(const sl_octree *t, const sl_octree_node *node, sl_mc_cell *cell,
+                     uint32_t point_crossing[SL_MC_MAX_POINTS])
 {
-    const sl_octree_node *node = &t->nodes[n];
     memset(cell, 0, sizeof *cell);
     cell->inside = node->inside;
+    const uint32_t *ids = t->node_crossings + node->crossing_base;
     for (int e = 0; e < 12; e++)
         point_crossing[SL_MC_EDGE_POINT(e)] =
-            (node->edge_mask >> e & 1) ? sl_octree_crossing(t, node, e) : SL_OCTREE_NONE;
-    if (node->level == 0 || tr->base[n] == SL_OCTREE_NONE)
-        return 0; /* a leaf never meets a finer cell */
-    unsigned want_faces = 0, want_edges = 0;
-    for (int f = 0; f < 6; f++)
-        if (expanded(expansion_index, sl_neighbour(nb, n, face_direction(f)), k)) {
-            int edges[4];
-            sl_mc_face_edges(f, edges);
-            want_faces |= 1u << f;
-            for (int i = 0; i < 4; i++)
-                want_edges |= 1u << edges[i];
+            (node->edge_mask >> e & 1) ? *ids++ : SL_OCTREE_NONE;
+}
+
+/* Faces and edges of internal node n to split after k expansions: those next to an
+ * expanded same-level neighbour. Reads only the neighbours in directions that split. */
+static void wanted_splits(const sl_neighbours *nb, const uint32_t *expansion_index, uint32_t k,
+                          uint32_t n, unsigned *want_faces, unsigned *want_edges)
+{
+    const split_table *st = split_table_get();
+    uint32_t mask = nb->mask[n];
+    const uint32_t *index = nb->index + nb->base[n];
+    unsigned faces = 0, edges = 0;
+    for (int j = 0; mask; mask &= mask - 1u, j++) {
+        int d = __builtin_ctz(mask);
+        if ((st->split_dirs >> d & 1) && expansion_index[index[j]] < k) {
+            faces |= st->faces[d];
+            edges |= st->edges[d];
         }
-    for (int e = 0; e < 12; e++) {
-        int dirs[3];
-        edge_directions(e, dirs);
-        for (int i = 0; i < 3; i++)
-            if (expanded(expansion_index, sl_neighbour(nb, n, dirs[i]), k))
-                want_edges |= 1u << e;
     }
-    if (!want_edges)
-        return 0;
+    *want_faces = faces;
+    *want_edges = edges;
+}
+
+/* Applies the wanted splits of internal node n; 0, or -1 on a missing finer crossing. */
+static int apply_splits(const sl_transitions *tr, const sl_octree_node *node, uint32_t n,
+                        unsigned want_faces, unsigned want_edges, sl_mc_cell *cell,
+                        uint32_t point_crossing[SL_MC_MAX_POINTS])
+{
     record_view r;
     decode(tr, n, &r);
     int rc = 0;
@@ -190,55 +284,201 @@ int sl_lod_cell(const sl_octree *t, const sl_neighbours *nb, const sl_transition
     return rc ? -1 : 0;
 }
 
+int sl_lod_cell(const sl_octree *t, const sl_neighbours *nb, const sl_transitions *tr,
+                const uint32_t *expansion_index, uint32_t k, uint32_t n, sl_mc_cell *cell,
+                uint32_t point_crossing[SL_MC_MAX_POINTS])
+{
+    const sl_octree_node *node = &t->nodes[n];
+    cell_own(t, node, cell, point_crossing);
+    if (node->level == 0 || tr->base[n] == SL_OCTREE_NONE)
+        return 0; /* a leaf never meets a finer cell */
+    unsigned want_faces, want_edges;
+    wanted_splits(nb, expansion_index, k, n, &want_faces, &want_edges);
+    if (!want_edges)
+        return 0;
+    return apply_splits(tr, node, n, want_faces, want_edges, cell, point_crossing);
+}
+
+/* Whether internal node n, all of whose corners have one sign, has that sign at every
+ * finer sample its record knows too: then no split can give it a crossing, and it draws
+ * nothing (and lacks nothing) whatever its neighbours. */
+static int uniform_record(const sl_transitions *tr, uint32_t n, int inside)
+{
+    const uint32_t *w = tr->words + tr->base[n];
+    uint32_t mid_known = w[0] & 0xfff, mid_inside = w[0] >> 12 & 0xfff;
+    uint32_t centre_known = w[0] >> 24 & 0x3f, centre_inside = w[1] >> 24 & 0x3f;
+    if (inside)
+        return (mid_inside & mid_known) == mid_known &&
+               (centre_inside & centre_known) == centre_known;
+    return !(mid_inside & mid_known) && !(centre_inside & centre_known);
+}
+
 uint64_t sl_lod_frontier_bound(const sl_lod_model *m, uint32_t k)
 {
     return k == 0 ? 1 : 8 * (uint64_t)k;
 }
 
+/* The frontier after k expansions, one node at a time: the children of lod_array[0..k)
+ * that are not themselves expanded before k (the root when k = 0). Reads the LOD array in
+ * order and asks the memory for the parents and children a few expansions ahead, so the
+ * walk does not wait on each. */
+typedef struct frontier_walk {
+    const sl_lod_model *m;
+    uint32_t k, next;   /* next LOD-array position to open */
+    uint32_t child, end; /* children of the last opened position still to look at */
+} frontier_walk;
+
+#define PARENTS_AHEAD 16 /* LOD-array positions whose parent node is fetched early */
+#define CHILDREN_AHEAD 8 /* ... whose children (nodes, expansion indices) are */
+
+static void frontier_start(frontier_walk *w, const sl_lod_model *m, uint32_t k)
+{
+    w->m = m;
+    w->k = k > m->expansion_count ? m->expansion_count : k;
+    w->next = 0;
+    w->child = 0;
+    w->end = w->k == 0 ? 1 : 0; /* the root alone */
+}
+
+static uint32_t frontier_next(frontier_walk *w)
+{
+    const sl_lod_model *m = w->m;
+    const sl_octree_node *nodes = m->tree.nodes;
+    for (;;) {
+        while (w->child < w->end) {
+            uint32_t c = w->child++;
+            if (m->expansion_index[c] >= w->k)
+                return c;
+        }
+        if (w->next >= w->k)
+            return SL_OCTREE_NONE;
+        uint32_t i = w->next++;
+        if (i + PARENTS_AHEAD < w->k)
+            __builtin_prefetch(&nodes[m->lod_array[i + PARENTS_AHEAD]]);
+        if (i + CHILDREN_AHEAD < w->k) {
+            const sl_octree_node *q = &nodes[m->lod_array[i + CHILDREN_AHEAD]];
+            uint32_t last = q->first_child + (uint32_t)__builtin_popcount(q->child_mask) - 1u;
+            __builtin_prefetch(&nodes[q->first_child]);
+            __builtin_prefetch(&nodes[last]);
+            __builtin_prefetch(&m->expansion_index[q->first_child]);
+        }
+        const sl_octree_node *p = &nodes[m->lod_array[i]];
+        w->child = p->first_child;
+        w->end = p->first_child + (uint32_t)__builtin_popcount(p->child_mask);
+    }
+}
+
 uint64_t sl_lod_frontier(const sl_lod_model *m, uint32_t k, uint32_t *cells)
 {
-    if (k > m->expansion_count)
-        k = m->expansion_count;
-    if (k == 0) {
-        cells[0] = 0; /* the root */
-        return 1;
-    }
+    frontier_walk w;
+    frontier_start(&w, m, k);
     uint64_t count = 0;
-    for (uint32_t i = 0; i < k; i++) {
-        const sl_octree_node *p = &m->tree.nodes[m->lod_array[i]];
-        int kids = __builtin_popcount(p->child_mask);
-        for (int c = 0; c < kids; c++) {
-            uint32_t child = p->first_child + (uint32_t)c;
-            if (m->expansion_index[child] >= k)
-                cells[count++] = child;
-        }
-    }
+    for (uint32_t n; (n = frontier_next(&w)) != SL_OCTREE_NONE;)
+        cells[count++] = n;
     return count;
 }
+
+/* Draws frontier node n into the builder; returns 1 when a split lacked data (a crack). */
+static int draw_cell(sl_lod_model *m, uint32_t k, uint32_t n, const split_table *st,
+                     sl_mesh_builder *b)
+{
+    const sl_octree *t = &m->tree;
+    const sl_octree_node *node = &t->nodes[n];
+    /* (A model read from a file has a transition record for every internal node, and
+     * sl_transitions_build makes one for each: the level says whether there is one.) */
+    int leaf = node->level == 0;
+    /* A cell whose corners share one sign draws nothing unless a split brings in a finer
+     * sample of the other sign: skip it without looking at its neighbours. */
+    if (!node->edge_mask && (leaf || uniform_record(&m->transitions, n, node->inside)))
+        return 0;
+    sl_mc_cell cell;
+    uint32_t point_crossing[SL_MC_MAX_POINTS];
+    cell_own(t, node, &cell, point_crossing);
+    unsigned want_faces = 0, want_edges = 0;
+    if (!leaf) { /* the faces and edges next to an expanded neighbour */
+        const uint32_t *slots = m->split_expansion + (size_t)n * SL_LOD_SPLIT_DIRS;
+        for (int j = 0; j < SL_LOD_SPLIT_DIRS; j++)
+            if (slots[j] < k) {
+                want_faces |= st->slot_faces[j];
+                want_edges |= st->slot_edges[j];
+            }
+    }
+    if (!want_edges) { /* no finer neighbour: the 256-case table is this cell's drawing */
+        const uint8_t *row = sl_lod_uniform_cells[cell.inside];
+        sl_mesh_builder_add_triangles(b, row[0], row + 1, point_crossing);
+        return 0;
+    }
+    int rc = apply_splits(&m->transitions, node, n, want_faces, want_edges, &cell,
+                          point_crossing);
+    sl_mc_triangles tri;
+    sl_mc_triangulate(&cell, &tri);
+    sl_mesh_builder_add_cell(b, &tri, point_crossing);
+    return rc ? 1 : 0;
+}
+
+/* Asks the memory for what drawing frontier node n reads first: its crossing ids and, for
+ * an internal node, its neighbours' expansion indices and its transition record's place. */
+static void fetch_cell(const sl_lod_model *m, uint32_t n)
+{
+    const sl_octree_node *node = &m->tree.nodes[n];
+    __builtin_prefetch(&m->tree.node_crossings[node->crossing_base]);
+    if (node->level > 0) {
+        const uint32_t *slots = m->split_expansion + (size_t)n * SL_LOD_SPLIT_DIRS;
+        __builtin_prefetch(slots);
+        __builtin_prefetch(slots + SL_LOD_SPLIT_DIRS - 1);
+        __builtin_prefetch(&m->transitions.base[n]);
+    }
+}
+
+/* ... and, once those have come, what it reads next: the crossings' vertex map entries and
+ * positions, and the transition record. */
+static void fetch_cell_data(const sl_lod_model *m, uint32_t n)
+{
+    const sl_octree *t = &m->tree;
+    const sl_octree_node *node = &t->nodes[n];
+    const uint32_t *ids = t->node_crossings + node->crossing_base;
+    for (int i = 0, count = __builtin_popcount(node->edge_mask); i < count; i++) {
+        __builtin_prefetch(&m->scratch[ids[i]]);
+        __builtin_prefetch(&t->crossing_position[3 * (size_t)ids[i]]);
+    }
+    if (node->level > 0)
+        __builtin_prefetch(&m->transitions.words[m->transitions.base[n]]);
+}
+
+#define CELLS_AHEAD 8 /* frontier cells fetched before they are drawn (a power of 2) */
 
 int sl_lod_generate(sl_lod_model *m, uint32_t k, sl_lod_mesh *out, uint64_t *cracks)
 {
     memset(out, 0, sizeof *out);
     if (k > m->expansion_count)
         k = m->expansion_count;
-    uint32_t *cells = malloc(sl_lod_frontier_bound(m, k) * sizeof *cells);
     sl_mesh_builder b;
-    if (!cells || sl_mesh_builder_init(&b, &m->tree, m->scratch)) {
-        free(cells);
+    if (sl_mesh_builder_init(&b, &m->tree, m->scratch))
         return -1;
+    /* The accumulation table says how many triangles this mesh has: size the output once
+     * (it is only a hint; the builder still grows if a model's table were off). */
+    sl_mesh_builder_reserve(&b, m->accumulation[k]);
+    const split_table *st = split_table_get();
+    uint64_t incomplete = 0;
+    /* The frontier in the order of sl_lod_frontier, each cell drawn CELLS_AHEAD cells after
+     * it is found: in between, its data is fetched in two steps. */
+    frontier_walk w;
+    frontier_start(&w, m, k);
+    uint32_t ring[2 * CELLS_AHEAD], mask = 2 * CELLS_AHEAD - 1;
+    for (uint32_t j = 0; j < CELLS_AHEAD; j++) {
+        ring[j] = frontier_next(&w);
+        if (ring[j] != SL_OCTREE_NONE)
+            fetch_cell(m, ring[j]);
     }
-    uint64_t count = sl_lod_frontier(m, k, cells), incomplete = 0;
-    for (uint64_t i = 0; i < count; i++) {
-        sl_mc_cell cell;
-        uint32_t point_crossing[SL_MC_MAX_POINTS];
-        if (sl_lod_cell(&m->tree, &m->neighbours, &m->transitions, m->expansion_index, k,
-                        cells[i], &cell, point_crossing))
-            incomplete++;
-        sl_mc_triangles tri;
-        sl_mc_triangulate(&cell, &tri);
-        sl_mesh_builder_add_cell(&b, &tri, point_crossing);
+    for (uint32_t pos = 0; ring[pos & mask] != SL_OCTREE_NONE; pos++) {
+        uint32_t ahead = frontier_next(&w), half = ring[(pos + CELLS_AHEAD / 2) & mask];
+        ring[(pos + CELLS_AHEAD) & mask] = ahead;
+        if (ahead != SL_OCTREE_NONE)
+            fetch_cell(m, ahead);
+        if (half != SL_OCTREE_NONE)
+            fetch_cell_data(m, half);
+        incomplete += (uint64_t)draw_cell(m, k, ring[pos & mask], st, &b);
     }
-    free(cells);
     if (cracks)
         *cracks = incomplete;
     return sl_mesh_builder_finish(&b, out);

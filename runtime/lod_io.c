@@ -50,24 +50,16 @@ static int64_t expansion_delta(const sl_lod_model *m, uint32_t i)
 
 int sl_lod_model_finish(sl_lod_model *m, const float *node_error, sl_error *err)
 {
-    uint32_t n = m->tree.node_count, e = m->expansion_count;
-    free(m->expansion_index);
+    uint32_t e = m->expansion_count;
     free(m->accumulation);
     free(m->error_after);
-    free(m->scratch);
-    m->expansion_index = malloc((size_t)n * sizeof *m->expansion_index);
     m->accumulation = malloc(((size_t)e + 1) * sizeof *m->accumulation);
     m->error_after = malloc(((size_t)e + 1) * sizeof *m->error_after);
-    m->scratch = malloc((m->tree.crossing_count ? m->tree.crossing_count : 1) * sizeof *m->scratch);
     int64_t *delta = malloc(((size_t)e + 1) * sizeof *delta);
-    if (!m->expansion_index || !m->accumulation || !m->error_after || !m->scratch || !delta) {
+    if (!m->accumulation || !m->error_after || !delta || sl_lod_model_prepare(m)) {
         free(delta);
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     }
-    memset(m->scratch, 0xff, (size_t)m->tree.crossing_count * sizeof *m->scratch);
-    memset(m->expansion_index, 0xff, (size_t)n * sizeof *m->expansion_index);
-    for (uint32_t i = 0; i < e; i++)
-        m->expansion_index[m->lod_array[i]] = i;
 #pragma omp parallel for schedule(dynamic, 256)
     for (uint32_t i = 0; i < e; i++)
         delta[i] = expansion_delta(m, i);
@@ -218,20 +210,9 @@ int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err)
     if (rc == 0)
         rc = parse_lod(out, (const unsigned char *)body + used, size - used, path, err);
     free(body);
-    if (rc == 0) {
-        out->expansion_index = malloc((size_t)out->tree.node_count * sizeof *out->expansion_index);
-        out->scratch = malloc((out->tree.crossing_count ? out->tree.crossing_count : 1) *
-                              sizeof *out->scratch);
-        if (!out->expansion_index || !out->scratch)
-            rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
-    }
-    if (rc == 0) {
-        memset(out->expansion_index, 0xff, (size_t)out->tree.node_count * sizeof(uint32_t));
-        for (uint32_t i = 0; i < out->expansion_count; i++)
-            out->expansion_index[out->lod_array[i]] = i;
-        memset(out->scratch, 0xff, (size_t)out->tree.crossing_count * sizeof(uint32_t));
-    } else {
+    if (rc == 0 && sl_lod_model_prepare(out))
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    if (rc)
         sl_lod_model_release(out);
-    }
     return rc;
 }

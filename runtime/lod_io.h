@@ -22,7 +22,7 @@
 
 int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_version,
                        sl_error *err);
-/* Loads and validates; prepares expansion_index and the extraction scratch. */
+/* Loads and validates; derives what generation needs (sl_lod_model_prepare). */
 int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err);
 
 /* Completes a model whose tree, lod_array, neighbours and transitions are set: derives

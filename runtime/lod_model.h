@@ -60,9 +60,22 @@ typedef struct sl_lod_model {
     sl_neighbours neighbours;
     sl_transitions transitions;
     uint32_t *scratch;       /* crossing -> vertex map for O(m) extraction (all NONE) */
+    /* Derived at load (sl_lod_model_prepare), for generation: per internal node n (n <
+     * split_nodes), SL_LOD_SPLIT_DIRS entries at n * SL_LOD_SPLIT_DIRS, the expansion index
+     * of its same-level neighbour in each face and edge direction (NONE when absent), so a
+     * cell learns which of its faces and edges meet a finer cell from one cache line or two
+     * instead of a lookup per neighbour. */
+    uint32_t split_nodes;
+    uint32_t *split_expansion;
 } sl_lod_model;
 
+#define SL_LOD_SPLIT_DIRS 18 /* 6 face and 12 edge neighbours: those that split a cell */
+
 void sl_lod_model_init(sl_lod_model *m);
+/* Derives what generation needs besides the file's tables: expansion_index, the
+ * extraction scratch and split_expansion. Needs the tree, lod_array and neighbours.
+ * Returns -1 when out of memory. */
+int sl_lod_model_prepare(sl_lod_model *m);
 void sl_lod_model_release(sl_lod_model *m);
 
 /* Neighbour in direction d of node n, or SL_OCTREE_NONE. */
@@ -73,6 +86,11 @@ static inline uint32_t sl_neighbour(const sl_neighbours *nb, uint32_t n, int d)
         return SL_OCTREE_NONE;
     return nb->index[nb->base[n] + (uint32_t)__builtin_popcount(mask & ((1u << d) - 1u))];
 }
+
+/* The uniform cell table (sl_mc_uniform_table) as constant data: row c holds the triangle
+ * count of corner configuration c, then 3 edge ids per triangle (at most 5 triangles). */
+#define SL_LOD_UNIFORM_ROW 16
+extern const uint8_t sl_lod_uniform_cells[256][SL_LOD_UNIFORM_ROW];
 
 /* Builds the neighbour table of every node (O(n log n) lookups). Returns -1 on OOM. */
 int sl_neighbours_build(const sl_octree *t, sl_neighbours *out);
