@@ -110,21 +110,23 @@ static void pair_runs(const walk *w, links *l)
 {
     int n = w->count;
     unsigned in = w->inside, all = (1u << n) - 1u;
-    if (in == all)
-        return; /* all inside: no crossing */
-    if (in == 0)
-        return; /* all outside: no crossing either */
+    if (in == 0 || in == all)
+        return; /* one sign all round: no crossing */
+    /* Sample i is followed by sample i + 1 (mod n): entries are pieces from an outside to
+     * an inside sample, exits the reverse. From the first outside sample on, each exit
+     * closes the run the last entry opened. */
+    unsigned after = (in >> 1 | in << (n - 1)) & all;
+    unsigned entries = ~in & after & all, both = entries | (in & ~after);
     int start = __builtin_ctz(~in & all), entry = -1;
-    for (int step = 0, i = start; step < n; step++) {
-        int j = i + 1 == n ? 0 : i + 1;
-        unsigned a = in >> i & 1, b = in >> j & 1;
-        if (!a && b)
+    for (unsigned r = (both >> start | both << (n - start)) & all; r; r &= r - 1u) {
+        int i = __builtin_ctz(r) + start;
+        i -= i >= n ? n : 0;
+        if (entries >> i & 1) {
             entry = w->piece[i];
-        else if (a && !b) { /* exit -> entry of the same inside run */
+        } else {
             l->next[w->piece[i]] = (int8_t)entry;
             l->from |= 1ull << w->piece[i];
         }
-        i = j;
     }
 }
 
