@@ -190,8 +190,10 @@ static partial sample_triangles(const sl_mesh *m, uint64_t first, uint64_t end, 
     return acc;
 }
 
+/* The used vertices of `src` in [first, end); `in_means`: they also count towards mean
+ * and rms (a point cloud's only samples), else towards the maximum alone. */
 static partial sample_vertices(const surface *src, uint64_t first, uint64_t end,
-                               const sl_triangle_bvh *target)
+                               const sl_triangle_bvh *target, int in_means)
 {
     partial acc = {0.0, 0.0, 0.0, 0};
     uint32_t hint = UINT32_MAX;
@@ -203,7 +205,7 @@ static partial sample_vertices(const surface *src, uint64_t first, uint64_t end,
         sl_closest q;
         sl_triangle_bvh_closest(target, p, hint, &q);
         hint = q.triangle;
-        accumulate(&acc, q.distance_sq, 0);
+        accumulate(&acc, q.distance_sq, in_means);
     }
     return acc;
 }
@@ -267,7 +269,7 @@ static int measure_side(const surface *src, const sl_triangle_bvh *target,
         } else {
             uint64_t v = (c - tri_chunks) * CHUNK;
             uint64_t end = v + CHUNK < m->vertex_count ? v + CHUNK : m->vertex_count;
-            parts[c] = sample_vertices(src, v, end, target);
+            parts[c] = sample_vertices(src, v, end, target, 0);
         }
     }
     free(cum);
@@ -315,6 +317,59 @@ static void fill_out(sl_mesh_distance *out, const surface *a)
     out->fraction = figures_over(out->world, out->diagonal);
 }
 
+/* A point cloud as A: its bounds, every point finite, every point flagged used. */
+static int check_points(surface *sa, const sl_mesh *a, sl_error *err)
+{
+    sa->mesh = a;
+    sa->name = "A";
+    if (a->vertex_count == 0)
+        return sl_error_set(err, SL_E_BADINPUT, 0, NULL, "mesh A: no triangles and no points");
+    sa->used = malloc(a->vertex_count);
+    if (!sa->used)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "vertex flags of mesh A");
+    memset(sa->used, 1, a->vertex_count);
+    for (int i = 0; i < 3; i++)
+        sa->lo[i] = sa->hi[i] = a->positions[i];
+    for (uint64_t v = 0; v < a->vertex_count; v++)
+        for (int i = 0; i < 3; i++) {
+            double x = a->positions[3 * v + i];
+            if (!isfinite(x))
+                return sl_error_set(err, SL_E_BADINPUT, 0, NULL,
+                                    "mesh A: point %llu has a non-finite coordinate",
+                                    (unsigned long long)v);
+            sa->lo[i] = fmin(sa->lo[i], x);
+            sa->hi[i] = fmax(sa->hi[i], x);
+        }
+    return SL_OK;
+}
+
+/* Every point of `src` against `target`; mean and rms over the points. */
+static int measure_points(const surface *src, const sl_triangle_bvh *target,
+                          sl_distance_side *side, sl_error *err)
+{
+    uint64_t n = src->mesh->vertex_count, chunks = chunks_of(n);
+    partial *parts = malloc(chunks * sizeof *parts);
+    if (!parts)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "sample bookkeeping of mesh A");
+#pragma omp parallel for schedule(dynamic, 1)
+    for (uint64_t c = 0; c < chunks; c++)
+        parts[c] = sample_vertices(src, c * CHUNK, (c + 1) * CHUNK < n ? (c + 1) * CHUNK : n,
+                                   target, 1);
+    partial all = {0.0, 0.0, 0.0, 0};
+    for (uint64_t c = 0; c < chunks; c++) {
+        all.max = fmax(all.max, parts[c].max);
+        all.sum += parts[c].sum;
+        all.sum_sq += parts[c].sum_sq;
+        all.count += parts[c].count;
+    }
+    free(parts);
+    side->world.hausdorff = all.max;
+    side->world.mean = all.sum / (double)all.count;
+    side->world.rms = sqrt(all.sum_sq / (double)all.count);
+    side->vertex_samples = all.count;
+    return SL_OK;
+}
+
 int sl_mesh_distance_compute(const sl_mesh *a, const sl_mesh *b,
                              const sl_mesh_distance_config *cfg, sl_mesh_distance *out,
                              sl_progress *progress, sl_error *err)
@@ -328,11 +383,23 @@ int sl_mesh_distance_compute(const sl_mesh *a, const sl_mesh *b,
 
     surface sa = {0}, sb = {0};
     sl_triangle_bvh bvh_a = {0}, bvh_b = {0};
-    int rc = check_surface(&sa, a, "A", NULL, err);
+    out->a_is_points = a->triangle_count == 0;
+    int rc = out->a_is_points ? check_points(&sa, a, err) : check_surface(&sa, a, "A", NULL, err);
     if (rc == SL_OK)
         rc = check_surface(&sb, b, "B", NULL, err);
     if (rc == SL_OK)
         rc = sl_triangle_bvh_build(&bvh_b, b, err);
+    if (rc == SL_OK && out->a_is_points) {
+        rc = measure_points(&sa, &bvh_b, &out->a_to_b, err);
+        if (rc == SL_OK && sl_progress_interrupted(progress))
+            rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "distance of points A");
+        sl_triangle_bvh_release(&bvh_b);
+        if (rc == SL_OK)
+            fill_out(out, &sa);
+        free(sa.used);
+        free(sb.used);
+        return rc;
+    }
     if (rc == SL_OK)
         rc = measure_side(&sa, &bvh_b, cfg, &out->a_to_b, progress, err);
     sl_triangle_bvh_release(&bvh_b);

@@ -57,6 +57,9 @@ typedef struct sl_distance_side {
 
 typedef struct sl_mesh_distance {
     double diagonal;               /* A's bounding-box diagonal, world */
+    int a_is_points;               /* A had no triangles: a_to_b is from its points (mean
+                                      and rms over them), b_to_a is not measured (0), and
+                                      the symmetric figures are a_to_b's */
     sl_distance_side a_to_b, b_to_a;
     sl_distance_figures world;     /* symmetric: each figure the max of both sides */
     sl_distance_figures fraction;  /* the same / diagonal */
@@ -74,7 +77,9 @@ typedef struct sl_mesh_topology {
 
 /* Distances between the surfaces of `a` and `b`. Both need at least one triangle of
  * nonzero area and finite coordinates at every vertex a triangle uses, else
- * SL_E_BADINPUT with a message naming the mesh ("A" or "B") and the cause; `cfg` may be
+ * SL_E_BADINPUT with a message naming the mesh ("A" or "B") and the cause -- except that
+ * A may be a point cloud (no triangles, at least one point, all finite): then only its
+ * points' distances to B are measured (out->a_is_points); `cfg` may be
  * NULL for the defaults; `progress` (may be NULL) is polled for an interrupt
  * (SL_E_INTERRUPTED). Also fails with SL_E_NOMEM, SL_E_LIMIT (> 2^32 - 1 triangles). */
 int sl_mesh_distance_compute(const sl_mesh *a, const sl_mesh *b,

@@ -19,7 +19,8 @@ static const char compare_usage[] =
     "usage: scanlod compare A.ply B.ply [--samples N] [--seed S] [--json]\n"
     "  Surface distance from B to A and back: symmetric and one-sided Hausdorff, RMS and\n"
     "  mean, as fractions of A's bounding-box diagonal; B's boundary and non-manifold\n"
-    "  edges and whether B is watertight.\n"
+    "  edges and whether B is watertight. A may be a point cloud (a scan without faces):\n"
+    "  then the distances are from its points to B only.\n"
     "  --samples N  area samples on each mesh, vertices come on top (default 1000000)\n"
     "  --seed S     sample positions (default 1)\n"
     "  --json       one JSON object instead of the table\n";
@@ -132,8 +133,10 @@ static int print_json(const compare_args *args, const sl_mesh *a, const sl_mesh 
     sl_json_double(&j, "hausdorff_world", d->world.hausdorff);
     sl_json_double(&j, "rms_world", d->world.rms);
     sl_json_double(&j, "mean_world", d->world.mean);
+    sl_json_bool(&j, "a_is_points", d->a_is_points);
     json_figures(&j, "a_to_b", &d->a_to_b);
-    json_figures(&j, "b_to_a", &d->b_to_a);
+    if (!d->a_is_points)
+        json_figures(&j, "b_to_a", &d->b_to_a);
     sl_json_object_begin(&j, "b_topology");
     sl_json_u64(&j, "welded_vertices", topo->welded_vertices);
     sl_json_u64(&j, "edges", topo->edges);
@@ -169,15 +172,22 @@ static void print_table(const compare_args *args, const sl_mesh *a, const sl_mes
                         const sl_mesh_distance *d, const sl_mesh_topology *topo,
                         const double seconds[2])
 {
-    printf("A %s: %" PRIu64 " triangles, bounding-box diagonal %.9g\n", args->path_a,
-           a->triangle_count, d->diagonal);
+    if (d->a_is_points)
+        printf("A %s: %" PRIu64 " points (no triangles: distances from its points), "
+               "bounding-box diagonal %.9g\n", args->path_a, a->vertex_count, d->diagonal);
+    else
+        printf("A %s: %" PRIu64 " triangles, bounding-box diagonal %.9g\n", args->path_a,
+               a->triangle_count, d->diagonal);
     printf("B %s: %" PRIu64 " triangles\n", args->path_b, b->triangle_count);
     printf("distance as a fraction of A's diagonal:\n");
     printf("  %-10s %12s %12s %12s\n", "", "hausdorff", "rms", "mean");
     printf("  %-10s %12.6g %12.6g %12.6g\n", "symmetric", d->fraction.hausdorff,
            d->fraction.rms, d->fraction.mean);
     print_side("A to B", &d->a_to_b);
-    print_side("B to A", &d->b_to_a);
+    if (d->a_is_points)
+        printf("  %-10s (not measured: A is a point cloud)\n", "B to A");
+    else
+        print_side("B to A", &d->b_to_a);
     printf("B edges: %" PRIu64 " boundary, %" PRIu64 " non-manifold, %" PRIu64
            " degenerate triangles (after welding equal positions)\n",
            topo->boundary_edges, topo->nonmanifold_edges, topo->degenerate_triangles);
@@ -185,10 +195,12 @@ static void print_table(const compare_args *args, const sl_mesh *a, const sl_mes
     printf("time: %.3f s reading, %.3f s comparing\n", seconds[0], seconds[1]);
 }
 
-static int read_surface(const char *path, sl_mesh *m, sl_error *err)
+/* B must be a surface; A may also be a point cloud (no triangles at all), whose points
+ * the distance code checks. */
+static int read_surface(const char *path, int points_allowed, sl_mesh *m, sl_error *err)
 {
     int rc = sl_ply_read(path, NULL, m, NULL, NULL, err);
-    if (rc == SL_OK)
+    if (rc == SL_OK && !(points_allowed && m->triangle_count == 0))
         rc = sl_mesh_check_surface(m, path, err);
     return rc;
 }
@@ -208,14 +220,18 @@ int sl_cmd_compare(int argc, char **argv)
     sl_mesh_distance d;
     sl_mesh_topology topo;
     double seconds[2], start = seconds_now();
-    rc = read_surface(args.path_a, &a, &err);
+    rc = read_surface(args.path_a, 1, &a, &err);
     if (rc == SL_OK)
-        rc = read_surface(args.path_b, &b, &err);
+        rc = read_surface(args.path_b, 0, &b, &err);
     int reading = rc != SL_OK;
     seconds[0] = seconds_now() - start;
     start = seconds_now();
-    if (rc == SL_OK)
+    if (rc == SL_OK) {
         rc = sl_mesh_distance_compute(&a, &b, &args.cfg, &d, NULL, &err);
+        if (rc == SL_E_BADINPUT && !err.file[0]) /* "mesh A: ..." names the file */
+            snprintf(err.file, sizeof err.file, "%s",
+                     strncmp(err.message, "mesh B", 6) == 0 ? args.path_b : args.path_a);
+    }
     if (rc == SL_OK)
         rc = sl_mesh_topology_compute(&b, &topo, &err);
     seconds[1] = seconds_now() - start;

@@ -260,8 +260,60 @@ static void test_bad_meshes(void)
     sl_mesh_release(&good);
 }
 
+/* A point cloud as A: distances from its points only, mean and rms over them. */
+static void test_points_as_a(void)
+{
+    static const float pts[] = {0.5f, 0.5f, 1.2f, 0.5f, 0.5f, 0.5f, 2, 0, 0};
+    sl_mesh cube, cloud;
+    make_mesh(&cube, cube_pos, 8, cube_tri, 12);
+    make_mesh(&cloud, pts, 3, cube_tri, 0);
+    sl_mesh_distance d;
+    sl_error err;
+    sl_error_init(&err);
+    CHECK(sl_mesh_distance_compute(&cloud, &cube, NULL, &d, NULL, &err) == SL_OK);
+    CHECK(d.a_is_points);
+    CHECK_EQ_U64(d.a_to_b.vertex_samples, 3);
+    CHECK_EQ_U64(d.a_to_b.area_samples, 0);
+    CHECK_NEAR(d.a_to_b.world.hausdorff, 1.0, 1e-6);
+    CHECK_NEAR(d.a_to_b.world.mean, (0.2 + 0.5 + 1.0) / 3, 1e-6);
+    CHECK_NEAR(d.a_to_b.world.rms, sqrt((0.04 + 0.25 + 1.0) / 3), 1e-6);
+    CHECK_NEAR(d.world.hausdorff, 1.0, 1e-6); /* symmetric = the one side measured */
+    CHECK_NEAR(d.diagonal, sqrt(1.5 * 1.5 + 0.5 * 0.5 + 1.2 * 1.2), 1e-6);
+    cloud.positions[4] = NAN;
+    CHECK(sl_mesh_distance_compute(&cloud, &cube, NULL, &d, NULL, &err) == SL_E_BADINPUT);
+    CHECK(strstr(err.message, "mesh A: point 1 has a non-finite coordinate") != NULL);
+    sl_mesh_release(&cloud);
+    sl_mesh_release(&cube);
+}
+
+/* The Voronoi region of a closest point (what signed distance needs). */
+static void test_closest_feature(void)
+{
+    const double a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, c[3] = {0, 1, 0};
+    static const struct { double p[3]; int feature; } cases[] = {
+        {{0.2, 0.2, 1}, SL_FEATURE_FACE},     {{-1, -1, 0.5}, SL_FEATURE_VERTEX_A},
+        {{2, -0.1, 0}, SL_FEATURE_VERTEX_B},  {{-0.1, 3, 1}, SL_FEATURE_VERTEX_C},
+        {{0.5, -1, 0.2}, SL_FEATURE_EDGE_AB}, {{1, 1, -0.5}, SL_FEATURE_EDGE_BC},
+        {{-1, 0.5, 0.3}, SL_FEATURE_EDGE_CA}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        double q[3];
+        int feature = -1;
+        sl_closest_point_triangle_feature(cases[i].p, a, b, c, q, &feature);
+        CHECK_MSG(feature == cases[i].feature, "case %zu: feature %d, want %d", i, feature,
+                  cases[i].feature);
+    }
+    /* a sliver (collinear corners): the closest point is on an edge or a corner */
+    const double s[3] = {2, 0, 0}, p[3] = {3, 1, 0};
+    double q[3];
+    int feature = -1;
+    sl_closest_point_triangle_feature(p, a, b, s, q, &feature);
+    CHECK(feature == SL_FEATURE_VERTEX_C && q[0] == 2 && q[1] == 0);
+}
+
 int main(void)
 {
+    test_points_as_a();
+    test_closest_feature();
     test_closest_point();
     test_bvh_matches_brute_force();
     test_spheres();
