@@ -124,6 +124,12 @@ int sl_lod_model_prepare(sl_lod_model *m)
     for (uint32_t i = 0; i < m->expansion_count; i++)
         m->expansion_index[m->lod_array[i]] = i;
     const split_table *st = split_table_get();
+    /* The triangulator builds its own tables on first use: let that be now, at load,
+     * rather than in the first extraction. */
+    sl_mc_cell empty;
+    sl_mc_triangles none;
+    memset(&empty, 0, sizeof empty);
+    sl_mc_triangulate(&empty, &none);
     const sl_neighbours *nb = &m->neighbours;
 #pragma omp parallel for schedule(static)
     for (uint32_t i = 0; i < internal; i++) {
