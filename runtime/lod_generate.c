@@ -253,6 +253,78 @@ static void cell_own(const sl_octree *t, const sl_octree_node *node, sl_mc_cell 
             (node->edge_mask >> e & 1) ? *ids++ : SL_OCTREE_NONE;
 }
 
+/* Gives node n's crossings (its own and its transition record's) the next new ids. */
+static void number_crossings(const sl_lod_model *m, uint32_t n, uint32_t *new_id, uint32_t *next)
+{
+    const sl_octree *t = &m->tree;
+    const sl_octree_node *node = &t->nodes[n];
+    const uint32_t *ids = t->node_crossings + node->crossing_base;
+    for (int i = 0, count = __builtin_popcount(node->edge_mask); i < count; i++)
+        if (new_id[ids[i]] == SL_OCTREE_NONE)
+            new_id[ids[i]] = (*next)++;
+    if (node->level == 0 || m->transitions.base[n] == SL_OCTREE_NONE)
+        return;
+    const uint32_t *w = m->transitions.words + m->transitions.base[n];
+    int count = __builtin_popcount(w[1] & 0xffffff) + __builtin_popcount(w[2] & 0xffffff);
+    for (int i = 0; i < count; i++)
+        if (new_id[w[3 + i]] == SL_OCTREE_NONE)
+            new_id[w[3 + i]] = (*next)++;
+}
+
+int sl_lod_model_localize(sl_lod_model *m)
+{
+    sl_octree *t = &m->tree;
+    uint32_t c = t->crossing_count, next = 0;
+    uint32_t *new_id = malloc((c ? c : 1) * sizeof *new_id);
+    float *position = malloc((c ? c : 1) * 3 * sizeof *position);
+    uint8_t *color = t->crossing_color ? malloc((c ? c : 1) * 4) : NULL;
+    if (!new_id || !position || (t->crossing_color && !color)) {
+        free(new_id);
+        free(position);
+        free(color);
+        return -1;
+    }
+    memset(new_id, 0xff, (size_t)c * sizeof *new_id);
+    /* First the frontier nodes' crossings in the order the LOD array reaches them, then
+     * any other node's, then the crossings no node names. */
+    if (t->node_count)
+        number_crossings(m, 0, new_id, &next);
+    for (uint32_t i = 0; i < m->expansion_count; i++) {
+        const sl_octree_node *p = &t->nodes[m->lod_array[i]];
+        for (int k = 0; k < __builtin_popcount(p->child_mask); k++)
+            number_crossings(m, p->first_child + (uint32_t)k, new_id, &next);
+    }
+    for (uint32_t n = 0; n < t->node_count; n++)
+        number_crossings(m, n, new_id, &next);
+    for (uint32_t i = 0; i < c; i++)
+        if (new_id[i] == SL_OCTREE_NONE)
+            new_id[i] = next++;
+    for (uint32_t i = 0; i < c; i++) {
+        memcpy(position + 3 * (size_t)new_id[i], t->crossing_position + 3 * (size_t)i,
+               3 * sizeof *position);
+        if (color)
+            memcpy(color + 4 * (size_t)new_id[i], t->crossing_color + 4 * (size_t)i, 4);
+    }
+    for (uint64_t i = 0; i < t->node_crossing_count; i++)
+        t->node_crossings[i] = new_id[t->node_crossings[i]];
+    for (uint32_t n = 0; n < t->node_count; n++) {
+        if (t->nodes[n].level == 0 || m->transitions.base[n] == SL_OCTREE_NONE)
+            continue;
+        uint32_t *w = m->transitions.words + m->transitions.base[n];
+        int count = __builtin_popcount(w[1] & 0xffffff) + __builtin_popcount(w[2] & 0xffffff);
+        for (int i = 0; i < count; i++)
+            w[3 + i] = new_id[w[3 + i]];
+    }
+    free(t->crossing_position);
+    t->crossing_position = position;
+    if (color) {
+        free(t->crossing_color);
+        t->crossing_color = color;
+    }
+    free(new_id);
+    return 0;
+}
+
 /* Faces and edges of internal node n to split after k expansions: those next to an
  * expanded same-level neighbour. Reads only the neighbours in directions that split. */
 static void wanted_splits(const sl_neighbours *nb, const uint32_t *expansion_index, uint32_t k,

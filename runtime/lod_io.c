@@ -210,7 +210,7 @@ int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err)
     if (rc == 0)
         rc = parse_lod(out, (const unsigned char *)body + used, size - used, path, err);
     free(body);
-    if (rc == 0 && sl_lod_model_prepare(out))
+    if (rc == 0 && (sl_lod_model_localize(out) || sl_lod_model_prepare(out)))
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
     if (rc)
         sl_lod_model_release(out);

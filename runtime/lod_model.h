@@ -76,6 +76,11 @@ void sl_lod_model_init(sl_lod_model *m);
  * extraction scratch and split_expansion. Needs the tree, lod_array and neighbours.
  * Returns -1 when out of memory. */
 int sl_lod_model_prepare(sl_lod_model *m);
+/* Renumbers the crossings in the order the LOD array first reaches them (then the rest),
+ * so a coarse level's vertices are read from one compact stretch of the crossing table
+ * rather than from all over it. Generated meshes do not change (vertices are numbered by
+ * first use, not by crossing id). Returns -1 when out of memory (model unchanged). */
+int sl_lod_model_localize(sl_lod_model *m);
 void sl_lod_model_release(sl_lod_model *m);
 
 /* Neighbour in direction d of node n, or SL_OCTREE_NONE. */
