@@ -63,6 +63,7 @@ typedef struct split_table {
     int slot_of_dir[27];
     uint8_t slot_faces[SL_LOD_SPLIT_DIRS];
     uint16_t slot_edges[SL_LOD_SPLIT_DIRS];
+    uint8_t edge_c0[12], edge_c1[12], face_edges[6][4]; /* mc_cube.h numbering */
 } split_table;
 
 static split_table splits;
@@ -82,6 +83,16 @@ static void build_split_table(void)
         edge_directions(e, dirs);
         for (int i = 0; i < 3; i++)
             splits.edges[dirs[i]] |= (uint16_t)(1u << e);
+    }
+    for (int e = 0; e < 12; e++) {
+        splits.edge_c0[e] = (uint8_t)sl_mc_edge_c0(e);
+        splits.edge_c1[e] = (uint8_t)sl_mc_edge_c1(e);
+    }
+    for (int f = 0; f < 6; f++) {
+        int edges[4];
+        sl_mc_face_edges(f, edges);
+        for (int i = 0; i < 4; i++)
+            splits.face_edges[f][i] = (uint8_t)edges[i];
     }
     int slot = 0;
     for (int d = 0; d < 27; d++) {
@@ -164,19 +175,27 @@ static void decode(const sl_transitions *tr, uint32_t n, record_view *r)
     r->ids = w + 3;
 }
 
+/* Set bits of a 24-bit mask (inline: without -mpopcnt __builtin_popcount is a call). */
+static inline uint32_t bits24(uint32_t x)
+{
+    x = x - (x >> 1 & 0x555555u);
+    x = (x & 0x333333u) + (x >> 2 & 0x333333u);
+    x = (x + (x >> 4)) & 0x0f0f0fu;
+    return (x * 0x010101u) >> 16 & 0xff;
+}
+
 static uint32_t half_id(const record_view *r, int j)
 {
     if (!(r->half_mask >> j & 1))
         return SL_OCTREE_NONE;
-    return r->ids[__builtin_popcount(r->half_mask & ((1u << j) - 1u))];
+    return r->ids[bits24(r->half_mask & ((1u << j) - 1u))];
 }
 
 static uint32_t spoke_id(const record_view *r, int j)
 {
     if (!(r->spoke_mask >> j & 1))
         return SL_OCTREE_NONE;
-    return r->ids[__builtin_popcount(r->half_mask) +
-                  __builtin_popcount(r->spoke_mask & ((1u << j) - 1u))];
+    return r->ids[bits24(r->half_mask) + bits24(r->spoke_mask & ((1u << j) - 1u))];
 }
 
 /* Splits edge e of the cell (its same-level neighbourhood has an expanded cell). The
@@ -185,10 +204,10 @@ static uint32_t spoke_id(const record_view *r, int j)
  * split "virtually" (midpoint sign = first corner's), keeping the coarse crossing, which
  * every cell around the edge does alike. Returns 0, or -1 when a finer crossing the
  * signs require is missing from the record (a crack the report counts). */
-static int split_edge(const record_view *r, const sl_octree_node *node, int e, sl_mc_cell *cell,
-                      uint32_t point_crossing[SL_MC_MAX_POINTS])
+static int split_edge(const split_table *st, const record_view *r, const sl_octree_node *node,
+                      int e, sl_mc_cell *cell, uint32_t point_crossing[SL_MC_MAX_POINTS])
 {
-    int in0 = node->inside >> sl_mc_edge_c0(e) & 1, in1 = node->inside >> sl_mc_edge_c1(e) & 1;
+    int in0 = node->inside >> st->edge_c0[e] & 1, in1 = node->inside >> st->edge_c1[e] & 1;
     int mid = (r->mid_known >> e & 1) ? (int)(r->mid_inside >> e & 1) : in0;
     uint32_t coarse = point_crossing[SL_MC_EDGE_POINT(e)];
     uint32_t half[2] = {SL_OCTREE_NONE, SL_OCTREE_NONE};
@@ -215,14 +234,14 @@ static int split_edge(const record_view *r, const sl_octree_node *node, int e, s
 
 /* Splits face f when a finer cell touches it (its centre is known); 0, or -1 when a
  * spoke crossing the signs require is missing. */
-static int split_face(const record_view *r, int f, sl_mc_cell *cell,
+static int split_face(const split_table *st, const record_view *r, int f, sl_mc_cell *cell,
                       uint32_t point_crossing[SL_MC_MAX_POINTS])
 {
     if (!(r->centre_known >> f & 1))
         return 0; /* no finer cell on this face: it is drawn whole on both sides */
-    int edges[4], centre = r->centre_inside >> f & 1;
+    int centre = r->centre_inside >> f & 1;
+    const uint8_t *edges = st->face_edges[f];
     uint32_t spokes[4];
-    sl_mc_face_edges(f, edges);
     for (int k = 0; k < 4; k++) {
         if (!(cell->split_edges >> edges[k] & 1))
             return -1;
@@ -346,7 +365,8 @@ static void wanted_splits(const sl_neighbours *nb, const uint32_t *expansion_ind
 }
 
 /* Applies the wanted splits of internal node n; 0, or -1 on a missing finer crossing. */
-static int apply_splits(const sl_transitions *tr, const sl_octree_node *node, uint32_t n,
+static int apply_splits(const split_table *st, const sl_transitions *tr,
+                        const sl_octree_node *node, uint32_t n,
                         unsigned want_faces, unsigned want_edges, sl_mc_cell *cell,
                         uint32_t point_crossing[SL_MC_MAX_POINTS])
 {
@@ -355,10 +375,10 @@ static int apply_splits(const sl_transitions *tr, const sl_octree_node *node, ui
     int rc = 0;
     for (int e = 0; e < 12; e++)
         if (want_edges >> e & 1)
-            rc |= split_edge(&r, node, e, cell, point_crossing);
+            rc |= split_edge(st, &r, node, e, cell, point_crossing);
     for (int f = 0; f < 6; f++)
         if (want_faces >> f & 1)
-            rc |= split_face(&r, f, cell, point_crossing);
+            rc |= split_face(st, &r, f, cell, point_crossing);
     return rc ? -1 : 0;
 }
 
@@ -374,7 +394,8 @@ int sl_lod_cell(const sl_octree *t, const sl_neighbours *nb, const sl_transition
     wanted_splits(nb, expansion_index, k, n, &want_faces, &want_edges);
     if (!want_edges)
         return 0;
-    return apply_splits(tr, node, n, want_faces, want_edges, cell, point_crossing);
+    return apply_splits(split_table_get(), tr, node, n, want_faces, want_edges, cell,
+                        point_crossing);
 }
 
 /* Whether internal node n, all of whose corners have one sign, has that sign at every
@@ -486,7 +507,7 @@ static int draw_cell(sl_lod_model *m, uint32_t k, uint32_t n, const split_table 
         sl_mesh_builder_add_triangles(b, row[0], row + 1, point_crossing);
         return 0;
     }
-    int rc = apply_splits(&m->transitions, node, n, want_faces, want_edges, &cell,
+    int rc = apply_splits(st, &m->transitions, node, n, want_faces, want_edges, &cell,
                           point_crossing);
     sl_mc_triangles tri;
     sl_mc_triangulate(&cell, &tri);
