@@ -53,7 +53,8 @@ typedef struct sl_mc_triangles {
     uint8_t centroids;                      /* bit l: loop l is fanned from its centroid */
 } sl_mc_triangles;
 
-/* Loops of point ids (each closed), triangulated; triangles face outwards. */
+/* Loops of point ids (each closed), triangulated; triangles face outwards. Only the parts of
+ * *out up to count, loops and loop_sizes are written. */
 void sl_mc_triangulate(const sl_mc_cell *cell, sl_mc_triangles *out);
 
 /* The 256 whole-face configurations (points are edge indices 0..11). */
