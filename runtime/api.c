@@ -94,6 +94,13 @@ int scanlod_extract(scanlod_model *model, uint32_t k, float *positions, float *n
     sl_lod_mesh mesh;
     if (sl_lod_generate(&model->lod, k, &mesh, NULL) != 0)
         return -1;
+    scanlod_mesh_bound bound = scanlod_extract_bound(model, k);
+    if (mesh.vertex_count > bound.vertices || mesh.triangle_count > bound.triangles) {
+        /* The caller sized its buffers by the accumulation table, which this model's
+         * mesh exceeds (a model whose table is wrong): write nothing rather than past them. */
+        sl_lod_mesh_release(&mesh);
+        return -1;
+    }
     if (mesh.vertex_count) { /* the coarsest levels may be empty (arrays NULL) */
         memcpy(positions, mesh.positions, mesh.vertex_count * 3 * sizeof(float));
         if (normals)
