@@ -51,6 +51,19 @@ check "extract --max-error to OBJ" [ "$rc" -eq 0 -a -s "$TMP/e.obj" ]
 run_scanlod extract "$TMP/work/artifacts/merge/fandisk/octree.slot" --level 1 -o "$TMP/l1.ply"
 check "extract --level from the octree" [ "$rc" -eq 0 -a -s "$TMP/l1.ply" ]
 
+# Every uniform level of the closed inputs that has a surface is watertight (issue 4).
+for item in fandisk rocker_arm cow; do
+  depth=$(python3 -c "import json; print(json.load(open('$TMP/work/artifacts/samples/$item/report.json'))['depth'])")
+  open_levels=""
+  for level in $(seq 0 "$depth"); do
+    run_scanlod extract "$TMP/work/artifacts/merge/$item/octree.slot" --level "$level" -o "$TMP/u.ply"
+    grep -q ": 0 triangles" <<<"$out" && continue
+    counts=$("$SCANLOD" compare "$TMP/u.ply" "$TMP/u.ply" | sed -n 's/B edges: \([0-9]*\) boundary, \([0-9]*\) non-manifold.*/\1 \2/p')
+    [ "$counts" = "0 0" ] || open_levels="$open_levels L$level($counts)"
+  done
+  check "$item: every uniform level watertight (open:$open_levels)" [ -z "$open_levels" ]
+done
+
 run_scanlod extract "$model" --triangles 0 -o "$TMP/x.ply"
 check "--triangles 0: usage error (rc $rc: $err)" [ "$rc" -eq 64 ] && grep -q "triangles" <<<"$err"
 run_scanlod extract "$model" --triangles $((finest + 1)) -o "$TMP/x.ply"
