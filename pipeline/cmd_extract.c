@@ -23,7 +23,8 @@ static const char usage[] =
     "       scanlod extract OCTREE.slot --level L -o OUT.{ply,glb,obj}\n"
     "Cuts one level of detail from a model built by `scanlod run` (published as\n"
     "OUTPUT/ITEM/model.slod): K expansions of the LOD array, the largest level within N\n"
-    "triangles, P percent of the LOD array (paper Table 1), or the coarsest level whose\n"
+    "triangles, P percent of the LOD array's expansions that have surface (paper Table 1;\n"
+    "100 = the finest level), or the coarsest level whose\n"
     "geometric error is at most E (world units). Prints what it wrote.\n";
 
 typedef struct request {

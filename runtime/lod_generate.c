@@ -28,6 +28,7 @@ void sl_lod_model_release(sl_lod_model *m)
     free(m->error_after);
     free(m->scratch);
     free(m->split_expansion);
+    free(m->surface_before);
     sl_neighbours_release(&m->neighbours);
     sl_transitions_release(&m->transitions);
     sl_lod_model_init(m);
@@ -113,6 +114,27 @@ static const split_table *split_table_get(void)
     return &splits;
 }
 
+/* surface_before (see lod_model.h). Nodes are stored coarse to fine, so a reverse sweep
+ * sees every child before its parent. */
+static int surface_counts(sl_lod_model *m)
+{
+    const sl_octree *t = &m->tree;
+    uint8_t *below = calloc(t->node_count ? t->node_count : 1, 1);
+    if (!below)
+        return -1;
+    for (uint32_t i = t->node_count; i-- > 0;) {
+        const sl_octree_node *node = &t->nodes[i];
+        below[i] |= node->edge_mask != 0;
+        if (below[i] && node->parent != SL_OCTREE_NONE)
+            below[node->parent] = 1;
+    }
+    m->surface_before[0] = 0;
+    for (uint32_t k = 0; k < m->expansion_count; k++)
+        m->surface_before[k + 1] = m->surface_before[k] + below[m->lod_array[k]];
+    free(below);
+    return 0;
+}
+
 int sl_lod_model_prepare(sl_lod_model *m)
 {
     const sl_octree *t = &m->tree;
@@ -123,12 +145,16 @@ int sl_lod_model_prepare(sl_lod_model *m)
     free(m->expansion_index);
     free(m->scratch);
     free(m->split_expansion);
+    free(m->surface_before);
     m->split_nodes = internal;
+    m->surface_before = malloc(((size_t)m->expansion_count + 1) * sizeof *m->surface_before);
     m->expansion_index = malloc((n ? n : 1) * sizeof *m->expansion_index);
     m->scratch = malloc((t->crossing_count ? t->crossing_count : 1) * sizeof *m->scratch);
     m->split_expansion = malloc(((size_t)internal * SL_LOD_SPLIT_DIRS + 1) *
                                 sizeof *m->split_expansion);
-    if (!m->expansion_index || !m->scratch || !m->split_expansion)
+    if (!m->expansion_index || !m->scratch || !m->split_expansion || !m->surface_before)
+        return -1;
+    if (surface_counts(m) != 0)
         return -1;
     memset(m->scratch, 0xff, (size_t)t->crossing_count * sizeof *m->scratch);
     memset(m->expansion_index, 0xff, (size_t)n * sizeof *m->expansion_index);
@@ -603,9 +629,17 @@ uint32_t sl_lod_expansions_for_percent(const sl_lod_model *m, double percent)
 {
     if (!(percent > 0))
         return 0;
-    if (percent >= 100)
-        return m->expansion_count;
-    return (uint32_t)llround(percent / 100.0 * m->expansion_count);
+    uint32_t total = m->surface_before[m->expansion_count];
+    uint32_t want = percent >= 100 ? total : (uint32_t)llround(percent / 100.0 * total);
+    uint32_t lo = 0, hi = m->expansion_count; /* smallest k with surface_before[k] >= want */
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (m->surface_before[mid] < want)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
 }
 
 uint32_t sl_lod_expansions_for_error(const sl_lod_model *m, double max_error)

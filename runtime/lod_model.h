@@ -67,6 +67,11 @@ typedef struct sl_lod_model {
      * instead of a lookup per neighbour. */
     uint32_t split_nodes;
     uint32_t *split_expansion;
+    /* Derived at load: surface_before[k] = how many of the first k expansions are of a
+     * node with surface below it (a crossing on an edge of it or of a descendant);
+     * expansion_count + 1 entries. The others (empty band cells) change no mesh, so LOD
+     * percents count these alone. */
+    uint32_t *surface_before;
 } sl_lod_model;
 
 #define SL_LOD_SPLIT_DIRS 18 /* 6 face and 12 edge neighbours: those that split a cell */
@@ -123,7 +128,9 @@ uint64_t sl_lod_frontier(const sl_lod_model *m, uint32_t k, uint32_t *cells);
 int sl_lod_generate(sl_lod_model *m, uint32_t k, sl_lod_mesh *out, uint64_t *cracks);
 
 /* k for a triangle budget (largest k whose accumulation <= budget; at least 0), a LOD
- * percent (k = round(percent / 100 * expansion_count), paper Table 1) and a maximum
+ * percent (paper Table 1: the smallest k whose first k expansions include
+ * round(percent / 100 * S) of the S expansions of nodes with surface below them, so
+ * 100 % is the finest mesh, reached as early as the LOD array reaches it) and a maximum
  * error (smallest k whose error_after <= max_error). */
 uint32_t sl_lod_expansions_for_triangles(const sl_lod_model *m, uint64_t budget);
 uint32_t sl_lod_expansions_for_percent(const sl_lod_model *m, double percent);

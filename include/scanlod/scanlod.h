@@ -48,6 +48,9 @@ uint64_t scanlod_model_triangles(const scanlod_model *model, uint32_t k);
 void scanlod_model_bounds(const scanlod_model *model, float min[3], float max[3]);
 
 uint32_t scanlod_expansions_for_triangles(const scanlod_model *model, uint64_t budget);
+/* LOD percent as in the paper's Table 1: P % of the expansions of nodes with surface
+ * below them (empty cells of the sample band are not counted); 100 gives the finest
+ * mesh, at the first k that reaches it (<= scanlod_model_expansions()). */
 uint32_t scanlod_expansions_for_percent(const scanlod_model *model, double percent);
 uint32_t scanlod_expansions_for_error(const scanlod_model *model, double max_error);
 

@@ -14,12 +14,13 @@
 #include "stages/crack/crack.h"
 #include "stages/export/export_internal.h"
 
-#define EXPORT_STAGE_VERSION 1u
+#define EXPORT_STAGE_VERSION 2u
 
 static const sl_option export_options[] = {
     {"export", "lod_percents", SL_OPT_LIST, "20,40,60,80,100", 0, 100, NULL,
-     "Levels by LOD percent, as in the paper's Table 1: P% of the LOD array is expanded "
-     "(100 = the finest level). Empty for none."},
+     "Levels by LOD percent, as in the paper's Table 1: P% of the LOD array's expansions "
+     "of nodes with surface below them are done (empty band cells change nothing and are "
+     "not counted; 100 = the finest level). Empty for none."},
     {"export", "budgets", SL_OPT_LIST, "thumb:2000,low:20000,medium:100000,high:500000", 0, 0,
      NULL,
      "Named triangle budgets (name:triangles), as museum web viewers use: the largest level "

@@ -67,7 +67,9 @@ int main(int argc, char **argv)
     uint32_t k = scanlod_expansions_for_triangles(m, budget);
     EXPECT(scanlod_model_triangles(m, k) <= budget);
     EXPECT(k == e || scanlod_model_triangles(m, k + 1) > budget || k + 1 <= e);
-    EXPECT(scanlod_expansions_for_percent(m, 100) == e);
+    uint32_t k100 = scanlod_expansions_for_percent(m, 100); /* the finest mesh, maybe early */
+    EXPECT(k100 <= e && scanlod_model_triangles(m, k100) == finest);
+    EXPECT(scanlod_expansions_for_percent(m, 50) <= k100);
     EXPECT(scanlod_expansions_for_error(m, 0) == e || scanlod_model_triangles(m, e) == finest);
     float lo[3], hi[3];
     scanlod_model_bounds(m, lo, hi);

@@ -160,8 +160,29 @@ static void test_model(sdf_fn sdf, int n, sl_priority_metric metric, const char 
     CHECK(m.error_after[k_err] <= 0.1 && (k_err == 0 || m.error_after[k_err - 1] > 0.1));
     uint32_t k_tri = sl_lod_expansions_for_triangles(&m, m.accumulation[m.expansion_count] / 3);
     CHECK(m.accumulation[k_tri] <= m.accumulation[m.expansion_count] / 3);
-    CHECK(sl_lod_expansions_for_percent(&m, 100) == m.expansion_count);
+    /* LOD percents count the expansions of nodes with surface below them: 100 % is the
+     * finest mesh exactly, reached no later than the last expansion; percents are
+     * monotone. */
+    uint32_t k100 = sl_lod_expansions_for_percent(&m, 100);
+    CHECK(k100 <= m.expansion_count);
     CHECK(sl_lod_expansions_for_percent(&m, 0) == 0);
+    for (int p = 10; p <= 100; p += 10)
+        CHECK(sl_lod_expansions_for_percent(&m, p - 10) <= sl_lod_expansions_for_percent(&m, p));
+    {
+        sl_lod_mesh at100, finest;
+        CHECK(sl_lod_generate(&m, k100, &at100, NULL) == 0);
+        CHECK(sl_lod_generate(&m, m.expansion_count, &finest, NULL) == 0);
+        CHECK_MSG(at100.triangle_count == finest.triangle_count &&
+                      at100.vertex_count == finest.vertex_count &&
+                      memcmp(at100.positions, finest.positions,
+                             finest.vertex_count * 3 * sizeof(float)) == 0 &&
+                      memcmp(at100.indices, finest.indices,
+                             finest.triangle_count * 3 * sizeof(uint32_t)) == 0,
+                  "%s: 100 %% (k %u) is not the finest mesh (k %u)", name, k100,
+                  m.expansion_count);
+        sl_lod_mesh_release(&at100);
+        sl_lod_mesh_release(&finest);
+    }
     printf("%s: %u nodes, %u expansions, triangles %llu .. %llu\n", name, m.tree.node_count,
            m.expansion_count, (unsigned long long)m.accumulation[0],
            (unsigned long long)m.accumulation[m.expansion_count]);
