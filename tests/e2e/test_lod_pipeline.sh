@@ -82,4 +82,12 @@ check "another format version: exit 65 saying so (rc $rc: $err)" [ "$rc" -eq 65 
 check "no partial output was left by failed extractions" [ ! -e "$TMP/x.ply" ]
 
 check "public API on the built model" "$api_check" "$model"
+
+# The models of the real scans at every K (fandisk: small) or 200-300 spread K:
+# level rule, accumulation = generated, watertight (all three are closed).
+lod_check="${SCANLOD_BUILD_DIR}/tests/lod_check"
+check "fandisk: every K" "$lod_check" "$TMP/out/fandisk/model.slod" 0 --closed
+check "cow: 300 spread K" "$lod_check" "$TMP/out/cow/model.slod" 300 --closed
+check "rocker_arm: 200 spread K" "$lod_check" "$TMP/out/rocker_arm/model.slod" 200 --closed
+check "bun_zipper_res3 (open): 200 spread K, level rule and accumulation" "$lod_check" "$TMP/out/bun_zipper_res3/model.slod" 200
 finish

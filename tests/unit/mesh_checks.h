@@ -1,20 +1,21 @@
-/* Mesh checks shared by the octree and LOD tests. */
+/* Mesh and LOD-model checks shared by the octree and LOD tests (and tests/e2e/lod_check.c). */
 #ifndef SCANLOD_TESTS_UNIT_MESH_CHECKS_H
 #define SCANLOD_TESTS_UNIT_MESH_CHECKS_H
 
 #include <stdint.h>
 #include <stdlib.h>
 
+#include "runtime/lod_model.h"
 #include "runtime/lod_mesh.h"
 
-static int cmp_u64(const void *a, const void *b)
+static inline int cmp_u64(const void *a, const void *b)
 {
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
     return x < y ? -1 : x > y;
 }
 
 /* How many edges of an indexed mesh are not in exactly two triangles (0 = watertight). */
-static uint64_t bad_edges(const sl_lod_mesh *m)
+static inline uint64_t bad_edges(const sl_lod_mesh *m)
 {
     uint64_t n = 3 * m->triangle_count, bad = 0;
     uint64_t *e = malloc((n ? n : 1) * sizeof *e);
@@ -33,6 +34,36 @@ static uint64_t bad_edges(const sl_lod_mesh *m)
     }
     free(e);
     return bad;
+}
+
+/* Does some frontier cell touch a frontier cell 2 or more levels coarser? A coarser
+ * frontier cell around cell a shows as the level-(a + 1) node over a neighbour position
+ * being unexpanded and not a frontier cell itself (so its own ancestors are unexpanded).
+ * (A 2-levels-coarser node over an empty position would touch a's expanded grandparent's
+ * region, which the order forbids before it expands, so level a + 1 is enough to look at.) */
+static inline int level_gap(const sl_lod_model *m, uint32_t k)
+{
+    uint32_t *cells = malloc(sl_lod_frontier_bound(m, k) * sizeof *cells);
+    uint64_t count = sl_lod_frontier(m, k, cells);
+    int gap = 0;
+    const sl_octree *t = &m->tree;
+    for (uint64_t i = 0; i < count && !gap; i++) {
+        const sl_octree_node *a = &t->nodes[cells[i]];
+        if (a->level + 1u > t->depth)
+            continue;
+        for (int d = 0; d < 27 && !gap; d++) {
+            int64_t q[3] = {a->x + d % 3 - 1, a->y + d / 3 % 3 - 1, a->z + d / 9 - 1};
+            if (q[0] < 0 || q[1] < 0 || q[2] < 0)
+                continue;
+            uint32_t c = sl_octree_find(t, a->level + 1u, q[0] >> 1, q[1] >> 1, q[2] >> 1);
+            if (c == SL_OCTREE_NONE || m->expansion_index[c] < k)
+                continue;
+            uint32_t parent = t->nodes[c].parent;
+            gap = parent != SL_OCTREE_NONE && m->expansion_index[parent] >= k;
+        }
+    }
+    free(cells);
+    return gap;
 }
 
 #endif

@@ -91,36 +91,6 @@ static int build_model(sdf_fn sdf, int n, sl_priority_metric metric, sl_lod_mode
 }
 
 
-/* Does some frontier cell touch a frontier cell 2 or more levels coarser? A coarser
- * frontier cell around cell a shows as the level-(a + 1) node over a neighbour position
- * being unexpanded and not a frontier cell itself (so its own ancestors are unexpanded).
- * (A 2-levels-coarser node over an empty position would touch a's expanded grandparent's
- * region, which the order forbids before it expands, so level a + 1 is enough to look at.) */
-static int level_gap(const sl_lod_model *m, uint32_t k)
-{
-    uint32_t *cells = malloc(sl_lod_frontier_bound(m, k) * sizeof *cells);
-    uint64_t count = sl_lod_frontier(m, k, cells);
-    int gap = 0;
-    const sl_octree *t = &m->tree;
-    for (uint64_t i = 0; i < count && !gap; i++) {
-        const sl_octree_node *a = &t->nodes[cells[i]];
-        if (a->level + 1u > t->depth)
-            continue;
-        for (int d = 0; d < 27 && !gap; d++) {
-            int64_t q[3] = {a->x + d % 3 - 1, a->y + d / 3 % 3 - 1, a->z + d / 9 - 1};
-            if (q[0] < 0 || q[1] < 0 || q[2] < 0)
-                continue;
-            uint32_t c = sl_octree_find(t, a->level + 1u, q[0] >> 1, q[1] >> 1, q[2] >> 1);
-            if (c == SL_OCTREE_NONE || m->expansion_index[c] < k)
-                continue;
-            uint32_t parent = t->nodes[c].parent;
-            gap = parent != SL_OCTREE_NONE && m->expansion_index[parent] >= k;
-        }
-    }
-    free(cells);
-    return gap;
-}
-
 static void test_model(sdf_fn sdf, int n, sl_priority_metric metric, const char *shape)
 {
     char name[64];
