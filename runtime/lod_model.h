@@ -86,6 +86,9 @@ int sl_lod_model_prepare(sl_lod_model *m);
  * rather than from all over it. Generated meshes do not change (vertices are numbered by
  * first use, not by crossing id). Returns -1 when out of memory (model unchanged). */
 int sl_lod_model_localize(sl_lod_model *m);
+/* Fills surface_before (allocated by the caller, expansion_count + 1 entries) from the
+ * tree and the LOD array; part of sl_lod_model_prepare. Returns -1 when out of memory. */
+int sl_lod_surface_counts(sl_lod_model *m);
 void sl_lod_model_release(sl_lod_model *m);
 
 /* Neighbour in direction d of node n, or SL_OCTREE_NONE. */
