@@ -190,6 +190,7 @@ static int claims_outstanding(const sl_engine *e)
 int sl_engine_work(sl_engine *e, sl_error *err)
 {
     double last_reclaim = 0;
+    int waited = 0, settling = 0;
     for (;;) {
         if (*sl_interrupt_flag() || e->stop)
             break;
@@ -222,12 +223,25 @@ int sl_engine_work(sl_engine *e, sl_error *err)
             /* Others still hold claims: their items may still fail back to ready or
              * enqueue a next stage, and the exit code should describe the finished
              * collection, so wait for them (a dead owner is reclaimed above). */
-            if (!claims_outstanding(e))
-                break;
             struct timespec pause = {0, 250 * 1000 * 1000};
+            if (claims_outstanding(e)) {
+                waited = 1;
+                settling = 0;
+                nanosleep(&pause, NULL);
+                continue;
+            }
+            /* Nothing ready and nothing claimed. But another process releases its claim
+             * a moment before it enqueues the item's next stage (engine_child.c: done,
+             * then advance), so after waiting on others, look once more a little later
+             * before calling the collection finished. A lone run never waits here. */
+            if (!waited || settling)
+                break;
+            settling = 1;
+            nanosleep(&pause, NULL);
             nanosleep(&pause, NULL);
             continue;
         }
+        settling = 0;
         rc = sl_engine_process(e, s, name, &t, err);
         if (rc && sl_error_class_of(rc) == SL_CLASS_STORAGE) {
             e->stop = 1;
