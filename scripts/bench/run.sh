@@ -50,7 +50,7 @@ render() { # render RESULTS_DIR: docs/benchmarks.md and docs/bench/*.png
   python3 "$lib/report.py" "$1" "$docs/benchmarks.md"
   echo "bench: wrote $docs/benchmarks.md and $docs/bench/*.png from $1"
 }
-run_phases() { # run_phases RESULTS_DIR: the phases named by $phases, then the docs
+run_phases() { # run_phases RESULTS_DIR [rerun]: the phases named by $phases, then the docs
   local t0 start
   start=$(date +%s)
   for phase in $phases; do
@@ -58,22 +58,42 @@ run_phases() { # run_phases RESULTS_DIR: the phases named by $phases, then the d
     python3 "$lib/$phase.py" "$1/context.json"
     echo "bench: phase $phase done in $(($(date +%s) - t0)) s"
   done
-  echo "$(($(date +%s) - start))" >"$1/elapsed_seconds"
-  cut -d' ' -f1-3 /proc/loadavg >"$1/load_end" 2>/dev/null || true
+  if [ -z "${2:-}" ]; then # a rerun keeps the first run's time and load figures
+    echo "$(($(date +%s) - start))" >"$1/elapsed_seconds"
+    cut -d' ' -f1-3 /proc/loadavg >"$1/load_end" 2>/dev/null || true
+  fi
   render "$1"
 }
 if [ -n "$report_only" ]; then
   render "$report_only"
   exit 0
 fi
-if [ -n "$resume" ]; then   # a fresh time budget from now
-  python3 - "$resume/context.json" <<'EOF2'
-import json, sys, time
-c = json.load(open(sys.argv[1]))
+build_bench() { # the Release tree every phase runs
+  local gen=()
+  [ -f "$build/CMakeCache.txt" ] || { command -v ninja >/dev/null && gen=(-G Ninja); }
+  cmake -S "$root" -B "$build" "${gen[@]}" -DCMAKE_BUILD_TYPE=Release >/dev/null
+  cmake --build "$build" --parallel "$(nproc)" \
+    --target scanlod bench_vdb_remesh bench_meshopt_lod bench_gen_surface
+}
+if [ -n "$resume" ]; then   # rebuilt from the current tree, a fresh time budget from now
+  build_bench
+  python3 - "$resume/context.json" "$resume/reruns.json" "$phases" "$root" <<'EOF2'
+import datetime, json, os, subprocess, sys, time
+ctx_path, reruns_path, phases, root = sys.argv[1:5]
+c = json.load(open(ctx_path))
 c["deadline"] = time.time() + 60 * c["minutes"]
-json.dump(c, open(sys.argv[1], "w"), indent=1)
+json.dump(c, open(ctx_path, "w"), indent=1)
+git = lambda *a: subprocess.run(["git", "-C", root] + list(a), capture_output=True,
+                                text=True).stdout.strip()
+commit = git("rev-parse", "--short", "HEAD") or "unknown"
+if git("status", "--porcelain", "--untracked-files=no"):
+    commit += " (with uncommitted changes)"
+reruns = json.load(open(reruns_path)) if os.path.exists(reruns_path) else []
+reruns.append({"phases": phases.split(), "commit": commit, "date":
+               datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")})
+json.dump(reruns, open(reruns_path, "w"), indent=1)
 EOF2
-  run_phases "$resume"
+  run_phases "$resume" rerun
   exit 0
 fi
 
@@ -83,11 +103,7 @@ command -v gnuplot >/dev/null || { echo "run.sh: gnuplot missing (scripts/instal
 command -v python3 >/dev/null || { echo "run.sh: python3 missing" >&2; exit 64; }
 
 # --- build (Release) -------------------------------------------------------------------
-gen=()
-[ -f "$build/CMakeCache.txt" ] || { command -v ninja >/dev/null && gen=(-G Ninja); }
-cmake -S "$root" -B "$build" "${gen[@]}" -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" --parallel "$(nproc)" \
-  --target scanlod bench_vdb_remesh bench_meshopt_lod bench_gen_surface
+build_bench
 
 # --- settings ----------------------------------------------------------------------------
 if [ "$quick" = 1 ]; then

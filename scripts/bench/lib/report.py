@@ -4,6 +4,7 @@ usage: report.py RESULTS_DIR OUT.md
 Reads machine, models, stages, octree, lod, growth (.json; a missing phase is said so).
 Derived figures (medians, pair ratios, slopes) come from headline.py.
 """
+import json
 import os
 import sys
 
@@ -44,6 +45,12 @@ def load_end(results):
     return open(p).read().split()[0] if os.path.exists(p) else "–"
 
 
+def reruns(results):
+    """Phases rerun later with `run.sh --resume` (their commit and date), oldest first."""
+    p = os.path.join(results, "reruns.json")
+    return json.load(open(p)) if os.path.exists(p) else []
+
+
 def section_machine(out, mach, results):
     out.append("## Machine and run\n")
     elapsed = None
@@ -65,7 +72,8 @@ def section_machine(out, mach, results):
         ["load average", "%.1f at the start, %s at the end (1 min; other jobs shared the "
                          "machine when this exceeds the thread count)"
          % (mach["load_start"][0], load_end(results))],
-    ])
+    ] + [["rerun", "phases %s at commit %s, %s (`run.sh --resume`)"
+          % (", ".join(r["phases"]), r["commit"], r["date"])] for r in reruns(results)])
 
 
 def section_inputs(out, models):
@@ -181,8 +189,9 @@ def section_octree(out, models, st, oc, h):
 def section_lod(out, lod, h):
     out.append("## 3. Levels of detail (issue 5)\n")
     out.append("### Table 1 of the paper\n")
-    out.append("From each reference build's `report.json` (export stage: LOD percent of the "
-               "LOD array expanded; RMS and Hausdorff symmetric, % of the diagonal).\n")
+    out.append("From each reference build's `report.json` (export stage: LOD P % = P % of the "
+               "LOD array's expansions of nodes with surface below them; RMS and Hausdorff "
+               "symmetric, % of the diagonal).\n")
     for name, r in lod.items():
         out.append("**%s**\n" % name)
         table(out, ["LOD", "triangles", "vertices", "RMS", "Hausdorff", "watertight",
