@@ -213,6 +213,8 @@ static int move_with_reason(sl_engine *e, int s, const char *name, sl_ticket *t,
     return rc == SL_E_BUSY ? 0 : rc;
 }
 
+static int advance(sl_engine *e, int from, const sl_ticket *t, sl_error *err);
+
 static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, sl_hash key,
                           const char *out_dir, const child_outcome *o, sl_error *err)
 {
@@ -239,9 +241,28 @@ static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, s
         t->cls[0] = t->reason[0] = '\0';
         rc = sl_queue_put(e->work, stage->name, SL_STATE_CLAIMED, name, t, err);
     }
-    if (rc == 0)
-        rc = sl_queue_move(e->work, stage->name, name, SL_STATE_CLAIMED, SL_STATE_DONE, err);
-    return rc == SL_E_BUSY ? sl_error_set(err, SL_E_LEASE_LOST, 0, name, "lease lost") : rc;
+    return rc;
+}
+
+/* Releases a committed claim: first the item's next step (the next stage's ticket, or
+ * the publication after the last stage), then the claim moves to done. In that order an
+ * unfinished item always has a ready or claimed ticket somewhere, so a run that finds
+ * none can call the collection finished (docs/engine.md, "When a run is finished"). */
+static int release_done(sl_engine *e, int s, const char *name, const sl_ticket *t,
+                        sl_error *err)
+{
+    int rc = advance(e, s + 1, t, err);
+    sl_error merr;
+    sl_error_init(&merr);
+    int moved = sl_queue_move(e->work, e->stages[s]->name, name, SL_STATE_CLAIMED,
+                              SL_STATE_DONE, &merr);
+    if (rc)
+        return rc;
+    if (moved == SL_E_BUSY)
+        return 0; /* lost the lease after committing: the new owner finds the record */
+    if (moved)
+        sl_error_merge(err, &merr);
+    return moved;
 }
 
 static int classify_signal(int sig)
@@ -376,8 +397,7 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         e->counts.reused++; /* someone finished it meanwhile */
         sl_hash_hex(key, t->key);
         sl_queue_put(e->work, stage->name, SL_STATE_CLAIMED, name, t, err);
-        rc = sl_queue_move(e->work, stage->name, name, SL_STATE_CLAIMED, SL_STATE_DONE, err);
-        return rc ? (rc == SL_E_BUSY ? 0 : rc) : advance(e, s + 1, t, err);
+        return release_done(e, s, name, t, err);
     }
     rc = sl_mkdirs(out_dir, err);
     if (rc == 0)
@@ -434,7 +454,7 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
             sl_log_event("stage_done", stage->name, t->item, outcome.seconds, NULL, extra);
             SL_LOG(SL_LOG_INFO, stage->name, t->item, "done in %.2f s, peak RSS %ld MiB",
                    outcome.seconds, outcome.result.max_rss_kb / 1024);
-            return advance(e, s + 1, t, err);
+            return release_done(e, s, name, t, err);
         }
         if (rc == SL_E_LEASE_LOST)
             outcome.lease_lost = 1;

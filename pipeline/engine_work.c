@@ -172,25 +172,25 @@ static int claim_one(sl_engine *e, int s, char *name, size_t name_size, sl_ticke
     return rc ? rc : claimed;
 }
 
-static int claims_outstanding(const sl_engine *e)
+/* Number of tickets of every stage in `state` (0 when a queue cannot be listed). */
+static int tickets_in(const sl_engine *e, int state)
 {
+    int total = 0;
     for (int s = 0; s < e->stage_count; s++) {
         char **names;
         int count = 0;
         sl_error err;
         sl_error_init(&err);
-        if (sl_queue_list(e->work, e->stages[s]->name, SL_STATE_CLAIMED, &names, &count, &err) == 0)
+        if (sl_queue_list(e->work, e->stages[s]->name, state, &names, &count, &err) == 0)
             free(names);
-        if (count > 0)
-            return 1;
+        total += count;
     }
-    return 0;
+    return total;
 }
 
 int sl_engine_work(sl_engine *e, sl_error *err)
 {
     double last_reclaim = 0;
-    int waited = 0, settling = 0;
     for (;;) {
         if (*sl_interrupt_flag() || e->stop)
             break;
@@ -223,25 +223,20 @@ int sl_engine_work(sl_engine *e, sl_error *err)
             /* Others still hold claims: their items may still fail back to ready or
              * enqueue a next stage, and the exit code should describe the finished
              * collection, so wait for them (a dead owner is reclaimed above). */
-            struct timespec pause = {0, 250 * 1000 * 1000};
-            if (claims_outstanding(e)) {
-                waited = 1;
-                settling = 0;
+            if (tickets_in(e, SL_STATE_CLAIMED) > 0) {
+                struct timespec pause = {0, 250 * 1000 * 1000};
                 nanosleep(&pause, NULL);
                 continue;
             }
-            /* Nothing ready and nothing claimed. But another process releases its claim
-             * a moment before it enqueues the item's next stage (engine_child.c: done,
-             * then advance), so after waiting on others, look once more a little later
-             * before calling the collection finished. A lone run never waits here. */
-            if (!waited || settling)
+            /* The sweeps above read one directory after another while other workers
+             * move tickets forward, so one can slip between them. An unfinished item
+             * always has a ready or claimed ticket (engine_child.c enqueues the next
+             * step before it releases a claim), so a last count that sees neither
+             * means the collection is settled. */
+            if (tickets_in(e, SL_STATE_READY) + tickets_in(e, SL_STATE_CLAIMED) == 0)
                 break;
-            settling = 1;
-            nanosleep(&pause, NULL);
-            nanosleep(&pause, NULL);
             continue;
         }
-        settling = 0;
         rc = sl_engine_process(e, s, name, &t, err);
         if (rc && sl_error_class_of(rc) == SL_CLASS_STORAGE) {
             e->stop = 1;
