@@ -19,18 +19,22 @@
 
 static const char usage[] =
     "usage: scanlod extract MODEL.slod (--expansions K | --triangles N | --lod-percent P |\n"
-    "                                   --max-error E) -o OUT.{ply,glb,obj}\n"
+    "                                   --max-error E) -o OUT.{ply,glb,obj} [--repeat R]\n"
     "       scanlod extract OCTREE.slot --level L -o OUT.{ply,glb,obj}\n"
     "Cuts one level of detail from a model built by `scanlod run` (published as\n"
     "OUTPUT/ITEM/model.slod): K expansions of the LOD array, the largest level within N\n"
     "triangles, P percent of the LOD array's expansions that have surface (paper Table 1;\n"
     "100 = the finest level), or the coarsest level whose\n"
-    "geometric error is at most E (world units). Prints what it wrote.\n";
+    "geometric error is at most E (world units). Prints what it wrote and how long the\n"
+    "generation took (in a fresh process: the first extraction). --repeat R then times R\n"
+    "more extractions of the same level into buffers allocated once, as a viewer using\n"
+    "the runtime API does, and prints their median and minimum (for benchmarks).\n";
 
 typedef struct request {
     const char *input, *output;
     int kind; /* 'k' expansions, 't' triangles, 'p' percent, 'e' error, 'l' level */
     double value;
+    long repeat; /* --repeat: warm extractions timed after the first */
 } request;
 
 static int parse(int argc, char **argv, request *r)
@@ -56,14 +60,20 @@ static int parse(int argc, char **argv, request *r)
         }
         if (matched)
             continue;
-        if (!strcmp(argv[i], "-o") && i + 1 < argc)
+        if (!strcmp(argv[i], "-o") && i + 1 < argc) {
             r->output = argv[++i];
+        } else if (!strcmp(argv[i], "--repeat") && i + 1 < argc) {
+            char *end;
+            r->repeat = strtol(argv[++i], &end, 10);
+            if (*end || r->repeat < 1 || r->repeat > 100000)
+                return -1;
+        }
         else if (argv[i][0] != '-' && !r->input)
             r->input = argv[i];
         else
             return -1;
     }
-    return r->input && r->output && r->kind ? 0 : -1;
+    return r->input && r->output && r->kind && !(r->repeat && r->kind == 'l') ? 0 : -1;
 }
 
 static int fail(const sl_error *err)
@@ -112,6 +122,44 @@ static int extract_level(const request *r)
     sl_lod_mesh_release(&mesh);
     sl_octree_release(&tree);
     return err.code ? fail(&err) : SL_EXIT_OK;
+}
+
+static int compare_doubles(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Times `repeat` extractions of level k into buffers sized once by the accumulation
+ * table (sl_lod_generate_into: no allocation per extraction). */
+static int time_warm(sl_lod_model *m, uint32_t k, long repeat, double *median, double *min)
+{
+    uint64_t triangles = m->accumulation[k], vertices = 3 * triangles;
+    size_t v = (size_t)(vertices ? vertices : 1), t = (size_t)(triangles ? triangles : 1);
+    float *positions = malloc(v * 3 * sizeof(float)), *normals = malloc(v * 3 * sizeof(float));
+    uint8_t *colors = malloc(v * 4);
+    uint32_t *indices = malloc(t * 3 * sizeof(uint32_t));
+    double *times = malloc((size_t)repeat * sizeof *times);
+    int rc = positions && normals && colors && indices && times ? 0 : -1;
+    for (long i = 0; rc == 0 && i < repeat; i++) {
+        sl_lod_mesh into = {0, 0, positions, normals, colors, indices};
+        struct timespec t0;
+        clock_gettime(CLOCK_MONOTONIC, &t0);
+        rc = sl_lod_generate_into(m, k, &into, vertices, triangles, NULL);
+        times[i] = seconds_since(&t0);
+    }
+    if (rc == 0) {
+        qsort(times, (size_t)repeat, sizeof *times, compare_doubles);
+        *median = repeat % 2 ? times[repeat / 2]
+                             : 0.5 * (times[repeat / 2 - 1] + times[repeat / 2]);
+        *min = times[0];
+    }
+    free(positions);
+    free(normals);
+    free(colors);
+    free(indices);
+    free(times);
+    return rc;
 }
 
 /* Turns the request into an expansion count, or prints why it cannot. */
@@ -186,12 +234,19 @@ int sl_cmd_extract(int argc, char **argv)
     char extras[256];
     snprintf(extras, sizeof extras, "{\"expansions\":%u,\"of\":%u,\"max_error\":%.9g}", k,
              model.expansion_count, (double)model.error_after[k]);
-    if (sl_export_write_mesh(r.output, &mesh, extras, &err) == 0)
+    char warm[128] = "";
+    double median = 0, min = 0;
+    if (r.repeat && time_warm(&model, k, r.repeat, &median, &min) != 0)
+        sl_error_set(&err, SL_E_NOMEM, ENOMEM, r.input, "out of memory");
+    else if (r.repeat)
+        snprintf(warm, sizeof warm, ", then %ld more in median %.7f s (min %.7f s)", r.repeat,
+                 median, min);
+    if (err.code == SL_OK && sl_export_write_mesh(r.output, &mesh, extras, &err) == 0)
         printf("expansions %u of %u: %llu triangles, %llu vertices, max error %.6g, "
-               "generated in %.6f s -> %s\n",
+               "generated in %.7f s%s -> %s\n",
                k, model.expansion_count, (unsigned long long)mesh.triangle_count,
                (unsigned long long)mesh.vertex_count, (double)model.error_after[k], generate_s,
-               r.output);
+               warm, r.output);
     sl_lod_mesh_release(&mesh);
     sl_lod_model_release(&model);
     return err.code ? fail(&err) : SL_EXIT_OK;

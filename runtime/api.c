@@ -91,28 +91,16 @@ scanlod_mesh_bound scanlod_extract_bound(const scanlod_model *model, uint32_t k)
 int scanlod_extract(scanlod_model *model, uint32_t k, float *positions, float *normals,
                     uint8_t *colors, uint32_t *indices, scanlod_mesh_bound *written)
 {
-    sl_lod_mesh mesh;
-    if (sl_lod_generate(&model->lod, k, &mesh, NULL) != 0)
-        return -1;
+    /* Straight into the caller's arrays: the bound is the accumulation table's count, so a
+     * mesh past it (a model whose table is wrong) fails instead of writing past them. */
     scanlod_mesh_bound bound = scanlod_extract_bound(model, k);
-    if (mesh.vertex_count > bound.vertices || mesh.triangle_count > bound.triangles) {
-        /* The caller sized its buffers by the accumulation table, which this model's
-         * mesh exceeds (a model whose table is wrong): write nothing rather than past them. */
-        sl_lod_mesh_release(&mesh);
+    sl_lod_mesh mesh = {0, 0, positions, normals, colors, indices};
+    written->vertices = written->triangles = 0;
+    if (sl_lod_generate_into(&model->lod, k, &mesh, bound.vertices, bound.triangles, NULL) != 0)
         return -1;
-    }
-    if (mesh.vertex_count) { /* the coarsest levels may be empty (arrays NULL) */
-        memcpy(positions, mesh.positions, mesh.vertex_count * 3 * sizeof(float));
-        if (normals)
-            memcpy(normals, mesh.normals, mesh.vertex_count * 3 * sizeof(float));
-        if (colors && mesh.colors)
-            memcpy(colors, mesh.colors, mesh.vertex_count * 4);
-        else if (colors)
-            memset(colors, 255, mesh.vertex_count * 4);
-        memcpy(indices, mesh.indices, mesh.triangle_count * 3 * sizeof(uint32_t));
-    }
+    if (colors && !model->lod.tree.crossing_color)
+        memset(colors, 255, mesh.vertex_count * 4);
     written->vertices = mesh.vertex_count;
     written->triangles = mesh.triangle_count;
-    sl_lod_mesh_release(&mesh);
     return 0;
 }

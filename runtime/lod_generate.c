@@ -25,7 +25,7 @@ void sl_lod_model_release(sl_lod_model *m)
     free(m->expansion_index);
     free(m->accumulation);
     free(m->error_after);
-    free(m->scratch);
+    sl_mesh_scratch_release(&m->scratch);
     free(m->split_expansion);
     free(m->surface_before);
     sl_neighbours_release(&m->neighbours);
@@ -121,20 +121,19 @@ int sl_lod_model_prepare(sl_lod_model *m)
         if (t->nodes[i].level > 0)
             internal = i + 1; /* internal nodes come first (sorted by level) */
     free(m->expansion_index);
-    free(m->scratch);
+    sl_mesh_scratch_release(&m->scratch);
     free(m->split_expansion);
     free(m->surface_before);
     m->split_nodes = internal;
     m->surface_before = malloc(((size_t)m->expansion_count + 1) * sizeof *m->surface_before);
     m->expansion_index = malloc((n ? n : 1) * sizeof *m->expansion_index);
-    m->scratch = malloc((t->crossing_count ? t->crossing_count : 1) * sizeof *m->scratch);
     m->split_expansion = malloc(((size_t)internal * SL_LOD_SPLIT_DIRS + 1) *
                                 sizeof *m->split_expansion);
-    if (!m->expansion_index || !m->scratch || !m->split_expansion || !m->surface_before)
+    if (!m->expansion_index || !m->split_expansion || !m->surface_before ||
+        sl_mesh_scratch_init(&m->scratch, t) != 0)
         return -1;
     if (sl_lod_surface_counts(m) != 0)
         return -1;
-    memset(m->scratch, 0xff, (size_t)t->crossing_count * sizeof *m->scratch);
     memset(m->expansion_index, 0xff, (size_t)n * sizeof *m->expansion_index);
     for (uint32_t i = 0; i < m->expansion_count; i++)
         m->expansion_index[m->lod_array[i]] = i;
@@ -541,7 +540,7 @@ static void fetch_cell_data(const sl_lod_model *m, uint32_t n)
     const sl_octree_node *node = &t->nodes[n];
     const uint32_t *ids = t->node_crossings + node->crossing_base;
     for (int i = 0, count = __builtin_popcount(node->edge_mask); i < count; i++) {
-        __builtin_prefetch(&m->scratch[ids[i]]);
+        __builtin_prefetch(&m->scratch.vertex_of_crossing[ids[i]]);
         __builtin_prefetch(&t->crossing_position[3 * (size_t)ids[i]]);
     }
     if (node->level > 0)
@@ -550,17 +549,9 @@ static void fetch_cell_data(const sl_lod_model *m, uint32_t n)
 
 #define CELLS_AHEAD 8 /* frontier cells fetched before they are drawn (a power of 2) */
 
-int sl_lod_generate(sl_lod_model *m, uint32_t k, sl_lod_mesh *out, uint64_t *cracks)
+/* Draws the frontier after k expansions into the builder; returns the crack count. */
+static uint64_t draw_frontier(sl_lod_model *m, uint32_t k, sl_mesh_builder *b)
 {
-    memset(out, 0, sizeof *out);
-    if (k > m->expansion_count)
-        k = m->expansion_count;
-    sl_mesh_builder b;
-    if (sl_mesh_builder_init(&b, &m->tree, m->scratch))
-        return -1;
-    /* The accumulation table says how many triangles this mesh has: size the output once
-     * (it is only a hint; the builder still grows if a model's table were off). */
-    sl_mesh_builder_reserve(&b, m->accumulation[k]);
     const split_table *st = split_table_get();
     uint64_t incomplete = 0;
     /* The frontier in the order of sl_lod_frontier, each cell drawn CELLS_AHEAD cells after
@@ -580,9 +571,40 @@ int sl_lod_generate(sl_lod_model *m, uint32_t k, sl_lod_mesh *out, uint64_t *cra
             fetch_cell(m, ahead);
         if (half != SL_OCTREE_NONE)
             fetch_cell_data(m, half);
-        incomplete += (uint64_t)draw_cell(m, k, ring[pos & mask], st, &b);
+        incomplete += (uint64_t)draw_cell(m, k, ring[pos & mask], st, b);
     }
+    return incomplete;
+}
+
+int sl_lod_generate(sl_lod_model *m, uint32_t k, sl_lod_mesh *out, uint64_t *cracks)
+{
+    memset(out, 0, sizeof *out);
+    if (k > m->expansion_count)
+        k = m->expansion_count;
+    sl_mesh_builder b;
+    if (sl_mesh_builder_init(&b, &m->tree, &m->scratch))
+        return -1;
+    /* The accumulation table says how many triangles this mesh has: size the output once
+     * (it is only a hint; the builder still grows if a model's table were off). */
+    sl_mesh_builder_reserve(&b, m->accumulation[k]);
+    uint64_t incomplete = draw_frontier(m, k, &b);
     if (cracks)
         *cracks = incomplete;
     return sl_mesh_builder_finish(&b, out);
+}
+
+int sl_lod_generate_into(sl_lod_model *m, uint32_t k, sl_lod_mesh *buffers,
+                         uint64_t vertex_capacity, uint64_t triangle_capacity, uint64_t *cracks)
+{
+    if (k > m->expansion_count)
+        k = m->expansion_count;
+    sl_mesh_builder b;
+    if (sl_mesh_builder_init(&b, &m->tree, &m->scratch))
+        return -1;
+    sl_mesh_builder_use_buffers(&b, buffers, vertex_capacity, triangle_capacity);
+    sl_mesh_builder_reserve(&b, m->accumulation[k]);
+    uint64_t incomplete = draw_frontier(m, k, &b);
+    if (cracks)
+        *cracks = incomplete;
+    return sl_mesh_builder_finish(&b, buffers);
 }

@@ -14,19 +14,47 @@ void sl_lod_mesh_release(sl_lod_mesh *m)
     memset(m, 0, sizeof *m);
 }
 
-int sl_mesh_builder_init(sl_mesh_builder *b, const sl_octree *tree, uint32_t *scratch)
+int sl_mesh_scratch_init(sl_mesh_scratch *s, const sl_octree *tree)
+{
+    memset(s, 0, sizeof *s);
+    size_t n = tree->crossing_count ? tree->crossing_count : 1;
+    s->vertex_of_crossing = malloc(n * sizeof *s->vertex_of_crossing);
+    if (!s->vertex_of_crossing)
+        return -1;
+    memset(s->vertex_of_crossing, 0xff, n * sizeof *s->vertex_of_crossing);
+    return 0;
+}
+
+void sl_mesh_scratch_release(sl_mesh_scratch *s)
+{
+    free(s->vertex_of_crossing);
+    free(s->used);
+    memset(s, 0, sizeof *s);
+}
+
+int sl_mesh_builder_init(sl_mesh_builder *b, const sl_octree *tree, sl_mesh_scratch *scratch)
 {
     memset(b, 0, sizeof *b);
     b->tree = tree;
     if (!scratch) {
-        scratch = malloc((tree->crossing_count ? tree->crossing_count : 1) * sizeof *scratch);
-        if (!scratch)
+        if (sl_mesh_scratch_init(&b->own_scratch, tree))
             return -1;
-        memset(scratch, 0xff, (size_t)tree->crossing_count * sizeof *scratch);
-        b->owns_scratch = 1;
+        scratch = &b->own_scratch;
     }
-    b->vertex_of_crossing = scratch;
+    b->scratch = scratch;
     return 0;
+}
+
+void sl_mesh_builder_use_buffers(sl_mesh_builder *b, const sl_lod_mesh *buffers,
+                                 uint64_t vertex_capacity, uint64_t triangle_capacity)
+{
+    b->mesh = *buffers;
+    b->mesh.vertex_count = b->mesh.triangle_count = 0;
+    if (!b->tree->crossing_color)
+        b->mesh.colors = NULL;
+    b->vertex_capacity = vertex_capacity;
+    b->triangle_capacity = triangle_capacity;
+    b->caller_buffers = 1;
 }
 
 /* Capacity for `need` elements: exactly that many when `exact`, else doubling. */
@@ -48,12 +76,20 @@ static int grow(void **p, uint64_t *cap, uint64_t need, size_t elem, int exact)
 static int reserve_vertices(sl_mesh_builder *b, uint64_t need, int exact)
 {
     sl_lod_mesh *m = &b->mesh;
-    uint64_t cap = b->vertex_capacity, c1 = cap, c2 = cap, c3 = cap;
-    if (grow((void **)&m->positions, &c1, need, 3 * sizeof(float), exact) ||
-        grow((void **)&b->used, &c2, need, sizeof(uint32_t), exact) ||
-        (b->tree->crossing_color && grow((void **)&m->colors, &c3, need, 4, exact)))
+    sl_mesh_scratch *s = b->scratch;
+    if (grow((void **)&s->used, &s->used_capacity, need, sizeof(uint32_t), exact))
         return -1;
-    b->vertex_capacity = c1;
+    if (b->caller_buffers) {
+        if (need > b->vertex_capacity)
+            return -1;
+    } else {
+        uint64_t cap = b->vertex_capacity, c1 = cap, c3 = cap;
+        if (grow((void **)&m->positions, &c1, need, 3 * sizeof(float), exact) ||
+            (b->tree->crossing_color && grow((void **)&m->colors, &c3, need, 4, exact)))
+            return -1;
+        b->vertex_capacity = c1;
+    }
+    b->vertex_room = b->vertex_capacity < s->used_capacity ? b->vertex_capacity : s->used_capacity;
     return 0;
 }
 
@@ -61,20 +97,25 @@ void sl_mesh_builder_reserve(sl_mesh_builder *b, uint64_t triangles)
 {
     /* A closed surface has about half as many vertices as triangles; an open scan's
      * boundary and loop centroids add a few: estimate, the builder grows past it. */
+    uint64_t vertices = triangles / 2 + triangles / 16 + 64;
+    if (b->caller_buffers) {
+        reserve_vertices(b, vertices < b->vertex_capacity ? vertices : b->vertex_capacity, 0);
+        return;
+    }
     uint64_t cap = b->triangle_capacity;
     if (grow((void **)&b->mesh.indices, &cap, triangles, 3 * sizeof(uint32_t), 1) == 0)
         b->triangle_capacity = cap;
-    reserve_vertices(b, triangles / 2 + triangles / 16 + 64, 1);
+    reserve_vertices(b, vertices, 1);
 }
 
 /* Vertex index of a crossing, mapping it on first use. */
 static inline uint32_t vertex_of(sl_mesh_builder *b, uint32_t crossing)
 {
-    uint32_t v = b->vertex_of_crossing[crossing];
+    uint32_t v = b->scratch->vertex_of_crossing[crossing];
     if (v != SL_OCTREE_NONE)
         return v;
     sl_lod_mesh *m = &b->mesh;
-    if (m->vertex_count >= b->vertex_capacity && reserve_vertices(b, m->vertex_count + 1, 0)) {
+    if (m->vertex_count >= b->vertex_room && reserve_vertices(b, m->vertex_count + 1, 0)) {
         b->failed = 1;
         return 0;
     }
@@ -86,8 +127,8 @@ static inline uint32_t vertex_of(sl_mesh_builder *b, uint32_t crossing)
     q[2] = p[2];
     if (m->colors)
         memcpy(m->colors + 4 * (size_t)v, b->tree->crossing_color + 4 * (size_t)crossing, 4);
-    b->used[v] = crossing;
-    b->vertex_of_crossing[crossing] = v;
+    b->scratch->used[v] = crossing;
+    b->scratch->vertex_of_crossing[crossing] = v;
     return v;
 }
 
@@ -116,19 +157,20 @@ static uint32_t centroid_vertex(sl_mesh_builder *b, const sl_mc_triangles *tri, 
     if (m->colors)
         for (int k = 0; k < 4; k++)
             m->colors[4 * (size_t)v + k] = (uint8_t)lround(col[k] / n);
-    b->used[v] = SL_OCTREE_NONE;
+    b->scratch->used[v] = SL_OCTREE_NONE;
     return v;
 }
 
-/* Room for `count` more triangles; 0, or -1 (and failed) when out of memory. */
+/* Room for `count` more triangles; 0, or -1 (and failed) when out of memory or past the
+ * caller's capacity. */
 static int reserve_triangles(sl_mesh_builder *b, int count)
 {
     sl_lod_mesh *m = &b->mesh;
     if (m->triangle_count + (uint64_t)count <= b->triangle_capacity)
         return 0;
     uint64_t cap = b->triangle_capacity;
-    if (grow((void **)&m->indices, &cap, m->triangle_count + (uint64_t)count,
-             3 * sizeof(uint32_t), 0)) {
+    if (b->caller_buffers || grow((void **)&m->indices, &cap, m->triangle_count + (uint64_t)count,
+                                  3 * sizeof(uint32_t), 0)) {
         b->failed = 1;
         return -1;
     }
@@ -199,29 +241,40 @@ static void compute_normals(sl_lod_mesh *m)
 
 static void reset_scratch(sl_mesh_builder *b)
 {
-    for (uint64_t v = 0; v < b->mesh.vertex_count; v++)
-        if (b->used && b->used[v] != SL_OCTREE_NONE)
-            b->vertex_of_crossing[b->used[v]] = SL_OCTREE_NONE;
+    sl_mesh_scratch *s = b->scratch;
+    if (!s)
+        return;
+    uint64_t made = b->mesh.vertex_count < s->used_capacity ? b->mesh.vertex_count
+                                                            : s->used_capacity;
+    for (uint64_t v = 0; v < made; v++)
+        if (s->used[v] != SL_OCTREE_NONE)
+            s->vertex_of_crossing[s->used[v]] = SL_OCTREE_NONE;
+}
+
+/* Resets the scratch and frees what the builder owns (the mesh too when `mesh_too`). */
+static void builder_end(sl_mesh_builder *b, int mesh_too)
+{
+    reset_scratch(b);
+    if (b->scratch == &b->own_scratch)
+        sl_mesh_scratch_release(&b->own_scratch);
+    b->scratch = NULL;
+    if (mesh_too && !b->caller_buffers)
+        sl_lod_mesh_release(&b->mesh);
 }
 
 int sl_mesh_builder_finish(sl_mesh_builder *b, sl_lod_mesh *out)
 {
-    reset_scratch(b);
     sl_lod_mesh *m = &b->mesh;
-    if (!b->failed) {
+    if (!b->failed && !b->caller_buffers) {
         m->normals = malloc((m->vertex_count ? m->vertex_count : 1) * 3 * sizeof(float));
         if (!m->normals)
             b->failed = 1;
-        else
-            compute_normals(m);
     }
-    free(b->used);
-    b->used = NULL;
-    if (b->owns_scratch)
-        free(b->vertex_of_crossing);
-    b->vertex_of_crossing = NULL;
+    if (!b->failed && m->normals)
+        compute_normals(m);
+    builder_end(b, b->failed);
     if (b->failed) {
-        sl_lod_mesh_release(m);
+        memset(m, 0, sizeof *m);
         return -1;
     }
     *out = *m;
@@ -231,11 +284,7 @@ int sl_mesh_builder_finish(sl_mesh_builder *b, sl_lod_mesh *out)
 
 void sl_mesh_builder_abort(sl_mesh_builder *b)
 {
-    reset_scratch(b);
-    free(b->used);
-    if (b->owns_scratch)
-        free(b->vertex_of_crossing);
-    sl_lod_mesh_release(&b->mesh);
+    builder_end(b, 1);
     memset(b, 0, sizeof *b);
 }
 

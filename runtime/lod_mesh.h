@@ -22,21 +22,38 @@ typedef struct sl_lod_mesh {
 
 void sl_lod_mesh_release(sl_lod_mesh *m);
 
+/* What a builder needs besides its output, kept between extractions so that repeated
+ * ones stay O(m): the crossing -> vertex map (crossing_count entries, all SL_OCTREE_NONE
+ * between uses) and the crossing of each vertex made (to reset the map entry by entry). */
+typedef struct sl_mesh_scratch {
+    uint32_t *vertex_of_crossing;
+    uint32_t *used;
+    uint64_t used_capacity;
+} sl_mesh_scratch;
+
+int sl_mesh_scratch_init(sl_mesh_scratch *s, const sl_octree *tree);
+void sl_mesh_scratch_release(sl_mesh_scratch *s);
+
 typedef struct sl_mesh_builder {
     const sl_octree *tree;
-    uint32_t *vertex_of_crossing; /* scratch, crossing_count entries, all NONE when idle */
+    sl_mesh_scratch *scratch;
+    sl_mesh_scratch own_scratch;  /* when the caller gave none */
     sl_lod_mesh mesh;
     uint64_t vertex_capacity, triangle_capacity;
-    uint32_t *used;               /* crossing ids mapped so far (to reset the scratch) */
-    int owns_scratch;
-    int failed;                   /* out of memory */
+    uint64_t vertex_room;         /* vertices that fit both the output and scratch->used */
+    int caller_buffers;           /* mesh arrays belong to the caller: never grown or freed */
+    int failed;                   /* out of memory, or past the caller's capacity */
 } sl_mesh_builder;
 
-/* `scratch` may be NULL (allocated here, O(crossings) once) or a caller-kept array of
- * crossing_count entries all SL_OCTREE_NONE, which lets repeated extractions stay O(m). */
-int sl_mesh_builder_init(sl_mesh_builder *b, const sl_octree *tree, uint32_t *scratch);
+/* `scratch` may be NULL (allocated here, O(crossings)) or a caller-kept one. */
+int sl_mesh_builder_init(sl_mesh_builder *b, const sl_octree *tree, sl_mesh_scratch *scratch);
 /* Sizes the output for about `triangles` triangles (a hint: the builder grows past it). */
 void sl_mesh_builder_reserve(sl_mesh_builder *b, uint64_t triangles);
+/* Writes into the caller's arrays instead (normals may be NULL; colors are written only
+ * when both the array and the octree's colours exist): nothing is allocated for the
+ * output, and a mesh larger than the capacities fails rather than grows. */
+void sl_mesh_builder_use_buffers(sl_mesh_builder *b, const sl_lod_mesh *buffers,
+                                 uint64_t vertex_capacity, uint64_t triangle_capacity);
 /* Adds the triangles of one cell: `point_id` maps the cell's point ids to crossing ids;
  * centroid points (SL_MC_CENTROID_POINT) become new vertices at their loop's mean. */
 void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
@@ -45,7 +62,8 @@ void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
  * `point_crossing` maps to a crossing id (a cell without centroid vertices). */
 void sl_mesh_builder_add_triangles(sl_mesh_builder *b, int count, const uint8_t *points,
                                    const uint32_t *point_crossing);
-/* Finishes normals, resets the scratch, moves the mesh to *out. Returns -1 on OOM. */
+/* Finishes normals, resets the scratch, moves the mesh to *out (with caller buffers: their
+ * pointers and the counts). Returns -1 when out of memory or past the capacities. */
 int sl_mesh_builder_finish(sl_mesh_builder *b, sl_lod_mesh *out);
 void sl_mesh_builder_abort(sl_mesh_builder *b);
 

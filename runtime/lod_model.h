@@ -59,7 +59,7 @@ typedef struct sl_lod_model {
     float *error_after;      /* expansion_count + 1 entries */
     sl_neighbours neighbours;
     sl_transitions transitions;
-    uint32_t *scratch;       /* crossing -> vertex map for O(m) extraction (all NONE) */
+    sl_mesh_scratch scratch; /* the builder's, kept between extractions */
     /* Derived at load (sl_lod_model_prepare), for generation: per internal node n (n <
      * split_nodes), SL_LOD_SPLIT_DIRS entries at n * SL_LOD_SPLIT_DIRS, the expansion index
      * of its same-level neighbour in each face and edge direction (NONE when absent), so a
@@ -129,6 +129,12 @@ uint64_t sl_lod_frontier(const sl_lod_model *m, uint32_t k, uint32_t *cells);
 /* The mesh after k expansions (k <= expansion_count). `cracks` (may be NULL) gets the
  * count of cells drawn without a split they needed. Returns 0 or -1 on OOM. */
 int sl_lod_generate(sl_lod_model *m, uint32_t k, sl_lod_mesh *out, uint64_t *cracks);
+/* The same mesh written into the caller's arrays (positions, indices; normals and colors
+ * may be NULL; colors stay unwritten when the octree has none): nothing is allocated for
+ * the output. On return *buffers holds the counts. Returns -1 when the mesh does not fit
+ * the capacities (then the arrays hold a partial mesh) or scratch cannot grow. */
+int sl_lod_generate_into(sl_lod_model *m, uint32_t k, sl_lod_mesh *buffers,
+                         uint64_t vertex_capacity, uint64_t triangle_capacity, uint64_t *cracks);
 
 /* k for a triangle budget (largest k whose accumulation <= budget; at least 0), a LOD
  * percent (paper Table 1: the smallest k whose first k expansions include

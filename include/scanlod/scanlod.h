@@ -61,8 +61,10 @@ scanlod_mesh_bound scanlod_extract_bound(const scanlod_model *model, uint32_t k)
  * positions (3 floats per vertex), normals (3 floats per vertex, may be NULL), colors
  * (RGBA bytes per vertex, may be NULL; white when the model has no colour), indices (3 per
  * triangle, counter-clockwise seen from outside). *written (OUT) gets the counts.
+ * Nothing is allocated for the mesh: it is generated into these arrays directly.
  * Returns 0, or non-zero when out of memory or when the mesh would not fit the bound (a
- * model whose accumulation table is wrong; nothing is written then). */
+ * model whose accumulation table is wrong; the arrays' contents are then unspecified and
+ * *written is zero). */
 int scanlod_extract(scanlod_model *model, uint32_t k, float *positions, float *normals,
                     uint8_t *colors, uint32_t *indices, scanlod_mesh_bound *written);
 

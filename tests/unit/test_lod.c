@@ -153,6 +153,48 @@ static void test_model(sdf_fn sdf, int n, sl_priority_metric metric, const char 
         sl_lod_mesh_release(&at100);
         sl_lod_mesh_release(&finest);
     }
+    /* Into caller buffers (the runtime API's path): the same bytes as the allocating
+     * path at several k; a capacity one triangle short fails, and leaves the scratch
+     * clean for the next extraction. */
+    {
+        uint64_t cap_t = 0; /* an expansion may also remove triangles: the largest level */
+        for (uint32_t k = 0; k <= m.expansion_count; k++)
+            cap_t = m.accumulation[k] > cap_t ? m.accumulation[k] : cap_t;
+        uint64_t cap_v = 3 * cap_t + 1;
+        sl_lod_mesh buf = {0, 0, malloc(cap_v * 12), malloc(cap_v * 12), malloc(cap_v * 4),
+                           malloc((cap_t + 1) * 12)};
+        for (int p = 0; p <= 100; p += 25) {
+            uint32_t k = sl_lod_expansions_for_percent(&m, p);
+            sl_lod_mesh ref, into = buf;
+            CHECK(sl_lod_generate(&m, k, &ref, NULL) == 0);
+            CHECK(sl_lod_generate_into(&m, k, &into, cap_v, cap_t, NULL) == 0);
+            int same = into.triangle_count == ref.triangle_count &&
+                       into.vertex_count == ref.vertex_count;
+            if (same && ref.vertex_count) /* (an empty level has NULL arrays) */
+                same = memcmp(into.positions, ref.positions, ref.vertex_count * 12) == 0 &&
+                       memcmp(into.normals, ref.normals, ref.vertex_count * 12) == 0 &&
+                       memcmp(into.indices, ref.indices, ref.triangle_count * 12) == 0 &&
+                       (!ref.colors || memcmp(ref.colors, into.colors, ref.vertex_count * 4) == 0);
+            CHECK_MSG(same,
+                      "%s: generate_into differs from generate at %d %%", name, p);
+            if (ref.triangle_count > 0) {
+                sl_lod_mesh short_buf = buf;
+                CHECK(sl_lod_generate_into(&m, k, &short_buf, cap_v, ref.triangle_count - 1,
+                                           NULL) != 0);
+                sl_lod_mesh again;
+                CHECK(sl_lod_generate(&m, k, &again, NULL) == 0);
+                CHECK_MSG(again.vertex_count == ref.vertex_count &&
+                              memcmp(again.indices, ref.indices, ref.triangle_count * 12) == 0,
+                          "%s: a failed extraction left the scratch dirty", name);
+                sl_lod_mesh_release(&again);
+            }
+            sl_lod_mesh_release(&ref);
+        }
+        free(buf.positions);
+        free(buf.normals);
+        free(buf.colors);
+        free(buf.indices);
+    }
     printf("%s: %u nodes, %u expansions, triangles %llu .. %llu\n", name, m.tree.node_count,
            m.expansion_count, (unsigned long long)m.accumulation[0],
            (unsigned long long)m.accumulation[m.expansion_count]);

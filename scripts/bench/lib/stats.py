@@ -51,20 +51,23 @@ def stage_record(samples_by_stage):
 EXTRACT_RE = re.compile(
     r"(?P<triangles>\d+) triangles, (?P<vertices>\d+) vertices"
     r"(?:, max error (?P<max_error>[-+0-9.eE]+|inf|nan))?"
-    r"(?:, generated in (?P<seconds>[-+0-9.eE]+) s)?")
+    r"(?:, generated in (?P<seconds>[-+0-9.eE]+) s)?"
+    r"(?:, then (?P<repeat>\d+) more in median (?P<warm>[-+0-9.eE]+) s)?")
 
 
 def parse_extract(text):
     """One line of `scanlod extract` -> {"triangles", "vertices", "seconds", "expansions"}.
 
     Model extraction: "expansions K of T: N triangles, V vertices, max error E,
-    generated in X s -> out.ply"; octree levels: "level L: N triangles, V vertices -> out".
+    generated in X s[, then R more in median W s (min M s)] -> out.ply" (X: the first
+    extraction in the process, "seconds"; W: the warm median, "warm_seconds"); octree levels: "level L: N triangles, V vertices -> out".
     """
     m = EXTRACT_RE.search(text)
     if not m:
         raise ValueError("unrecognised extract output: %r" % text.strip()[:200])
     out = {"triangles": int(m.group("triangles")), "vertices": int(m.group("vertices")),
-           "seconds": float(m.group("seconds")) if m.group("seconds") else None}
+           "seconds": float(m.group("seconds")) if m.group("seconds") else None,
+           "warm_seconds": float(m.group("warm")) if m.group("warm") else None}
     e = re.search(r"expansions (\d+) of (\d+)", text)
     if e:
         out["expansions"] = int(e.group(1))
