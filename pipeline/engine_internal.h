@@ -80,6 +80,10 @@ int sl_engine_lease_renew(sl_engine *e, const char *stage, const char *name, sl_
                           sl_error *err);
 int sl_engine_lease_check(sl_engine *e, const char *stage, const char *name,
                           const sl_ticket *t, sl_error *err);
+/* A run's scan is announced like a claim (WORK/queue/_scan/claimed/HOST.PID, with a
+ * lease): it may still enqueue work, so others do not call the collection finished while
+ * it lasts. mark: 1 = announce or renew (when half the lease is gone), 0 = withdraw. */
+void sl_engine_scan_mark(sl_engine *e, int mark);
 
 /* engine_summary.c: OUTPUT/summary.json and summary.md over the scanned items. */
 int sl_engine_write_summary(sl_engine *e, sl_error *err);

@@ -130,6 +130,7 @@ static int scan_item(sl_engine *e, const char *rel, sl_error *err)
     size_t n = strlen(rel);
     snprintf(item, sizeof item, "%.*s", (int)(n - 4), rel);
     e->counts.items++;
+    sl_engine_scan_mark(e, 1); /* renews the announcement on a long scan */
     if (e->item_count == e->item_capacity) {
         uint64_t cap = e->item_capacity ? 2 * e->item_capacity : 64;
         char **grown = realloc(e->items, cap * sizeof *grown);
@@ -211,8 +212,10 @@ static int walk(sl_engine *e, const char *rel_dir, int depth, sl_error *err)
 int sl_engine_scan(sl_engine *e, sl_error *err)
 {
     double start = sl_now_seconds();
+    sl_engine_scan_mark(e, 1);
     sl_engine_gc(e);
     int rc = walk(e, "", 0, err);
+    sl_engine_scan_mark(e, 0);
     char extra[128];
     snprintf(extra, sizeof extra, "\"items\":%llu", (unsigned long long)e->counts.items);
     sl_log_event("scan_end", "scan", NULL, sl_now_seconds() - start, rc ? err : NULL, extra);

@@ -172,6 +172,64 @@ static int claim_one(sl_engine *e, int s, char *name, size_t name_size, sl_ticke
     return rc ? rc : claimed;
 }
 
+#define SCAN_QUEUE "_scan"
+
+void sl_engine_scan_mark(sl_engine *e, int mark)
+{
+    static int64_t expires; /* of this process's announcement; 0 = none */
+    char name[128];
+    snprintf(name, sizeof name, "%s.%ld", e->self.host, e->self.pid);
+    sl_error err;
+    sl_error_init(&err);
+    if (!mark) {
+        char path[PATH_MAX];
+        sl_queue_path(path, sizeof path, e->work, SCAN_QUEUE, SL_STATE_CLAIMED, name);
+        unlink(path);
+        expires = 0;
+        return;
+    }
+    if (expires && (int64_t)sl_now_seconds() < expires - e->lease_seconds / 2)
+        return;
+    sl_ticket t;
+    sl_ticket_init(&t);
+    snprintf(t.item, sizeof t.item, "%s", "(scan)");
+    stamp_lease(e, &t);
+    /* Best effort: without it (full disk) others may finish early and exit 75. */
+    if (sl_queue_create(e->work, SCAN_QUEUE, &err) == 0 &&
+        sl_queue_put(e->work, SCAN_QUEUE, SL_STATE_CLAIMED, name, &t, &err) == 0)
+        expires = t.expires;
+}
+
+/* Scans announced by other live processes (their announcements when dead are removed). */
+static int scans_elsewhere(const sl_engine *e)
+{
+    char **names;
+    int count = 0, live = 0;
+    sl_error err;
+    sl_error_init(&err);
+    if (sl_queue_list(e->work, SCAN_QUEUE, SL_STATE_CLAIMED, &names, &count, &err) != 0)
+        return 0;
+    int64_t now = (int64_t)sl_now_seconds();
+    for (int i = 0; i < count; i++) {
+        char path[PATH_MAX];
+        sl_queue_path(path, sizeof path, e->work, SCAN_QUEUE, SL_STATE_CLAIMED, names[i]);
+        sl_ticket t;
+        sl_error terr;
+        sl_error_init(&terr);
+        if (sl_ticket_read(path, &t, &terr) != 0)
+            continue; /* being written */
+        if (t.pid == e->self.pid && strcmp(t.host, e->self.host) == 0)
+            continue;
+        int alive = sl_identity_alive(&e->self, &t);
+        if (alive == 1 || (alive < 0 && t.expires >= now))
+            live++;
+        else
+            unlink(path);
+    }
+    free(names);
+    return live;
+}
+
 /* Number of tickets of every stage in `state` (0 when a queue cannot be listed). */
 static int tickets_in(const sl_engine *e, int state)
 {
@@ -188,9 +246,29 @@ static int tickets_in(const sl_engine *e, int state)
     return total;
 }
 
+static int queues_unsettled(const sl_engine *e)
+{
+    /* In the order tickets move (ready, claimed of stage 0, then of stage 1, ...): a
+     * ticket moving on during the sweep moves ahead of it, where it is still found
+     * unless it outruns the sweep through a whole stage. */
+    int total = 0;
+    for (int s = 0; s < e->stage_count; s++)
+        for (int state = SL_STATE_READY; state <= SL_STATE_CLAIMED; state++) {
+            char **names;
+            int count = 0;
+            sl_error err;
+            sl_error_init(&err);
+            if (sl_queue_list(e->work, e->stages[s]->name, state, &names, &count, &err) == 0)
+                free(names);
+            total += count;
+        }
+    return total;
+}
+
 int sl_engine_work(sl_engine *e, sl_error *err)
 {
     double last_reclaim = 0;
+    int quiet_once = 0;
     for (;;) {
         if (*sl_interrupt_flag() || e->stop)
             break;
@@ -220,23 +298,31 @@ int sl_engine_work(sl_engine *e, sl_error *err)
             return rc;
         }
         if (!claimed) {
-            /* Others still hold claims: their items may still fail back to ready or
-             * enqueue a next stage, and the exit code should describe the finished
-             * collection, so wait for them (a dead owner is reclaimed above). */
-            if (tickets_in(e, SL_STATE_CLAIMED) > 0) {
+            /* Others still hold claims (their items may still fail back to ready or
+             * enqueue a next stage) or are scanning (and may enqueue items), and the
+             * exit code should describe the finished collection, so wait for them (a
+             * dead owner is reclaimed above, a dead scanner's mark dropped). */
+            if (tickets_in(e, SL_STATE_CLAIMED) > 0 || scans_elsewhere(e) > 0) {
                 struct timespec pause = {0, 250 * 1000 * 1000};
                 nanosleep(&pause, NULL);
+                quiet_once = 0;
                 continue;
             }
             /* The sweeps above read one directory after another while other workers
              * move tickets forward, so one can slip between them. An unfinished item
              * always has a ready or claimed ticket (engine_child.c enqueues the next
-             * step before it releases a claim), so a last count that sees neither
-             * means the collection is settled. */
-            if (tickets_in(e, SL_STATE_READY) + tickets_in(e, SL_STATE_CLAIMED) == 0)
-                break;
+             * step before it releases a claim), so two counts a moment apart that
+             * see neither mean the collection is settled. */
+            if (queues_unsettled(e) == 0) {
+                if (quiet_once)
+                    break;
+                quiet_once = 1; /* and once more a moment later */
+                struct timespec moment = {0, 50 * 1000 * 1000};
+                nanosleep(&moment, NULL);
+            }
             continue;
         }
+        quiet_once = 0;
         rc = sl_engine_process(e, s, name, &t, err);
         if (rc && sl_error_class_of(rc) == SL_CLASS_STORAGE) {
             e->stop = 1;
