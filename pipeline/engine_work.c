@@ -230,38 +230,35 @@ static int scans_elsewhere(const sl_engine *e)
     return live;
 }
 
-/* Number of tickets of every stage in `state` (0 when a queue cannot be listed). */
+/* Tickets of stage s in `state` (0 when the queue cannot be listed). */
+static int count_tickets(const sl_engine *e, int s, int state)
+{
+    char **names;
+    int count = 0;
+    sl_error err;
+    sl_error_init(&err);
+    if (sl_queue_list(e->work, e->stages[s]->name, state, &names, &count, &err) == 0)
+        free(names);
+    return count;
+}
+
+/* Tickets of every stage in `state`. */
 static int tickets_in(const sl_engine *e, int state)
 {
     int total = 0;
-    for (int s = 0; s < e->stage_count; s++) {
-        char **names;
-        int count = 0;
-        sl_error err;
-        sl_error_init(&err);
-        if (sl_queue_list(e->work, e->stages[s]->name, state, &names, &count, &err) == 0)
-            free(names);
-        total += count;
-    }
+    for (int s = 0; s < e->stage_count; s++)
+        total += count_tickets(e, s, state);
     return total;
 }
 
+/* Ready and claimed tickets, read in the order tickets move (ready, claimed of stage 0,
+ * then of stage 1, ...): a ticket moving on during the sweep moves ahead of it, where it
+ * is still found unless it outruns the sweep through a whole stage. */
 static int queues_unsettled(const sl_engine *e)
 {
-    /* In the order tickets move (ready, claimed of stage 0, then of stage 1, ...): a
-     * ticket moving on during the sweep moves ahead of it, where it is still found
-     * unless it outruns the sweep through a whole stage. */
     int total = 0;
     for (int s = 0; s < e->stage_count; s++)
-        for (int state = SL_STATE_READY; state <= SL_STATE_CLAIMED; state++) {
-            char **names;
-            int count = 0;
-            sl_error err;
-            sl_error_init(&err);
-            if (sl_queue_list(e->work, e->stages[s]->name, state, &names, &count, &err) == 0)
-                free(names);
-            total += count;
-        }
+        total += count_tickets(e, s, SL_STATE_READY) + count_tickets(e, s, SL_STATE_CLAIMED);
     return total;
 }
 
