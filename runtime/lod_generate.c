@@ -26,6 +26,7 @@ void sl_lod_model_release(sl_lod_model *m)
     free(m->accumulation);
     free(m->error_after);
     sl_mesh_scratch_release(&m->scratch);
+    sl_mc_cache_free(m->mc_cache);
     free(m->split_expansion);
     free(m->surface_before);
     sl_neighbours_release(&m->neighbours);
@@ -122,6 +123,8 @@ int sl_lod_model_prepare(sl_lod_model *m)
             internal = i + 1; /* internal nodes come first (sorted by level) */
     free(m->expansion_index);
     sl_mesh_scratch_release(&m->scratch);
+    sl_mc_cache_free(m->mc_cache);
+    m->mc_cache = sl_mc_cache_new(); /* without it extraction is only slower */
     free(m->split_expansion);
     free(m->surface_before);
     m->split_nodes = internal;
@@ -513,7 +516,7 @@ static int draw_cell(sl_lod_model *m, uint32_t k, uint32_t n, const split_table 
     int rc = apply_splits(st, &m->transitions, node, n, want_faces, want_edges, &cell,
                           point_crossing);
     sl_mc_triangles tri;
-    sl_mc_triangulate(&cell, &tri);
+    sl_mc_triangulate_cached(m->mc_cache, &cell, &tri);
     sl_mesh_builder_add_cell(b, &tri, point_crossing);
     return rc ? 1 : 0;
 }

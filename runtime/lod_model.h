@@ -24,6 +24,7 @@
 #include <stdint.h>
 
 #include "runtime/lod_mesh.h"
+#include "runtime/mc_cache.h"
 #include "runtime/mc_cube.h"
 #include "runtime/octree.h"
 
@@ -60,6 +61,7 @@ typedef struct sl_lod_model {
     sl_neighbours neighbours;
     sl_transitions transitions;
     sl_mesh_scratch scratch; /* the builder's, kept between extractions */
+    sl_mc_cache *mc_cache;   /* transition triangulations seen so far (may be NULL) */
     /* Derived at load (sl_lod_model_prepare), for generation: per internal node n (n <
      * split_nodes), SL_LOD_SPLIT_DIRS entries at n * SL_LOD_SPLIT_DIRS, the expansion index
      * of its same-level neighbour in each face and edge direction (NONE when absent), so a
