@@ -44,6 +44,11 @@ got=$(sed -n 's/.*: \([0-9]*\) triangles.*/\1/p' <<<"$out")
 check "extract --triangles $half gives at most that ($got)" [ -n "$got" ] && [ "$got" -le "$half" ]
 run_scanlod compare "$TMP/in/fandisk.ply" "$TMP/half.ply" --json
 check "compare reads the extracted mesh" [ "$rc" -eq 0 ]
+run_scanlod extract "$model" --triangles "$half" --repeat 3 -o "$TMP/half3.ply"
+check "extract --repeat times 3 more, same mesh ($out)" grep -q "then 3 more in median" <<<"$out" &&
+  cmp -s "$TMP/half.ply" "$TMP/half3.ply"
+run_scanlod extract "$model" --triangles "$half" --repeat 0 -o "$TMP/x.ply"
+check "--repeat 0: usage error (rc $rc)" [ "$rc" -eq 64 ]
 run_scanlod extract "$model" --lod-percent 20 -o "$TMP/p20.glb"
 check "extract --lod-percent 20 to GLB" [ "$rc" -eq 0 -a -s "$TMP/p20.glb" ]
 run_scanlod extract "$model" --max-error 0.01 -o "$TMP/e.obj"
