@@ -178,7 +178,7 @@ def derive(models, st, oc, lod, gr):
         warm = any(v.get("warm") for v in h["ladder"].values())
         lines.append("extraction cost per triangle%s, max/min over budgets 1–100 %%: %s; at "
                      "100 %%: %s triangles/s%s." % (
-                         " (warm: median of repeated extractions in one process)"
+                         " (warm process, caches flushed before each: median of repeated extractions)"
                          if warm else "",
                          ", ".join("%s %.2f" % (n, v["flatness"]) for n, v in
                                    h["ladder"].items() if v["flatness"]),

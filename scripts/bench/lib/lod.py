@@ -12,9 +12,9 @@ Per input of ctx.lod_models, from the reference build:
 - Extraction ladder: `extract --triangles N --repeat WARM_REPEAT` for N = ctx.budgets
   percent of the finest, ctx.extract_reps times each. Two timings of the O(m) generation
   (no file writing) per call: "generated in", the first extraction in a fresh process
-  (cold: lazy symbol binding, first-touch page faults of a new output, empty caches), and
-  the median of WARM_REPEAT more into buffers allocated once, as a viewer holding a model
-  extracts (warm). Per repetition meshopt_simplify from the finest mesh (lod100.ply) to
+  (cold: lazy symbol binding, first-touch page faults of a new output), and the median of
+  WARM_REPEAT more into buffers allocated once, each after a cache flush, as a viewer
+  holding a model extracts between frames (warm process, cold caches). Per repetition meshopt_simplify from the finest mesh (lod100.ply) to
   the same counts (one call per level in one process, as warm as ours), so each speed
   ratio is a pair from one repetition.
 Writes RESULTS/lod.json.

@@ -234,16 +234,16 @@ def section_lod(out, lod, h):
     out.append("### Extraction time per output triangle\n")
     out.append("`scanlod extract MODEL.slod --triangles N --repeat 9`: the O(m) generation, "
                "no file writing. *Warm*: the median of 9 extractions into buffers allocated "
-               "once, in the process that loaded the model (what a viewer using the runtime "
-               "API pays per level; the flatness and speed figures are judged on it). "
-               "*First*: the first extraction in a fresh process (\"generated in\"), which "
-               "adds lazy symbol binding, first-touch page faults of a new output and cold "
-               "caches: a fixed 10–30 µs that dominates the smallest budgets. Median "
-               "[min–max] over the repetitions (see the run settings above). meshopt: "
-               "`meshopt_simplify` from the finest mesh (lod100.ply, already welded) to the "
-               "same count, one call per level in one process, simplify time only (none at "
-               "100 %: nothing to simplify). Speed-up = meshopt / scanlod per repetition, "
-               "median.\n")
+               "once, in the process that loaded the model, each after the CPU caches were "
+               "flushed (a viewer renders between two cuts: the model is in memory, not in "
+               "cache; the flatness and speed figures are judged on it). *First*: the first "
+               "extraction in a fresh process (\"generated in\"), which adds lazy symbol "
+               "binding and first-touch page faults of a new output: a fixed 10–30 µs that "
+               "dominates the smallest budgets. Median [min–max] over the repetitions (see "
+               "the run settings above). meshopt: `meshopt_simplify` from the finest mesh "
+               "(lod100.ply, already welded) to the same count, one call per level in one "
+               "process, simplify time only (none at 100 %: nothing to simplify). Speed-up = "
+               "meshopt / scanlod per repetition, median.\n")
     for name, r in h["ladder"].items():
         fit = ("; time ~ m^%.2f (log-log fit over the budgets)" % r["fit"]
                if r.get("fit") else "")
