@@ -6,8 +6,8 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/build.sh" "$root/build"
 cd "$root"
 status=0
-build/scanlod run config/demo.ini || status=$?
-build/scanlod status config/demo.ini
+build/pipeline/scanlod run config/demo.ini || status=$?
+build/pipeline/scanlod status config/demo.ini
 echo "--- build/demo/output/cow/report.json"
 cat build/demo/output/cow/report.json
 exit $status

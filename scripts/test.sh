@@ -9,6 +9,18 @@ jobs=$(nproc)
 "$root/scripts/build.sh" "$root/build"
 (cd "$root/build" && ctest --output-on-failure --timeout 900 -j "$jobs")
 
+# The README's other command (after the install) must keep working too: the demo converts
+# the bundled scans, and a second run finds nothing to do.
+demo_log=$root/build/demo-check.log
+for pass in first second; do
+  if ! "$root/scripts/demo.sh" >"$demo_log" 2>&1; then
+    cat "$demo_log"
+    echo "scripts/demo.sh failed on its $pass run" >&2
+    exit 1
+  fi
+done
+grep -q "^nothing to do" "$demo_log" || { cat "$demo_log"; echo "demo rerun did work" >&2; exit 1; }
+
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 "$root/scripts/build.sh" "$root/build-asan" -DSCANLOD_SANITIZE=ON -DSCANLOD_BENCH=OFF \
