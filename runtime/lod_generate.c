@@ -6,11 +6,11 @@
  * level finer; the priority order keeps it at most one), with the finer points taken from
  * the cell's precomputed transition record. Cost O(k + m): no search, no sorting.
  */
-#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "runtime/lod_model.h"
+#include "runtime/lod_splits.h"
 
 void sl_lod_model_init(sl_lod_model *m)
 {
@@ -32,86 +32,6 @@ void sl_lod_model_release(sl_lod_model *m)
     sl_neighbours_release(&m->neighbours);
     sl_transitions_release(&m->transitions);
     sl_lod_model_init(m);
-}
-
-static int face_direction(int f)
-{
-    int a = f / 2, d = f % 2 ? 1 : -1;
-    return sl_direction(a == 0 ? d : 0, a == 1 ? d : 0, a == 2 ? d : 0);
-}
-
-/* The 3 same-level neighbours sharing edge e. */
-static void edge_directions(int e, int dirs[3])
-{
-    int a = sl_mc_edge_axis(e), c0 = sl_mc_edge_c0(e), b = (a + 1) % 3, c = (a + 2) % 3;
-    int off_b[3] = {0, 0, 0}, off_c[3] = {0, 0, 0};
-    off_b[b] = (c0 >> b & 1) ? 1 : -1;
-    off_c[c] = (c0 >> c & 1) ? 1 : -1;
-    dirs[0] = sl_direction(off_b[0], off_b[1], off_b[2]);
-    dirs[1] = sl_direction(off_c[0], off_c[1], off_c[2]);
-    dirs[2] = sl_direction(off_b[0] + off_c[0], off_b[1] + off_c[1], off_b[2] + off_c[2]);
-}
-
-/* Per neighbour direction: the faces (bit f) and edges (bit e) of a cell that must be
- * split when the neighbour in that direction is expanded (a face neighbour: that face and
- * its 4 edges; any of the 3 neighbours around an edge: that edge; a corner neighbour:
- * nothing). The directions that split anything, in increasing order, are the model's
- * split_expansion slots. */
-typedef struct split_table {
-    uint8_t faces[27];
-    uint16_t edges[27];
-    uint32_t split_dirs;
-    int slot_of_dir[27];
-    uint8_t slot_faces[SL_LOD_SPLIT_DIRS];
-    uint16_t slot_edges[SL_LOD_SPLIT_DIRS];
-    uint8_t edge_c0[12], edge_c1[12], face_edges[6][4]; /* mc_cube.h numbering */
-} split_table;
-
-static split_table splits;
-static pthread_once_t splits_once = PTHREAD_ONCE_INIT;
-
-static void build_split_table(void)
-{
-    for (int f = 0; f < 6; f++) {
-        int edges[4], d = face_direction(f);
-        sl_mc_face_edges(f, edges);
-        splits.faces[d] |= (uint8_t)(1u << f);
-        for (int i = 0; i < 4; i++)
-            splits.edges[d] |= (uint16_t)(1u << edges[i]);
-    }
-    for (int e = 0; e < 12; e++) {
-        int dirs[3];
-        edge_directions(e, dirs);
-        for (int i = 0; i < 3; i++)
-            splits.edges[dirs[i]] |= (uint16_t)(1u << e);
-    }
-    for (int e = 0; e < 12; e++) {
-        splits.edge_c0[e] = (uint8_t)sl_mc_edge_c0(e);
-        splits.edge_c1[e] = (uint8_t)sl_mc_edge_c1(e);
-    }
-    for (int f = 0; f < 6; f++) {
-        int edges[4];
-        sl_mc_face_edges(f, edges);
-        for (int i = 0; i < 4; i++)
-            splits.face_edges[f][i] = (uint8_t)edges[i];
-    }
-    int slot = 0;
-    for (int d = 0; d < 27; d++) {
-        splits.slot_of_dir[d] = -1;
-        if (!splits.edges[d])
-            continue;
-        splits.split_dirs |= 1u << d;
-        splits.slot_of_dir[d] = slot;
-        splits.slot_faces[slot] = splits.faces[d];
-        splits.slot_edges[slot] = splits.edges[d];
-        slot++;
-    }
-}
-
-static const split_table *split_table_get(void)
-{
-    pthread_once(&splits_once, build_split_table);
-    return &splits;
 }
 
 int sl_lod_model_prepare(sl_lod_model *m)
@@ -140,7 +60,7 @@ int sl_lod_model_prepare(sl_lod_model *m)
     memset(m->expansion_index, 0xff, (size_t)n * sizeof *m->expansion_index);
     for (uint32_t i = 0; i < m->expansion_count; i++)
         m->expansion_index[m->lod_array[i]] = i;
-    const split_table *st = split_table_get();
+    const sl_lod_split_table *st = sl_lod_split_table_get();
     /* The triangulator builds its own tables on first use: let that be now, at load,
      * rather than in the first extraction. */
     sl_mc_cell empty;
@@ -210,8 +130,9 @@ static uint32_t spoke_id(const record_view *r, int j)
  * split "virtually" (midpoint sign = first corner's), keeping the coarse crossing, which
  * every cell around the edge does alike. Returns 0, or -1 when a finer crossing the
  * signs require is missing from the record (a crack the report counts). */
-static int split_edge(const split_table *st, const record_view *r, const sl_octree_node *node,
-                      int e, sl_mc_cell *cell, uint32_t point_crossing[SL_MC_MAX_POINTS])
+static int split_edge(const sl_lod_split_table *st, const record_view *r,
+                      const sl_octree_node *node, int e, sl_mc_cell *cell,
+                      uint32_t point_crossing[SL_MC_MAX_POINTS])
 {
     int in0 = node->inside >> st->edge_c0[e] & 1, in1 = node->inside >> st->edge_c1[e] & 1;
     int mid = (r->mid_known >> e & 1) ? (int)(r->mid_inside >> e & 1) : in0;
@@ -240,7 +161,7 @@ static int split_edge(const split_table *st, const record_view *r, const sl_octr
 
 /* Splits face f when a finer cell touches it (its centre is known); 0, or -1 when a
  * spoke crossing the signs require is missing. */
-static int split_face(const split_table *st, const record_view *r, int f, sl_mc_cell *cell,
+static int split_face(const sl_lod_split_table *st, const record_view *r, int f, sl_mc_cell *cell,
                       uint32_t point_crossing[SL_MC_MAX_POINTS])
 {
     if (!(r->centre_known >> f & 1))
@@ -355,7 +276,7 @@ int sl_lod_model_localize(sl_lod_model *m)
 static void wanted_splits(const sl_neighbours *nb, const uint32_t *expansion_index, uint32_t k,
                           uint32_t n, unsigned *want_faces, unsigned *want_edges)
 {
-    const split_table *st = split_table_get();
+    const sl_lod_split_table *st = sl_lod_split_table_get();
     uint32_t mask = nb->mask[n];
     const uint32_t *index = nb->index + nb->base[n];
     unsigned faces = 0, edges = 0;
@@ -371,7 +292,7 @@ static void wanted_splits(const sl_neighbours *nb, const uint32_t *expansion_ind
 }
 
 /* Applies the wanted splits of internal node n; 0, or -1 on a missing finer crossing. */
-static int apply_splits(const split_table *st, const sl_transitions *tr,
+static int apply_splits(const sl_lod_split_table *st, const sl_transitions *tr,
                         const sl_octree_node *node, uint32_t n,
                         unsigned want_faces, unsigned want_edges, sl_mc_cell *cell,
                         uint32_t point_crossing[SL_MC_MAX_POINTS])
@@ -400,7 +321,7 @@ int sl_lod_cell(const sl_octree *t, const sl_neighbours *nb, const sl_transition
     wanted_splits(nb, expansion_index, k, n, &want_faces, &want_edges);
     if (!want_edges)
         return 0;
-    return apply_splits(split_table_get(), tr, node, n, want_faces, want_edges, cell,
+    return apply_splits(sl_lod_split_table_get(), tr, node, n, want_faces, want_edges, cell,
                         point_crossing);
 }
 
@@ -484,7 +405,7 @@ uint64_t sl_lod_frontier(const sl_lod_model *m, uint32_t k, uint32_t *cells)
 }
 
 /* Draws frontier node n into the builder; returns 1 when a split lacked data (a crack). */
-static int draw_cell(sl_lod_model *m, uint32_t k, uint32_t n, const split_table *st,
+static int draw_cell(sl_lod_model *m, uint32_t k, uint32_t n, const sl_lod_split_table *st,
                      sl_mesh_builder *b)
 {
     const sl_octree *t = &m->tree;
@@ -555,7 +476,7 @@ static void fetch_cell_data(const sl_lod_model *m, uint32_t n)
 /* Draws the frontier after k expansions into the builder; returns the crack count. */
 static uint64_t draw_frontier(sl_lod_model *m, uint32_t k, sl_mesh_builder *b)
 {
-    const split_table *st = split_table_get();
+    const sl_lod_split_table *st = sl_lod_split_table_get();
     uint64_t incomplete = 0;
     /* The frontier in the order of sl_lod_frontier, each cell drawn CELLS_AHEAD cells after
      * it is found: in between, its data is fetched in two steps. */
