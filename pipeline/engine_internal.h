@@ -37,6 +37,7 @@ struct sl_engine {
     const char *input, *work, *output, *logs;
     int threads;
     int64_t memory_limit_mb, item_timeout_s, lease_seconds;
+    int64_t scan_mark_expires;    /* this process's scan mark (engine_work.c); 0 = none */
     int max_crashes;
     const sl_stage *stages[SL_MAX_STAGES];
     uint64_t config_hash[SL_MAX_STAGES];

@@ -79,6 +79,14 @@ int sl_engine_lease_check(sl_engine *e, const char *stage, const char *name,
     return 0;
 }
 
+/* The owner of a leased ticket is gone: on this host its pid died (or was reused), on
+ * another its lease expired. One rule for claims and scan marks. */
+static int lease_owner_gone(const sl_engine *e, const sl_ticket *t, int64_t now)
+{
+    int alive = sl_identity_alive(&e->self, t);
+    return alive == 0 || (alive < 0 && t->expires < now);
+}
+
 /* A claimed ticket nobody can be working on any more goes back to ready. */
 static void reclaim_stale(sl_engine *e, int s)
 {
@@ -107,10 +115,7 @@ static void reclaim_stale(sl_engine *e, int s)
             struct stat st;
             stale = stat(path, &st) == 0 && st.st_ctime + UNLEASED_CLAIM_S < now;
         } else {
-            int alive = sl_identity_alive(&e->self, &t);
-            stale = alive == 0 || (alive < 0 && t.expires < now);
-            if (alive == 1 && t.pid == e->self.pid)
-                stale = 0;
+            stale = lease_owner_gone(e, &t, now);
         }
         if (!stale)
             continue;
@@ -176,7 +181,6 @@ static int claim_one(sl_engine *e, int s, char *name, size_t name_size, sl_ticke
 
 void sl_engine_scan_mark(sl_engine *e, int mark)
 {
-    static int64_t expires; /* of this process's announcement; 0 = none */
     char name[128];
     snprintf(name, sizeof name, "%s.%ld", e->self.host, e->self.pid);
     sl_error err;
@@ -185,10 +189,11 @@ void sl_engine_scan_mark(sl_engine *e, int mark)
         char path[PATH_MAX];
         sl_queue_path(path, sizeof path, e->work, SCAN_QUEUE, SL_STATE_CLAIMED, name);
         unlink(path);
-        expires = 0;
+        e->scan_mark_expires = 0;
         return;
     }
-    if (expires && (int64_t)sl_now_seconds() < expires - e->lease_seconds / 2)
+    if (e->scan_mark_expires &&
+        (int64_t)sl_now_seconds() < e->scan_mark_expires - e->lease_seconds / 2)
         return;
     sl_ticket t;
     sl_ticket_init(&t);
@@ -197,7 +202,7 @@ void sl_engine_scan_mark(sl_engine *e, int mark)
     /* Best effort: without it (full disk) others may finish early and exit 75. */
     if (sl_queue_create(e->work, SCAN_QUEUE, &err) == 0 &&
         sl_queue_put(e->work, SCAN_QUEUE, SL_STATE_CLAIMED, name, &t, &err) == 0)
-        expires = t.expires;
+        e->scan_mark_expires = t.expires;
 }
 
 /* Scans announced by other live processes (their announcements when dead are removed). */
@@ -220,11 +225,10 @@ static int scans_elsewhere(const sl_engine *e)
             continue; /* being written */
         if (t.pid == e->self.pid && strcmp(t.host, e->self.host) == 0)
             continue;
-        int alive = sl_identity_alive(&e->self, &t);
-        if (alive == 1 || (alive < 0 && t.expires >= now))
-            live++;
-        else
+        if (lease_owner_gone(e, &t, now))
             unlink(path);
+        else
+            live++;
     }
     free(names);
     return live;
