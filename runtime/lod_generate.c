@@ -27,61 +27,13 @@ void sl_lod_model_release(sl_lod_model *m)
     free(m->error_after);
     sl_mesh_scratch_release(&m->scratch);
     sl_mc_cache_free(m->mc_cache);
-    free(m->split_expansion);
+    free(m->frontier_end);
+    free(m->cells);
+    free(m->split_words);
     free(m->surface_before);
     sl_neighbours_release(&m->neighbours);
     sl_transitions_release(&m->transitions);
     sl_lod_model_init(m);
-}
-
-int sl_lod_model_prepare(sl_lod_model *m)
-{
-    const sl_octree *t = &m->tree;
-    uint32_t n = t->node_count, internal = 0;
-    for (uint32_t i = 0; i < n; i++)
-        if (t->nodes[i].level > 0)
-            internal = i + 1; /* internal nodes come first (sorted by level) */
-    free(m->expansion_index);
-    sl_mesh_scratch_release(&m->scratch);
-    sl_mc_cache_free(m->mc_cache);
-    m->mc_cache = sl_mc_cache_new(); /* without it extraction is only slower */
-    free(m->split_expansion);
-    free(m->surface_before);
-    m->split_nodes = internal;
-    m->surface_before = malloc(((size_t)m->expansion_count + 1) * sizeof *m->surface_before);
-    m->expansion_index = malloc((n ? n : 1) * sizeof *m->expansion_index);
-    m->split_expansion = malloc(((size_t)internal * SL_LOD_SPLIT_DIRS + 1) *
-                                sizeof *m->split_expansion);
-    if (!m->expansion_index || !m->split_expansion || !m->surface_before ||
-        sl_mesh_scratch_init(&m->scratch, t) != 0)
-        return -1;
-    if (sl_lod_surface_counts(m) != 0)
-        return -1;
-    memset(m->expansion_index, 0xff, (size_t)n * sizeof *m->expansion_index);
-    for (uint32_t i = 0; i < m->expansion_count; i++)
-        m->expansion_index[m->lod_array[i]] = i;
-    const sl_lod_split_table *st = sl_lod_split_table_get();
-    /* The triangulator builds its own tables on first use: let that be now, at load,
-     * rather than in the first extraction. */
-    sl_mc_cell empty;
-    sl_mc_triangles none;
-    memset(&empty, 0, sizeof empty);
-    sl_mc_triangulate(&empty, &none);
-    const sl_neighbours *nb = &m->neighbours;
-#pragma omp parallel for schedule(static)
-    for (uint32_t i = 0; i < internal; i++) {
-        uint32_t *slots = m->split_expansion + (size_t)i * SL_LOD_SPLIT_DIRS;
-        for (int j = 0; j < SL_LOD_SPLIT_DIRS; j++)
-            slots[j] = SL_OCTREE_NONE;
-        uint32_t mask = nb->mask[i];
-        const uint32_t *index = nb->index + nb->base[i];
-        for (int j = 0; mask; mask &= mask - 1u, j++) {
-            int slot = st->slot_of_dir[__builtin_ctz(mask)];
-            if (slot >= 0)
-                slots[slot] = m->expansion_index[index[j]];
-        }
-    }
-    return 0;
 }
 
 typedef struct record_view {
@@ -89,9 +41,8 @@ typedef struct record_view {
     const uint32_t *ids;
 } record_view;
 
-static void decode(const sl_transitions *tr, uint32_t n, record_view *r)
+static void decode(const uint32_t *w, record_view *r)
 {
-    const uint32_t *w = tr->words + tr->base[n];
     r->mid_known = w[0] & 0xfff;
     r->mid_inside = w[0] >> 12 & 0xfff;
     r->centre_known = w[0] >> 24 & 0x3f;
@@ -130,11 +81,10 @@ static uint32_t spoke_id(const record_view *r, int j)
  * split "virtually" (midpoint sign = first corner's), keeping the coarse crossing, which
  * every cell around the edge does alike. Returns 0, or -1 when a finer crossing the
  * signs require is missing from the record (a crack the report counts). */
-static int split_edge(const sl_lod_split_table *st, const record_view *r,
-                      const sl_octree_node *node, int e, sl_mc_cell *cell,
-                      uint32_t point_crossing[SL_MC_MAX_POINTS])
+static int split_edge(const sl_lod_split_table *st, const record_view *r, int e,
+                      sl_mc_cell *cell, uint32_t point_crossing[SL_MC_MAX_POINTS])
 {
-    int in0 = node->inside >> st->edge_c0[e] & 1, in1 = node->inside >> st->edge_c1[e] & 1;
+    int in0 = cell->inside >> st->edge_c0[e] & 1, in1 = cell->inside >> st->edge_c1[e] & 1;
     int mid = (r->mid_known >> e & 1) ? (int)(r->mid_inside >> e & 1) : in0;
     uint32_t coarse = point_crossing[SL_MC_EDGE_POINT(e)];
     uint32_t half[2] = {SL_OCTREE_NONE, SL_OCTREE_NONE};
@@ -199,78 +149,6 @@ static void cell_own(const sl_octree *t, const sl_octree_node *node, sl_mc_cell 
             (node->edge_mask >> e & 1) ? *ids++ : SL_OCTREE_NONE;
 }
 
-/* Gives node n's crossings (its own and its transition record's) the next new ids. */
-static void number_crossings(const sl_lod_model *m, uint32_t n, uint32_t *new_id, uint32_t *next)
-{
-    const sl_octree *t = &m->tree;
-    const sl_octree_node *node = &t->nodes[n];
-    const uint32_t *ids = t->node_crossings + node->crossing_base;
-    for (int i = 0, count = __builtin_popcount(node->edge_mask); i < count; i++)
-        if (new_id[ids[i]] == SL_OCTREE_NONE)
-            new_id[ids[i]] = (*next)++;
-    if (node->level == 0 || m->transitions.base[n] == SL_OCTREE_NONE)
-        return;
-    const uint32_t *w = m->transitions.words + m->transitions.base[n];
-    int count = __builtin_popcount(w[1] & 0xffffff) + __builtin_popcount(w[2] & 0xffffff);
-    for (int i = 0; i < count; i++)
-        if (new_id[w[3 + i]] == SL_OCTREE_NONE)
-            new_id[w[3 + i]] = (*next)++;
-}
-
-int sl_lod_model_localize(sl_lod_model *m)
-{
-    sl_octree *t = &m->tree;
-    uint32_t c = t->crossing_count, next = 0;
-    uint32_t *new_id = malloc((c ? c : 1) * sizeof *new_id);
-    float *position = malloc((c ? c : 1) * 3 * sizeof *position);
-    uint8_t *color = t->crossing_color ? malloc((c ? c : 1) * 4) : NULL;
-    if (!new_id || !position || (t->crossing_color && !color)) {
-        free(new_id);
-        free(position);
-        free(color);
-        return -1;
-    }
-    memset(new_id, 0xff, (size_t)c * sizeof *new_id);
-    /* First the frontier nodes' crossings in the order the LOD array reaches them, then
-     * any other node's, then the crossings no node names. */
-    if (t->node_count)
-        number_crossings(m, 0, new_id, &next);
-    for (uint32_t i = 0; i < m->expansion_count; i++) {
-        const sl_octree_node *p = &t->nodes[m->lod_array[i]];
-        for (int k = 0; k < __builtin_popcount(p->child_mask); k++)
-            number_crossings(m, p->first_child + (uint32_t)k, new_id, &next);
-    }
-    for (uint32_t n = 0; n < t->node_count; n++)
-        number_crossings(m, n, new_id, &next);
-    for (uint32_t i = 0; i < c; i++)
-        if (new_id[i] == SL_OCTREE_NONE)
-            new_id[i] = next++;
-    for (uint32_t i = 0; i < c; i++) {
-        memcpy(position + 3 * (size_t)new_id[i], t->crossing_position + 3 * (size_t)i,
-               3 * sizeof *position);
-        if (color)
-            memcpy(color + 4 * (size_t)new_id[i], t->crossing_color + 4 * (size_t)i, 4);
-    }
-    for (uint64_t i = 0; i < t->node_crossing_count; i++)
-        t->node_crossings[i] = new_id[t->node_crossings[i]];
-    for (uint32_t n = 0; n < t->node_count; n++) {
-        if (t->nodes[n].level == 0 || m->transitions.base[n] == SL_OCTREE_NONE)
-            continue;
-        uint32_t *w = m->transitions.words + m->transitions.base[n];
-        int count = __builtin_popcount(w[1] & 0xffffff) + __builtin_popcount(w[2] & 0xffffff);
-        for (int i = 0; i < count; i++)
-            w[3 + i] = new_id[w[3 + i]];
-    }
-    free(t->crossing_position);
-    t->crossing_position = position;
-    if (color) {
-        free(t->crossing_color);
-        t->crossing_color = color;
-    }
-    free(new_id);
-    return 0;
-}
-
 /* Faces and edges of internal node n to split after k expansions: those next to an
  * expanded same-level neighbour. Reads only the neighbours in directions that split. */
 static void wanted_splits(const sl_neighbours *nb, const uint32_t *expansion_index, uint32_t k,
@@ -291,18 +169,18 @@ static void wanted_splits(const sl_neighbours *nb, const uint32_t *expansion_ind
     *want_edges = edges;
 }
 
-/* Applies the wanted splits of internal node n; 0, or -1 on a missing finer crossing. */
-static int apply_splits(const sl_lod_split_table *st, const sl_transitions *tr,
-                        const sl_octree_node *node, uint32_t n,
+/* Applies the wanted splits to a cell with its own signs and crossings, from its transition
+ * record `words`; 0, or -1 on a missing finer crossing. */
+static int apply_splits(const sl_lod_split_table *st, const uint32_t *words,
                         unsigned want_faces, unsigned want_edges, sl_mc_cell *cell,
                         uint32_t point_crossing[SL_MC_MAX_POINTS])
 {
     record_view r;
-    decode(tr, n, &r);
+    decode(words, &r);
     int rc = 0;
     for (int e = 0; e < 12; e++)
         if (want_edges >> e & 1)
-            rc |= split_edge(st, &r, node, e, cell, point_crossing);
+            rc |= split_edge(st, &r, e, cell, point_crossing);
     for (int f = 0; f < 6; f++)
         if (want_faces >> f & 1)
             rc |= split_face(st, &r, f, cell, point_crossing);
@@ -321,22 +199,8 @@ int sl_lod_cell(const sl_octree *t, const sl_neighbours *nb, const sl_transition
     wanted_splits(nb, expansion_index, k, n, &want_faces, &want_edges);
     if (!want_edges)
         return 0;
-    return apply_splits(sl_lod_split_table_get(), tr, node, n, want_faces, want_edges, cell,
-                        point_crossing);
-}
-
-/* Whether internal node n, all of whose corners have one sign, has that sign at every
- * finer sample its record knows too: then no split can give it a crossing, and it draws
- * nothing (and lacks nothing) whatever its neighbours. */
-static int uniform_record(const sl_transitions *tr, uint32_t n, int inside)
-{
-    const uint32_t *w = tr->words + tr->base[n];
-    uint32_t mid_known = w[0] & 0xfff, mid_inside = w[0] >> 12 & 0xfff;
-    uint32_t centre_known = w[0] >> 24 & 0x3f, centre_inside = w[1] >> 24 & 0x3f;
-    if (inside)
-        return (mid_inside & mid_known) == mid_known &&
-               (centre_inside & centre_known) == centre_known;
-    return !(mid_inside & mid_known) && !(centre_inside & centre_known);
+    return apply_splits(sl_lod_split_table_get(), tr->words + tr->base[n], want_faces,
+                        want_edges, cell, point_crossing);
 }
 
 uint64_t sl_lod_frontier_bound(const sl_lod_model *m, uint32_t k)
@@ -344,158 +208,141 @@ uint64_t sl_lod_frontier_bound(const sl_lod_model *m, uint32_t k)
     return k == 0 ? 1 : 8 * (uint64_t)k;
 }
 
-/* The frontier after k expansions, one node at a time: the children of lod_array[0..k)
- * that are not themselves expanded before k (the root when k = 0). Reads the LOD array in
- * order and asks the memory for the parents and children a few expansions ahead, so the
- * walk does not wait on each. */
-typedef struct frontier_walk {
-    const sl_lod_model *m;
-    uint32_t k, next;   /* next LOD-array position to open */
-    uint32_t child, end; /* children of the last opened position still to look at */
-} frontier_walk;
-
-#define PARENTS_AHEAD 16 /* LOD-array positions whose parent node is fetched early */
-#define CHILDREN_AHEAD 8 /* ... whose children (nodes, expansion indices) are */
-
-static void frontier_start(frontier_walk *w, const sl_lod_model *m, uint32_t k)
-{
-    w->m = m;
-    w->k = k > m->expansion_count ? m->expansion_count : k;
-    w->next = 0;
-    w->child = 0;
-    w->end = w->k == 0 ? 1 : 0; /* the root alone */
-}
-
-static uint32_t frontier_next(frontier_walk *w)
-{
-    const sl_lod_model *m = w->m;
-    const sl_octree_node *nodes = m->tree.nodes;
-    for (;;) {
-        while (w->child < w->end) {
-            uint32_t c = w->child++;
-            if (m->expansion_index[c] >= w->k)
-                return c;
-        }
-        if (w->next >= w->k)
-            return SL_OCTREE_NONE;
-        uint32_t i = w->next++;
-        if (i + PARENTS_AHEAD < w->k)
-            __builtin_prefetch(&nodes[m->lod_array[i + PARENTS_AHEAD]]);
-        if (i + CHILDREN_AHEAD < w->k) {
-            const sl_octree_node *q = &nodes[m->lod_array[i + CHILDREN_AHEAD]];
-            uint32_t last = q->first_child + (uint32_t)__builtin_popcount(q->child_mask) - 1u;
-            __builtin_prefetch(&nodes[q->first_child]);
-            __builtin_prefetch(&nodes[last]);
-            __builtin_prefetch(&m->expansion_index[q->first_child]);
-        }
-        const sl_octree_node *p = &nodes[m->lod_array[i]];
-        w->child = p->first_child;
-        w->end = p->first_child + (uint32_t)__builtin_popcount(p->child_mask);
-    }
-}
-
+/* The frontier after k expansions: the children of lod_array[0..k) that are not themselves
+ * expanded before k (the root when k = 0), in the order generation draws them. */
 uint64_t sl_lod_frontier(const sl_lod_model *m, uint32_t k, uint32_t *cells)
 {
-    frontier_walk w;
-    frontier_start(&w, m, k);
+    const sl_octree_node *nodes = m->tree.nodes;
+    if (k > m->expansion_count)
+        k = m->expansion_count;
+    if (k == 0) {
+        cells[0] = 0;
+        return m->tree.node_count ? 1 : 0;
+    }
     uint64_t count = 0;
-    for (uint32_t n; (n = frontier_next(&w)) != SL_OCTREE_NONE;)
-        cells[count++] = n;
+    for (uint32_t i = 0; i < k; i++) {
+        const sl_octree_node *p = &nodes[m->lod_array[i]];
+        for (uint32_t c = p->first_child;
+             c < p->first_child + (uint32_t)__builtin_popcount(p->child_mask); c++)
+            if (m->expansion_index[c] >= k)
+                cells[count++] = c;
+    }
     return count;
 }
 
-/* Draws frontier node n into the builder; returns 1 when a split lacked data (a crack). */
-static int draw_cell(sl_lod_model *m, uint32_t k, uint32_t n, const sl_lod_split_table *st,
-                     sl_mesh_builder *b)
+/* Frontier cell c after k expansions: its own signs and crossings, split where an expanded
+ * neighbour requires. *split says whether any split was wanted (if not, the uniform table
+ * is the cell's drawing); *entry is the split list's word naming the state's mc_cache
+ * entry (NULL when not split). Returns 0, or -1 when a split lacked data (a crack). */
+static int frontier_cell(const sl_lod_model *m, uint32_t k, const sl_lod_cell_ref *c,
+                         const sl_lod_split_table *st, sl_mc_cell *cell,
+                         uint32_t point_crossing[SL_MC_MAX_POINTS], uint32_t **entry)
 {
-    const sl_octree *t = &m->tree;
-    const sl_octree_node *node = &t->nodes[n];
-    /* (A model read from a file has a transition record for every internal node, and
-     * sl_transitions_build makes one for each: the level says whether there is one.) */
-    int leaf = node->level == 0;
-    /* A cell whose corners share one sign draws nothing unless a split brings in a finer
-     * sample of the other sign: skip it without looking at its neighbours. */
-    if (!node->edge_mask && (leaf || uniform_record(&m->transitions, n, node->inside)))
-        return 0;
-    sl_mc_cell cell;
-    uint32_t point_crossing[SL_MC_MAX_POINTS];
-    cell_own(t, node, &cell, point_crossing);
-    unsigned want_faces = 0, want_edges = 0;
-    if (!leaf) { /* the faces and edges next to an expanded neighbour */
-        const uint32_t *slots = m->split_expansion + (size_t)n * SL_LOD_SPLIT_DIRS;
-        for (int j = 0; j < SL_LOD_SPLIT_DIRS; j++)
-            if (slots[j] < k) {
-                want_faces |= st->slot_faces[j];
-                want_edges |= st->slot_edges[j];
-            }
+    memset(cell, 0, sizeof *cell);
+    cell->inside = c->inside;
+    const uint32_t *ids = m->tree.node_crossings + c->crossing_base;
+    for (int e = 0; e < 12; e++)
+        point_crossing[SL_MC_EDGE_POINT(e)] = (c->edge_mask >> e & 1) ? *ids++ : SL_OCTREE_NONE;
+    *entry = NULL;
+    if (c->splits == SL_OCTREE_NONE)
+        return 0; /* a leaf, or a cell no cut splits */
+    uint32_t *w = m->split_words + c->splits;
+    uint32_t want = w[1] & 0xffffffu, events = w[1] >> 24, *state = w + 2;
+    for (uint32_t i = 0; i < events && w[3 + 3 * i] < k; i++) {
+        want |= w[4 + 3 * i];
+        state = w + 5 + 3 * i;
     }
-    if (!want_edges) { /* no finer neighbour: the 256-case table is this cell's drawing */
+    if (!SL_LOD_SPLIT_EDGES(want))
+        return 0;
+    *entry = state;
+    return apply_splits(st, m->transitions.words + w[0], SL_LOD_SPLIT_FACES(want),
+                        SL_LOD_SPLIT_EDGES(want), cell, point_crossing);
+}
+
+/* Draws frontier cell c into the builder; returns 1 when a split lacked data (a crack). */
+static int draw_cell(const sl_lod_model *m, uint32_t k, const sl_lod_cell_ref *c,
+                     const sl_lod_split_table *st, sl_mesh_builder *b)
+{
+    sl_mc_cell cell;
+    uint32_t point_crossing[SL_MC_MAX_POINTS], *entry;
+    int rc = frontier_cell(m, k, c, st, &cell, point_crossing, &entry);
+    if (!entry) { /* no finer neighbour: the 256-case table is this cell's drawing */
         const uint8_t *row = sl_lod_uniform_cells[cell.inside];
         sl_mesh_builder_add_triangles(b, row[0], row + 1, point_crossing);
         return 0;
     }
-    int rc = apply_splits(st, &m->transitions, node, n, want_faces, want_edges, &cell,
-                          point_crossing);
-    sl_mc_triangles tri;
-    sl_mc_triangulate_cached(m->mc_cache, &cell, &tri);
-    sl_mesh_builder_add_cell(b, &tri, point_crossing);
+    if (*entry != SL_MC_CACHE_NONE && m->mc_cache) {
+        const sl_mc_cached *t = sl_mc_cache_entry(m->mc_cache, *entry);
+        sl_mesh_builder_add_triangles(b, t->count, &t->points[0][0], point_crossing);
+    } else {
+        sl_mc_triangles tri;
+        sl_mc_triangulate(&cell, &tri);
+        sl_mesh_builder_add_cell(b, &tri, point_crossing);
+    }
     return rc ? 1 : 0;
 }
 
-/* Asks the memory for what drawing frontier node n reads first: its crossing ids and, for
- * an internal node, its neighbours' expansion indices and its transition record's place. */
-static void fetch_cell(const sl_lod_model *m, uint32_t n)
+int sl_lod_cache_transitions(sl_lod_model *m)
 {
-    const sl_octree_node *node = &m->tree.nodes[n];
-    __builtin_prefetch(&m->tree.node_crossings[node->crossing_base]);
-    if (node->level > 0) {
-        const uint32_t *slots = m->split_expansion + (size_t)n * SL_LOD_SPLIT_DIRS;
-        __builtin_prefetch(slots);
-        __builtin_prefetch(slots + SL_LOD_SPLIT_DIRS - 1);
-        __builtin_prefetch(&m->transitions.base[n]);
+    if (!m->mc_cache)
+        return 0;
+    const sl_lod_split_table *st = sl_lod_split_table_get();
+    uint32_t e = m->expansion_count, end = m->frontier_end[e], parent = 0;
+    for (uint32_t pos = 0; pos < end; pos++) {
+        /* Cells [frontier_end[i], frontier_end[i + 1]) are the children of lod_array[i]. */
+        while (parent < e && m->frontier_end[parent + 1] <= pos)
+            parent++;
+        const sl_lod_cell_ref *c = &m->cells[pos];
+        if (c->splits == SL_OCTREE_NONE || !c->draws)
+            continue;
+        /* Its state when it appears, and after each event. */
+        const uint32_t *w = m->split_words + c->splits;
+        for (uint32_t i = 0; i <= w[1] >> 24; i++) {
+            uint32_t k = i == 0 ? (pos == 0 ? 0 : parent + 1) : w[3 * i] + 1u;
+            sl_mc_cell cell;
+            uint32_t point_crossing[SL_MC_MAX_POINTS], *entry;
+            frontier_cell(m, k, c, st, &cell, point_crossing, &entry);
+            if (entry && sl_mc_cache_add(m->mc_cache, &cell, entry))
+                return -1;
+        }
     }
+    return 0;
 }
 
-/* ... and, once those have come, what it reads next: the crossings' vertex map entries and
- * positions, and the transition record. */
-static void fetch_cell_data(const sl_lod_model *m, uint32_t n)
+/* The records, ids and split lists stream in LOD order, but crossings are shared with
+ * other cells and only roughly in that order: their vertex map entries and positions are
+ * asked for CROSSING_AHEAD cells before they are drawn. (Fetching the split lists and
+ * transition records ahead too measured no faster.) */
+#define CROSSING_AHEAD 8
+
+static inline int drawn_at(const sl_lod_cell_ref *c, uint32_t k)
 {
-    const sl_octree *t = &m->tree;
-    const sl_octree_node *node = &t->nodes[n];
-    const uint32_t *ids = t->node_crossings + node->crossing_base;
-    for (int i = 0, count = __builtin_popcount(node->edge_mask); i < count; i++) {
+    return c->draws && c->expansion >= k;
+}
+
+static void fetch_crossings(const sl_lod_model *m, const sl_lod_cell_ref *c)
+{
+    const uint32_t *ids = m->tree.node_crossings + c->crossing_base;
+    for (int i = 0, count = __builtin_popcount(c->edge_mask); i < count; i++) {
         __builtin_prefetch(&m->scratch.vertex_of_crossing[ids[i]]);
-        __builtin_prefetch(&t->crossing_position[3 * (size_t)ids[i]]);
+        __builtin_prefetch(&m->tree.crossing_position[3 * (size_t)ids[i]]);
     }
-    if (node->level > 0)
-        __builtin_prefetch(&m->transitions.words[m->transitions.base[n]]);
 }
-
-#define CELLS_AHEAD 8 /* frontier cells fetched before they are drawn (a power of 2) */
 
 /* Draws the frontier after k expansions into the builder; returns the crack count. */
 static uint64_t draw_frontier(sl_lod_model *m, uint32_t k, sl_mesh_builder *b)
 {
     const sl_lod_split_table *st = sl_lod_split_table_get();
+    if (k > m->expansion_count)
+        k = m->expansion_count;
+    uint32_t end = m->frontier_end[k];
     uint64_t incomplete = 0;
-    /* The frontier in the order of sl_lod_frontier, each cell drawn CELLS_AHEAD cells after
-     * it is found: in between, its data is fetched in two steps. */
-    frontier_walk w;
-    frontier_start(&w, m, k);
-    uint32_t ring[2 * CELLS_AHEAD], mask = 2 * CELLS_AHEAD - 1;
-    for (uint32_t j = 0; j < CELLS_AHEAD; j++) {
-        ring[j] = frontier_next(&w);
-        if (ring[j] != SL_OCTREE_NONE)
-            fetch_cell(m, ring[j]);
-    }
-    for (uint32_t pos = 0; ring[pos & mask] != SL_OCTREE_NONE; pos++) {
-        uint32_t ahead = frontier_next(&w), half = ring[(pos + CELLS_AHEAD / 2) & mask];
-        ring[(pos + CELLS_AHEAD) & mask] = ahead;
-        if (ahead != SL_OCTREE_NONE)
-            fetch_cell(m, ahead);
-        if (half != SL_OCTREE_NONE)
-            fetch_cell_data(m, half);
-        incomplete += (uint64_t)draw_cell(m, k, ring[pos & mask], st, b);
+    for (uint32_t pos = 0; pos < end; pos++) {
+        if (pos + CROSSING_AHEAD < end && drawn_at(&m->cells[pos + CROSSING_AHEAD], k))
+            fetch_crossings(m, &m->cells[pos + CROSSING_AHEAD]);
+        const sl_lod_cell_ref *c = &m->cells[pos];
+        if (drawn_at(c, k))
+            incomplete += (uint64_t)draw_cell(m, k, c, st, b);
     }
     return incomplete;
 }

@@ -51,6 +51,30 @@ typedef struct sl_transitions {
     uint32_t *words;
 } sl_transitions;
 
+/* A node as generation reads it, in LOD order. */
+typedef struct sl_lod_cell_ref {
+    uint32_t expansion;     /* its expansion_index (SL_OCTREE_NONE: never expanded) */
+    uint32_t crossing_base; /* as the node's */
+    uint32_t splits;        /* offset of its split list in split_words, or SL_OCTREE_NONE
+                               when no cut splits it (a leaf never meets a finer cell) */
+    uint16_t edge_mask;
+    uint8_t inside;
+    uint8_t draws;          /* 0: draws nothing whatever its neighbours */
+} sl_lod_cell_ref;
+
+/* A split list (split_words at sl_lod_cell_ref.splits): which faces and edges of a cell
+ * meet a finer cell, and the triangulation that gives, for every k at which the cell is on
+ * the frontier. Word 0: the node's transition record base; word 1: the splits when the
+ * cell appears (faces in bits 0-5, edges in bits 6-17) | event count << 24; word 2: the
+ * mc_cache entry of that state; then per event, in increasing order, the expansion index s
+ * of a same-level neighbour, the splits its expansion adds (for k > s) and the entry of
+ * the new state. An entry SL_MC_CACHE_NONE: no split, or a configuration the cache does
+ * not keep (triangulated when drawn). Only neighbours expanding while the cell is on the
+ * frontier make events, so a cell reads a few words after the previous cell's. */
+#define SL_LOD_SPLIT_DIRS 18 /* 6 face and 12 edge neighbours: those that split a cell */
+#define SL_LOD_SPLIT_FACES(w) ((w) & 0x3fu)
+#define SL_LOD_SPLIT_EDGES(w) ((w) >> 6 & 0xfffu)
+
 typedef struct sl_lod_model {
     sl_octree tree;
     uint32_t expansion_count;
@@ -61,14 +85,15 @@ typedef struct sl_lod_model {
     sl_neighbours neighbours;
     sl_transitions transitions;
     sl_mesh_scratch scratch; /* the builder's, kept between extractions */
-    sl_mc_cache *mc_cache;   /* transition triangulations seen so far (may be NULL) */
-    /* Derived at load (sl_lod_model_prepare), for generation: per internal node n (n <
-     * split_nodes), SL_LOD_SPLIT_DIRS entries at n * SL_LOD_SPLIT_DIRS, the expansion index
-     * of its same-level neighbour in each face and edge direction (NONE when absent), so a
-     * cell learns which of its faces and edges meet a finer cell from one cache line or two
-     * instead of a lookup per neighbour. */
-    uint32_t split_nodes;
-    uint32_t *split_expansion;
+    sl_mc_cache *mc_cache;   /* every transition configuration a cut can draw (may be
+                                NULL: then extraction triangulates them itself) */
+    /* Derived at load (sl_lod_model_prepare, runtime/lod_layout.c), for generation: the
+     * nodes in LOD order (the root, then the children of lod_array[0], of lod_array[1],
+     * ...), so the frontier after k expansions is the part of cells[0 .. frontier_end[k])
+     * whose expansion is not below k, drawn in that order by streaming one prefix. */
+    uint32_t *frontier_end;  /* expansion_count + 1 entries */
+    sl_lod_cell_ref *cells;  /* frontier_end[expansion_count] entries */
+    uint32_t *split_words;   /* the cells' split lists, in LOD order */
     /* Derived at load: surface_before[k] = how many of the first k expansions are of a
      * node with surface below it (a crossing on an edge of it or of a descendant);
      * expansion_count + 1 entries. The others (empty band cells) change no mesh, so LOD
@@ -76,22 +101,27 @@ typedef struct sl_lod_model {
     uint32_t *surface_before;
 } sl_lod_model;
 
-#define SL_LOD_SPLIT_DIRS 18 /* 6 face and 12 edge neighbours: those that split a cell */
-
 void sl_lod_model_init(sl_lod_model *m);
 /* Derives what generation needs besides the file's tables: expansion_index, the
- * extraction scratch and split_expansion. Needs the tree, lod_array and neighbours.
+ * extraction scratch, the cells in LOD order and their split rows. Needs the tree,
+ * lod_array, neighbours and transitions.
  * Returns -1 when out of memory. */
 int sl_lod_model_prepare(sl_lod_model *m);
 /* Renumbers the crossings in the order the LOD array first reaches them (then the rest),
  * so a coarse level's vertices are read from one compact stretch of the crossing table
- * rather than from all over it. Generated meshes do not change (vertices are numbered by
- * first use, not by crossing id). Returns -1 when out of memory (model unchanged). */
+ * rather than from all over it, and lays out the per-node crossing ids and transition
+ * records in LOD order. Generated meshes do not change (vertices are numbered by first
+ * use, not by crossing id). Call before sl_lod_model_prepare. Returns -1 when out of
+ * memory. */
 int sl_lod_model_localize(sl_lod_model *m);
 /* Fills surface_before (allocated by the caller, expansion_count + 1 entries) from the
  * tree and the LOD array; part of sl_lod_model_prepare. Returns -1 when out of memory. */
 int sl_lod_surface_counts(sl_lod_model *m);
 void sl_lod_model_release(sl_lod_model *m);
+/* Fills mc_cache with the triangulation of every transition cell any cut can draw (each
+ * internal frontier cell in each of its split states); part of sl_lod_model_prepare.
+ * Returns -1 when out of memory. */
+int sl_lod_cache_transitions(sl_lod_model *m);
 
 /* Neighbour in direction d of node n, or SL_OCTREE_NONE. */
 static inline uint32_t sl_neighbour(const sl_neighbours *nb, uint32_t n, int d)

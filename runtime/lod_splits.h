@@ -1,5 +1,5 @@
 /* Which faces and edges of a cell a neighbour's expansion splits (runtime/lod_generate.c
- * draws transition cells with it; sl_lod_model_prepare lays out split_expansion by its
+ * draws transition cells with it; sl_lod_model_prepare lays out the split rows by its
  * slots). Built once, read-only afterwards. */
 #ifndef SCANLOD_RUNTIME_LOD_SPLITS_H
 #define SCANLOD_RUNTIME_LOD_SPLITS_H
@@ -12,7 +12,7 @@
  * split when the neighbour in that direction is expanded (a face neighbour: that face and
  * its 4 edges; any of the 3 neighbours around an edge: that edge; a corner neighbour:
  * nothing). The directions that split anything, in increasing order, are the model's
- * split_expansion slots. */
+ * split row slots. */
 typedef struct sl_lod_split_table {
     uint8_t faces[27];
     uint16_t edges[27];

@@ -1,29 +1,43 @@
-/* A small cache of transition-cell triangulations for extraction.
+/* The table of transition-cell triangulations a model's cuts draw.
  *
  * sl_mc_triangulate is a pure function of the cell's signs (corner, split-edge midpoint and
- * split-face centre signs; 44 bits), and a model's transition cells repeat a few hundred
- * configurations, so extraction looks them up instead of pairing crossings face by face
- * each time: at 1-20 % budgets the general triangulation was a quarter of the cost per
- * triangle. Direct-mapped, one 64-byte line per entry; only configurations of at most
- * SL_MC_CACHE_TRIANGLES triangles without centroid vertices are kept (the rest are
- * recomputed). Not thread-safe: one per model, used by one extraction at a time.
+ * split-face centre signs; 44 bits), and a model's transition cells repeat a limited set of
+ * configurations. At load, every configuration any cut can draw is triangulated once, in
+ * the order cuts first meet them (sl_lod_cache_transitions), and each frontier cell's
+ * split list names the entry of each of its states: extraction neither triangulates nor
+ * hashes, and a small cut reads the first entries of the table. One 64-byte line per
+ * entry; configurations of more than SL_MC_CACHE_TRIANGLES triangles or with centroid
+ * vertices get no entry (extraction triangulates those). Read-only once filled, so
+ * extractions may share it.
  */
 #ifndef SCANLOD_RUNTIME_MC_CACHE_H
 #define SCANLOD_RUNTIME_MC_CACHE_H
 
+#include <stdint.h>
+
 #include "runtime/mc_cube.h"
 
 #define SL_MC_CACHE_TRIANGLES 18
+#define SL_MC_CACHE_NONE UINT32_MAX
+
+typedef struct sl_mc_cached {
+    uint8_t count;
+    uint8_t points[SL_MC_CACHE_TRIANGLES][3]; /* as sl_mc_triangles.points */
+    uint8_t pad[64 - 1 - 3 * SL_MC_CACHE_TRIANGLES];
+} sl_mc_cached;
 
 typedef struct sl_mc_cache sl_mc_cache;
 
 sl_mc_cache *sl_mc_cache_new(void); /* NULL when out of memory */
 void sl_mc_cache_free(sl_mc_cache *cache);
-
-/* As sl_mc_triangulate, except that on a cached configuration only count, points and
- * centroids (0) are written: read loops only when centroids is non-zero. `cache` may be
- * NULL (then it is sl_mc_triangulate). */
-void sl_mc_triangulate_cached(sl_mc_cache *cache, const sl_mc_cell *cell,
-                              sl_mc_triangles *out);
+/* The entry of the cell's configuration, triangulated and added unless it is there:
+ * *id = its index, or SL_MC_CACHE_NONE when it cannot be kept. Returns -1 when out of
+ * memory (the table stays usable). */
+int sl_mc_cache_add(sl_mc_cache *cache, const sl_mc_cell *cell, uint32_t *id);
+/* Entry id (id < sl_mc_cache_count). */
+const sl_mc_cached *sl_mc_cache_entry(const sl_mc_cache *cache, uint32_t id);
+/* Entries in the table, and its size in bytes. */
+uint32_t sl_mc_cache_count(const sl_mc_cache *cache);
+uint64_t sl_mc_cache_bytes(const sl_mc_cache *cache);
 
 #endif

@@ -136,12 +136,15 @@ static int same_mesh(const sl_lod_mesh *a, const sl_lod_mesh *b)
            (!a->colors) == (!b->colors) && (!a->colors || !memcmp(a->colors, b->colors, 4 * v));
 }
 
-static void test_generation(int n, int coloured, uint64_t seed)
+static void test_generation(int n, int coloured, int localized, uint64_t seed)
 {
     rng_state ^= seed;
     sl_lod_model m;
     CHECK(build_model(n, coloured, &m) == 0);
     CHECK(m.expansion_count > 100);
+    /* As a model read from a file is: crossings renumbered, pools in LOD order. */
+    if (localized)
+        CHECK(sl_lod_model_localize(&m) == 0 && sl_lod_model_prepare(&m) == 0);
     uint64_t differ = 0, cracks_total = 0;
     for (uint32_t k = 0; k <= m.expansion_count; k++) {
         sl_lod_mesh fast, slow;
@@ -158,8 +161,8 @@ static void test_generation(int n, int coloured, uint64_t seed)
     }
     CHECK_MSG(differ == 0, "%llu K where generation differs from the reference",
               (unsigned long long)differ);
-    printf("random order %llx: %u nodes, %u expansions, %llu cells drawn with a crack\n",
-           (unsigned long long)seed, m.tree.node_count, m.expansion_count,
+    printf("random order %llx%s: %u nodes, %u expansions, %llu cells drawn with a crack\n",
+           (unsigned long long)seed, localized ? " (localized)" : "", m.tree.node_count, m.expansion_count,
            (unsigned long long)cracks_total);
     sl_lod_model_release(&m);
 }
@@ -167,7 +170,8 @@ static void test_generation(int n, int coloured, uint64_t seed)
 int main(void)
 {
     test_uniform_table();
-    test_generation(13, 0, 1);
-    test_generation(14, 1, 2);
+    test_generation(13, 0, 0, 1);
+    test_generation(14, 1, 1, 2);
+    test_generation(12, 0, 1, 3);
     return check_report();
 }
