@@ -11,6 +11,7 @@
 
 #include "runtime/lod_model.h"
 #include "runtime/lod_splits.h"
+#include "runtime/mc_cache.h"
 
 void sl_lod_model_init(sl_lod_model *m)
 {
@@ -26,7 +27,7 @@ void sl_lod_model_release(sl_lod_model *m)
     free(m->accumulation);
     free(m->error_after);
     sl_mesh_scratch_release(&m->scratch);
-    sl_mc_cache_free(m->mc_cache);
+    free(m->split_triangles);
     free(m->frontier_end);
     free(m->cells);
     free(m->split_words);
@@ -232,8 +233,8 @@ uint64_t sl_lod_frontier(const sl_lod_model *m, uint32_t k, uint32_t *cells)
 
 /* Frontier cell c after k expansions: its own signs and crossings, split where an expanded
  * neighbour requires. *split says whether any split was wanted (if not, the uniform table
- * is the cell's drawing); *entry is the split list's word naming the state's mc_cache
- * entry (NULL when not split). Returns 0, or -1 when a split lacked data (a crack). */
+ * is the cell's drawing); *entry is the split list's word naming the state's
+ * triangulation (NULL when not split). Returns 0, or -1 when a split lacked data (a crack). */
 static int frontier_cell(const sl_lod_model *m, uint32_t k, const sl_lod_cell_ref *c,
                          const sl_lod_split_table *st, sl_mc_cell *cell,
                          uint32_t point_crossing[SL_MC_MAX_POINTS], uint32_t **entry)
@@ -271,9 +272,9 @@ static int draw_cell(const sl_lod_model *m, uint32_t k, const sl_lod_cell_ref *c
         sl_mesh_builder_add_triangles(b, row[0], row + 1, point_crossing);
         return 0;
     }
-    if (*entry != SL_MC_CACHE_NONE && m->mc_cache) {
-        const sl_mc_cached *t = sl_mc_cache_entry(m->mc_cache, *entry);
-        sl_mesh_builder_add_triangles(b, t->count, &t->points[0][0], point_crossing);
+    if (*entry != SL_OCTREE_NONE) {
+        const uint8_t *t = m->split_triangles + *entry;
+        sl_mesh_builder_add_triangles(b, t[0], t + 1, point_crossing);
     } else {
         sl_mc_triangles tri;
         sl_mc_triangulate(&cell, &tri);
@@ -282,13 +283,40 @@ static int draw_cell(const sl_lod_model *m, uint32_t k, const sl_lod_cell_ref *c
     return rc ? 1 : 0;
 }
 
-int sl_lod_cache_transitions(sl_lod_model *m)
+/* Appends a triangulation to split_triangles; its offset, or SL_OCTREE_NONE past 4 GiB. */
+static int append_triangles(sl_lod_model *m, const sl_mc_cached *t, uint64_t *capacity,
+                            uint32_t *offset)
 {
-    if (!m->mc_cache)
+    uint64_t size = 1 + 3 * (uint64_t)t->count, at = m->split_triangle_bytes;
+    *offset = SL_OCTREE_NONE;
+    if (at + size >= SL_OCTREE_NONE)
         return 0;
+    if (at + size > *capacity) {
+        uint64_t grown = *capacity ? 2 * *capacity : 4096;
+        uint8_t *bytes = realloc(m->split_triangles, (size_t)grown);
+        if (!bytes)
+            return -1;
+        m->split_triangles = bytes;
+        *capacity = grown;
+    }
+    m->split_triangles[at] = t->count;
+    memcpy(m->split_triangles + at + 1, t->points, 3 * (size_t)t->count);
+    m->split_triangle_bytes = at + size;
+    *offset = (uint32_t)at;
+    return 0;
+}
+
+int sl_lod_triangulate_states(sl_lod_model *m)
+{
     const sl_lod_split_table *st = sl_lod_split_table_get();
+    sl_mc_cache *configs = sl_mc_cache_new(); /* each distinct configuration once */
     uint32_t e = m->expansion_count, end = m->frontier_end[e], parent = 0;
-    for (uint32_t pos = 0; pos < end; pos++) {
+    uint64_t capacity = 0;
+    free(m->split_triangles);
+    m->split_triangles = NULL;
+    m->split_triangle_bytes = 0;
+    int rc = configs ? 0 : -1;
+    for (uint32_t pos = 0; pos < end && !rc; pos++) {
         /* Cells [frontier_end[i], frontier_end[i + 1]) are the children of lod_array[i]. */
         while (parent < e && m->frontier_end[parent + 1] <= pos)
             parent++;
@@ -297,16 +325,20 @@ int sl_lod_cache_transitions(sl_lod_model *m)
             continue;
         /* Its state when it appears, and after each event. */
         const uint32_t *w = m->split_words + c->splits;
-        for (uint32_t i = 0; i <= w[1] >> 24; i++) {
+        for (uint32_t i = 0; i <= w[1] >> 24 && !rc; i++) {
             uint32_t k = i == 0 ? (pos == 0 ? 0 : parent + 1) : w[3 * i] + 1u;
             sl_mc_cell cell;
-            uint32_t point_crossing[SL_MC_MAX_POINTS], *entry;
+            uint32_t point_crossing[SL_MC_MAX_POINTS], *entry, id;
             frontier_cell(m, k, c, st, &cell, point_crossing, &entry);
-            if (entry && sl_mc_cache_add(m->mc_cache, &cell, entry))
-                return -1;
+            if (!entry)
+                continue;
+            rc = sl_mc_cache_add(configs, &cell, &id);
+            if (!rc && id != SL_MC_CACHE_NONE)
+                rc = append_triangles(m, sl_mc_cache_entry(configs, id), &capacity, entry);
         }
     }
-    return 0;
+    sl_mc_cache_free(configs);
+    return rc;
 }
 
 /* The records, ids and split lists stream in LOD order, but crossings are shared with

@@ -209,13 +209,13 @@ static uint32_t split_list(const sl_lod_model *m, const sl_lod_split_table *st, 
         }
         out[3 + 3 * at] = s;
         out[4 + 3 * at] = adds;
-        out[5 + 3 * at] = SL_MC_CACHE_NONE; /* sl_lod_cache_transitions fills these */
+        out[5 + 3 * at] = SL_OCTREE_NONE; /* sl_lod_triangulate_states fills these */
     }
     if (!initial && !events)
         return 0;
     out[0] = m->transitions.base[n];
     out[1] = initial | events << 24;
-    out[2] = SL_MC_CACHE_NONE;
+    out[2] = SL_OCTREE_NONE;
     return 3 + 3 * events;
 }
 
@@ -295,8 +295,6 @@ int sl_lod_model_prepare(sl_lod_model *m)
     uint32_t n = t->node_count;
     free(m->expansion_index);
     sl_mesh_scratch_release(&m->scratch);
-    sl_mc_cache_free(m->mc_cache);
-    m->mc_cache = sl_mc_cache_new(); /* without it extraction is only slower */
     free(m->surface_before);
     m->surface_before = malloc(((size_t)m->expansion_count + 1) * sizeof *m->surface_before);
     m->expansion_index = malloc((n ? n : 1) * sizeof *m->expansion_index);
@@ -316,5 +314,5 @@ int sl_lod_model_prepare(sl_lod_model *m)
     sl_mc_triangulate(&empty, &none);
     if (lay_out_cells(m))
         return -1;
-    return sl_lod_cache_transitions(m);
+    return sl_lod_triangulate_states(m);
 }

@@ -24,7 +24,6 @@
 #include <stdint.h>
 
 #include "runtime/lod_mesh.h"
-#include "runtime/mc_cache.h"
 #include "runtime/mc_cube.h"
 #include "runtime/octree.h"
 
@@ -66,10 +65,12 @@ typedef struct sl_lod_cell_ref {
  * meet a finer cell, and the triangulation that gives, for every k at which the cell is on
  * the frontier. Word 0: the node's transition record base; word 1: the splits when the
  * cell appears (faces in bits 0-5, edges in bits 6-17) | event count << 24; word 2: the
- * mc_cache entry of that state; then per event, in increasing order, the expansion index s
- * of a same-level neighbour, the splits its expansion adds (for k > s) and the entry of
- * the new state. An entry SL_MC_CACHE_NONE: no split, or a configuration the cache does
- * not keep (triangulated when drawn). Only neighbours expanding while the cell is on the
+ * offset of that state's triangulation in split_triangles; then per event, in increasing
+ * order, the expansion index s of a same-level neighbour, the splits its expansion adds
+ * (for k > s) and the triangulation of the new state. A triangulation is a count and 3
+ * point ids per triangle (sl_mc_triangles numbering), stored in LOD order like the lists;
+ * offset SL_OCTREE_NONE: no split, or a configuration with centroid vertices or more than
+ * 18 triangles (triangulated when drawn). Only neighbours expanding while the cell is on the
  * frontier make events, so a cell reads a few words after the previous cell's. */
 #define SL_LOD_SPLIT_DIRS 18 /* 6 face and 12 edge neighbours: those that split a cell */
 #define SL_LOD_SPLIT_FACES(w) ((w) & 0x3fu)
@@ -85,8 +86,6 @@ typedef struct sl_lod_model {
     sl_neighbours neighbours;
     sl_transitions transitions;
     sl_mesh_scratch scratch; /* the builder's, kept between extractions */
-    sl_mc_cache *mc_cache;   /* every transition configuration a cut can draw (may be
-                                NULL: then extraction triangulates them itself) */
     /* Derived at load (sl_lod_model_prepare, runtime/lod_layout.c), for generation: the
      * nodes in LOD order (the root, then the children of lod_array[0], of lod_array[1],
      * ...), so the frontier after k expansions is the part of cells[0 .. frontier_end[k])
@@ -94,6 +93,8 @@ typedef struct sl_lod_model {
     uint32_t *frontier_end;  /* expansion_count + 1 entries */
     sl_lod_cell_ref *cells;  /* frontier_end[expansion_count] entries */
     uint32_t *split_words;   /* the cells' split lists, in LOD order */
+    uint8_t *split_triangles; /* their states' triangulations, in LOD order */
+    uint64_t split_triangle_bytes;
     /* Derived at load: surface_before[k] = how many of the first k expansions are of a
      * node with surface below it (a crossing on an edge of it or of a descendant);
      * expansion_count + 1 entries. The others (empty band cells) change no mesh, so LOD
@@ -118,10 +119,9 @@ int sl_lod_model_localize(sl_lod_model *m);
  * tree and the LOD array; part of sl_lod_model_prepare. Returns -1 when out of memory. */
 int sl_lod_surface_counts(sl_lod_model *m);
 void sl_lod_model_release(sl_lod_model *m);
-/* Fills mc_cache with the triangulation of every transition cell any cut can draw (each
- * internal frontier cell in each of its split states); part of sl_lod_model_prepare.
- * Returns -1 when out of memory. */
-int sl_lod_cache_transitions(sl_lod_model *m);
+/* Triangulates every state of every split list into split_triangles (each distinct
+ * configuration once); part of sl_lod_model_prepare. Returns -1 when out of memory. */
+int sl_lod_triangulate_states(sl_lod_model *m);
 
 /* Neighbour in direction d of node n, or SL_OCTREE_NONE. */
 static inline uint32_t sl_neighbour(const sl_neighbours *nb, uint32_t n, int d)

@@ -1,14 +1,11 @@
-/* The table of transition-cell triangulations a model's cuts draw.
+/* The distinct transition-cell triangulations of a model, found by configuration.
  *
  * sl_mc_triangulate is a pure function of the cell's signs (corner, split-edge midpoint and
  * split-face centre signs; 44 bits), and a model's transition cells repeat a limited set of
- * configurations. At load, every configuration any cut can draw is triangulated once, in
- * the order cuts first meet them (sl_lod_cache_transitions), and each frontier cell's
- * split list names the entry of each of its states: extraction neither triangulates nor
- * hashes, and a small cut reads the first entries of the table. One 64-byte line per
- * entry; configurations of more than SL_MC_CACHE_TRIANGLES triangles or with centroid
- * vertices get no entry (extraction triangulates those). Read-only once filled, so
- * extractions may share it.
+ * configurations: at load, sl_lod_triangulate_states triangulates each distinct one once
+ * through this table and copies the result into the model's split lists. One 64-byte line
+ * per entry; configurations of more than SL_MC_CACHE_TRIANGLES triangles or with centroid
+ * vertices get no entry.
  */
 #ifndef SCANLOD_RUNTIME_MC_CACHE_H
 #define SCANLOD_RUNTIME_MC_CACHE_H
