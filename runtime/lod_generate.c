@@ -341,24 +341,37 @@ int sl_lod_triangulate_states(sl_lod_model *m)
     return rc;
 }
 
-/* The records, ids and split lists stream in LOD order, but crossings are shared with
- * other cells and only roughly in that order: their vertex map entries and positions are
- * asked for CROSSING_AHEAD cells before they are drawn. (Fetching the split lists and
- * transition records ahead too measured no faster.) */
-#define CROSSING_AHEAD 8
+/* The records, ids, split lists and transition records stream in LOD order, but as
+ * several streams with gaps (the expanded cells' entries lie between), and crossings are
+ * shared with other cells and only roughly in that order: the walk asks for a cell's data
+ * a few cells before drawing it, each step once the previous one's data has come. */
+#define LIST_AHEAD 16    /* cells whose split list and crossing ids are fetched */
+#define CROSSING_AHEAD 8 /* ... whose crossings' vertex map entries and positions are */
+#define RECORD_AHEAD 4   /* ... whose transition record is (its base is in the list) */
 
 static inline int drawn_at(const sl_lod_cell_ref *c, uint32_t k)
 {
     return c->draws && c->expansion >= k;
 }
 
-static void fetch_crossings(const sl_lod_model *m, const sl_lod_cell_ref *c)
+static void fetch_ahead(const sl_lod_model *m, uint32_t k, uint32_t pos, uint32_t end)
 {
-    const uint32_t *ids = m->tree.node_crossings + c->crossing_base;
-    for (int i = 0, count = __builtin_popcount(c->edge_mask); i < count; i++) {
-        __builtin_prefetch(&m->scratch.vertex_of_crossing[ids[i]]);
-        __builtin_prefetch(&m->tree.crossing_position[3 * (size_t)ids[i]]);
+    const sl_lod_cell_ref *c;
+    if (pos + LIST_AHEAD < end && drawn_at(c = &m->cells[pos + LIST_AHEAD], k)) {
+        __builtin_prefetch(m->tree.node_crossings + c->crossing_base);
+        if (c->splits != SL_OCTREE_NONE)
+            __builtin_prefetch(m->split_words + c->splits);
     }
+    if (pos + CROSSING_AHEAD < end && drawn_at(c = &m->cells[pos + CROSSING_AHEAD], k)) {
+        const uint32_t *ids = m->tree.node_crossings + c->crossing_base;
+        for (int i = 0, count = __builtin_popcount(c->edge_mask); i < count; i++) {
+            __builtin_prefetch(&m->scratch.vertex_of_crossing[ids[i]]);
+            __builtin_prefetch(&m->tree.crossing_position[3 * (size_t)ids[i]]);
+        }
+    }
+    if (pos + RECORD_AHEAD < end && drawn_at(c = &m->cells[pos + RECORD_AHEAD], k) &&
+        c->splits != SL_OCTREE_NONE)
+        __builtin_prefetch(m->transitions.words + m->split_words[c->splits]);
 }
 
 /* Draws the frontier after k expansions into the builder; returns the crack count. */
@@ -370,8 +383,7 @@ static uint64_t draw_frontier(sl_lod_model *m, uint32_t k, sl_mesh_builder *b)
     uint32_t end = m->frontier_end[k];
     uint64_t incomplete = 0;
     for (uint32_t pos = 0; pos < end; pos++) {
-        if (pos + CROSSING_AHEAD < end && drawn_at(&m->cells[pos + CROSSING_AHEAD], k))
-            fetch_crossings(m, &m->cells[pos + CROSSING_AHEAD]);
+        fetch_ahead(m, k, pos, end);
         const sl_lod_cell_ref *c = &m->cells[pos];
         if (drawn_at(c, k))
             incomplete += (uint64_t)draw_cell(m, k, c, st, b);
