@@ -27,7 +27,7 @@ void sl_lod_model_release(sl_lod_model *m)
     free(m->accumulation);
     free(m->error_after);
     sl_mesh_scratch_release(&m->scratch);
-    free(m->split_triangles);
+    free(m->split_drawings);
     free(m->frontier_end);
     free(m->cells);
     free(m->split_words);
@@ -231,10 +231,27 @@ uint64_t sl_lod_frontier(const sl_lod_model *m, uint32_t k, uint32_t *cells)
     return count;
 }
 
+/* The word of cell c's split list naming its state after k expansions, or NULL when no
+ * face or edge of it meets a finer cell then; *want gets the splits. */
+static uint32_t *split_state(const sl_lod_model *m, uint32_t k, const sl_lod_cell_ref *c,
+                             uint32_t *want)
+{
+    if (c->splits == SL_OCTREE_NONE)
+        return NULL; /* a leaf, or a cell no cut splits */
+    uint32_t *w = m->split_words + c->splits;
+    uint32_t splits = w[1] & 0xffffffu, events = w[1] >> 24, *state = w + 2;
+    for (uint32_t i = 0; i < events && w[3 + 3 * i] < k; i++) {
+        splits |= w[4 + 3 * i];
+        state = w + 5 + 3 * i;
+    }
+    *want = splits;
+    return SL_LOD_SPLIT_EDGES(splits) ? state : NULL;
+}
+
 /* Frontier cell c after k expansions: its own signs and crossings, split where an expanded
- * neighbour requires. *split says whether any split was wanted (if not, the uniform table
- * is the cell's drawing); *entry is the split list's word naming the state's
- * triangulation (NULL when not split). Returns 0, or -1 when a split lacked data (a crack). */
+ * neighbour requires, the finer points taken from its transition record. *entry is the
+ * split list's word naming the state's drawing (NULL when not split: then the uniform
+ * table is the cell's drawing). Returns 0, or -1 when a split lacked data (a crack). */
 static int frontier_cell(const sl_lod_model *m, uint32_t k, const sl_lod_cell_ref *c,
                          const sl_lod_split_table *st, sl_mc_cell *cell,
                          uint32_t point_crossing[SL_MC_MAX_POINTS], uint32_t **entry)
@@ -244,26 +261,24 @@ static int frontier_cell(const sl_lod_model *m, uint32_t k, const sl_lod_cell_re
     const uint32_t *ids = m->tree.node_crossings + c->crossing_base;
     for (int e = 0; e < 12; e++)
         point_crossing[SL_MC_EDGE_POINT(e)] = (c->edge_mask >> e & 1) ? *ids++ : SL_OCTREE_NONE;
-    *entry = NULL;
-    if (c->splits == SL_OCTREE_NONE)
-        return 0; /* a leaf, or a cell no cut splits */
-    uint32_t *w = m->split_words + c->splits;
-    uint32_t want = w[1] & 0xffffffu, events = w[1] >> 24, *state = w + 2;
-    for (uint32_t i = 0; i < events && w[3 + 3 * i] < k; i++) {
-        want |= w[4 + 3 * i];
-        state = w + 5 + 3 * i;
-    }
-    if (!SL_LOD_SPLIT_EDGES(want))
+    uint32_t want = 0;
+    *entry = split_state(m, k, c, &want);
+    if (!*entry)
         return 0;
-    *entry = state;
-    return apply_splits(st, m->transitions.words + w[0], SL_LOD_SPLIT_FACES(want),
-                        SL_LOD_SPLIT_EDGES(want), cell, point_crossing);
+    return apply_splits(st, m->transitions.words + m->split_words[c->splits],
+                        SL_LOD_SPLIT_FACES(want), SL_LOD_SPLIT_EDGES(want), cell, point_crossing);
 }
 
 /* Draws frontier cell c into the builder; returns 1 when a split lacked data (a crack). */
 static int draw_cell(const sl_lod_model *m, uint32_t k, const sl_lod_cell_ref *c,
                      const sl_lod_split_table *st, sl_mesh_builder *b)
 {
+    uint32_t want, *state = split_state(m, k, c, &want);
+    if (state && *state != SL_OCTREE_NONE) { /* a transition cell, drawn at load */
+        const uint32_t *drawing = m->split_drawings + *state;
+        sl_mesh_builder_add_crossing_triangles(b, (int)(drawing[0] & 0xff), drawing + 1);
+        return (int)(drawing[0] >> 8 & 1);
+    }
     sl_mc_cell cell;
     uint32_t point_crossing[SL_MC_MAX_POINTS], *entry;
     int rc = frontier_cell(m, k, c, st, &cell, point_crossing, &entry);
@@ -272,49 +287,48 @@ static int draw_cell(const sl_lod_model *m, uint32_t k, const sl_lod_cell_ref *c
         sl_mesh_builder_add_triangles(b, row[0], row + 1, point_crossing);
         return 0;
     }
-    if (*entry != SL_OCTREE_NONE) {
-        const uint8_t *t = m->split_triangles + *entry;
-        sl_mesh_builder_add_triangles(b, t[0], t + 1, point_crossing);
-    } else {
-        sl_mc_triangles tri;
-        sl_mc_triangulate(&cell, &tri);
-        sl_mesh_builder_add_cell(b, &tri, point_crossing);
-    }
+    sl_mc_triangles tri; /* centroid vertices or many triangles: not kept at load */
+    sl_mc_triangulate(&cell, &tri);
+    sl_mesh_builder_add_cell(b, &tri, point_crossing);
     return rc ? 1 : 0;
 }
 
-/* Appends a triangulation to split_triangles; its offset, or SL_OCTREE_NONE past 4 GiB. */
-static int append_triangles(sl_lod_model *m, const sl_mc_cached *t, uint64_t *capacity,
-                            uint32_t *offset)
+/* Appends a transition cell's drawing to split_drawings: its offset, or SL_OCTREE_NONE
+ * (drawn the general way) past 4 Gi words. */
+static int append_drawing(sl_lod_model *m, const sl_mc_cached *t, int crack,
+                          const uint32_t point_crossing[SL_MC_MAX_POINTS], uint64_t *capacity,
+                          uint32_t *offset)
 {
-    uint64_t size = 1 + 3 * (uint64_t)t->count, at = m->split_triangle_bytes;
+    uint64_t size = 1 + 3 * (uint64_t)t->count, at = m->split_drawing_words;
     *offset = SL_OCTREE_NONE;
     if (at + size >= SL_OCTREE_NONE)
         return 0;
     if (at + size > *capacity) {
         uint64_t grown = *capacity ? 2 * *capacity : 4096;
-        uint8_t *bytes = realloc(m->split_triangles, (size_t)grown);
-        if (!bytes)
+        uint32_t *words = realloc(m->split_drawings, (size_t)grown * sizeof *words);
+        if (!words)
             return -1;
-        m->split_triangles = bytes;
+        m->split_drawings = words;
         *capacity = grown;
     }
-    m->split_triangles[at] = t->count;
-    memcpy(m->split_triangles + at + 1, t->points, 3 * (size_t)t->count);
-    m->split_triangle_bytes = at + size;
+    uint32_t *out = m->split_drawings + at;
+    out[0] = t->count | (uint32_t)(crack ? 1 : 0) << 8;
+    for (int i = 0; i < 3 * t->count; i++)
+        out[1 + i] = point_crossing[(&t->points[0][0])[i]];
+    m->split_drawing_words = at + size;
     *offset = (uint32_t)at;
     return 0;
 }
 
-int sl_lod_triangulate_states(sl_lod_model *m)
+int sl_lod_draw_states(sl_lod_model *m)
 {
     const sl_lod_split_table *st = sl_lod_split_table_get();
     sl_mc_cache *configs = sl_mc_cache_new(); /* each distinct configuration once */
     uint32_t e = m->expansion_count, end = m->frontier_end[e], parent = 0;
     uint64_t capacity = 0;
-    free(m->split_triangles);
-    m->split_triangles = NULL;
-    m->split_triangle_bytes = 0;
+    free(m->split_drawings);
+    m->split_drawings = NULL;
+    m->split_drawing_words = 0;
     int rc = configs ? 0 : -1;
     for (uint32_t pos = 0; pos < end && !rc; pos++) {
         /* Cells [frontier_end[i], frontier_end[i + 1]) are the children of lod_array[i]. */
@@ -329,49 +343,62 @@ int sl_lod_triangulate_states(sl_lod_model *m)
             uint32_t k = i == 0 ? (pos == 0 ? 0 : parent + 1) : w[3 * i] + 1u;
             sl_mc_cell cell;
             uint32_t point_crossing[SL_MC_MAX_POINTS], *entry, id;
-            frontier_cell(m, k, c, st, &cell, point_crossing, &entry);
+            int crack = frontier_cell(m, k, c, st, &cell, point_crossing, &entry);
             if (!entry)
                 continue;
             rc = sl_mc_cache_add(configs, &cell, &id);
             if (!rc && id != SL_MC_CACHE_NONE)
-                rc = append_triangles(m, sl_mc_cache_entry(configs, id), &capacity, entry);
+                rc = append_drawing(m, sl_mc_cache_entry(configs, id), crack, point_crossing,
+                                    &capacity, entry);
         }
     }
     sl_mc_cache_free(configs);
     return rc;
 }
 
-/* The records, ids, split lists and transition records stream in LOD order, but as
- * several streams with gaps (the expanded cells' entries lie between), and crossings are
- * shared with other cells and only roughly in that order: the walk asks for a cell's data
- * a few cells before drawing it, each step once the previous one's data has come. */
+/* The records, ids, split lists and drawings stream in LOD order, but as several streams
+ * with gaps (the expanded cells' entries lie between), and crossings are shared with
+ * other cells and only roughly in that order: the walk asks for a cell's data a few cells
+ * before drawing it, each step once the previous one's data has come. */
 #define LIST_AHEAD 16    /* cells whose split list and crossing ids are fetched */
-#define CROSSING_AHEAD 8 /* ... whose crossings' vertex map entries and positions are */
-#define RECORD_AHEAD 4   /* ... whose transition record is (its base is in the list) */
+#define CROSSING_AHEAD 8 /* ... whose own crossings' vertex map entries and positions are */
+#define DRAWING_AHEAD 4  /* ... whose drawing is (its offset is in the list) */
 
 static inline int drawn_at(const sl_lod_cell_ref *c, uint32_t k)
 {
     return c->draws && c->expansion >= k;
 }
 
+static void fetch_crossings(const sl_lod_model *m, const uint32_t *ids, int count)
+{
+    for (int i = 0; i < count; i++) {
+        __builtin_prefetch(&m->scratch.vertex_of_crossing[ids[i]]);
+        __builtin_prefetch(&m->tree.crossing_position[3 * (size_t)ids[i]]);
+    }
+}
+
+/* The drawing of cell c after k expansions, or NULL (not a transition cell then). */
+static const uint32_t *drawing_of(const sl_lod_model *m, uint32_t k, const sl_lod_cell_ref *c)
+{
+    uint32_t want, *state = split_state(m, k, c, &want);
+    return state && *state != SL_OCTREE_NONE ? m->split_drawings + *state : NULL;
+}
+
 static void fetch_ahead(const sl_lod_model *m, uint32_t k, uint32_t pos, uint32_t end)
 {
     const sl_lod_cell_ref *c;
+    const uint32_t *drawing;
     if (pos + LIST_AHEAD < end && drawn_at(c = &m->cells[pos + LIST_AHEAD], k)) {
         __builtin_prefetch(m->tree.node_crossings + c->crossing_base);
         if (c->splits != SL_OCTREE_NONE)
             __builtin_prefetch(m->split_words + c->splits);
     }
-    if (pos + CROSSING_AHEAD < end && drawn_at(c = &m->cells[pos + CROSSING_AHEAD], k)) {
-        const uint32_t *ids = m->tree.node_crossings + c->crossing_base;
-        for (int i = 0, count = __builtin_popcount(c->edge_mask); i < count; i++) {
-            __builtin_prefetch(&m->scratch.vertex_of_crossing[ids[i]]);
-            __builtin_prefetch(&m->tree.crossing_position[3 * (size_t)ids[i]]);
-        }
-    }
-    if (pos + RECORD_AHEAD < end && drawn_at(c = &m->cells[pos + RECORD_AHEAD], k) &&
-        c->splits != SL_OCTREE_NONE)
-        __builtin_prefetch(m->transitions.words + m->split_words[c->splits]);
+    if (pos + CROSSING_AHEAD < end && drawn_at(c = &m->cells[pos + CROSSING_AHEAD], k))
+        fetch_crossings(m, m->tree.node_crossings + c->crossing_base,
+                        __builtin_popcount(c->edge_mask));
+    if (pos + DRAWING_AHEAD < end && drawn_at(c = &m->cells[pos + DRAWING_AHEAD], k) &&
+        (drawing = drawing_of(m, k, c)))
+        __builtin_prefetch(drawing);
 }
 
 /* Draws the frontier after k expansions into the builder; returns the crack count. */

@@ -209,7 +209,7 @@ static uint32_t split_list(const sl_lod_model *m, const sl_lod_split_table *st, 
         }
         out[3 + 3 * at] = s;
         out[4 + 3 * at] = adds;
-        out[5 + 3 * at] = SL_OCTREE_NONE; /* sl_lod_triangulate_states fills these */
+        out[5 + 3 * at] = SL_OCTREE_NONE; /* sl_lod_draw_states fills these */
     }
     if (!initial && !events)
         return 0;
@@ -314,5 +314,5 @@ int sl_lod_model_prepare(sl_lod_model *m)
     sl_mc_triangulate(&empty, &none);
     if (lay_out_cells(m))
         return -1;
-    return sl_lod_triangulate_states(m);
+    return sl_lod_draw_states(m);
 }

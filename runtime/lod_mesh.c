@@ -190,6 +190,18 @@ void sl_mesh_builder_add_triangles(sl_mesh_builder *b, int count, const uint8_t 
     m->triangle_count += (uint64_t)count;
 }
 
+void sl_mesh_builder_add_crossing_triangles(sl_mesh_builder *b, int count,
+                                            const uint32_t *crossings)
+{
+    if (b->failed || count == 0 || reserve_triangles(b, count))
+        return;
+    sl_lod_mesh *m = &b->mesh;
+    uint32_t *out = m->indices + 3 * (size_t)m->triangle_count;
+    for (int i = 0; i < 3 * count; i++)
+        out[i] = vertex_of(b, crossings[i]);
+    m->triangle_count += (uint64_t)count;
+}
+
 void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
                               const uint32_t point_crossing[SL_MC_MAX_POINTS])
 {

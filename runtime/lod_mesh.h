@@ -62,6 +62,9 @@ void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
  * `point_crossing` maps to a crossing id (a cell without centroid vertices). */
 void sl_mesh_builder_add_triangles(sl_mesh_builder *b, int count, const uint8_t *points,
                                    const uint32_t *point_crossing);
+/* Adds `count` triangles given as 3 crossing ids each. */
+void sl_mesh_builder_add_crossing_triangles(sl_mesh_builder *b, int count,
+                                            const uint32_t *crossings);
 /* Finishes normals, resets the scratch, moves the mesh to *out (with caller buffers: their
  * pointers and the counts). Returns -1 when out of memory or past the capacities. */
 int sl_mesh_builder_finish(sl_mesh_builder *b, sl_lod_mesh *out);

@@ -62,16 +62,19 @@ typedef struct sl_lod_cell_ref {
 } sl_lod_cell_ref;
 
 /* A split list (split_words at sl_lod_cell_ref.splits): which faces and edges of a cell
- * meet a finer cell, and the triangulation that gives, for every k at which the cell is on
- * the frontier. Word 0: the node's transition record base; word 1: the splits when the
- * cell appears (faces in bits 0-5, edges in bits 6-17) | event count << 24; word 2: the
- * offset of that state's triangulation in split_triangles; then per event, in increasing
- * order, the expansion index s of a same-level neighbour, the splits its expansion adds
- * (for k > s) and the triangulation of the new state. A triangulation is a count and 3
- * point ids per triangle (sl_mc_triangles numbering), stored in LOD order like the lists;
- * offset SL_OCTREE_NONE: no split, or a configuration with centroid vertices or more than
- * 18 triangles (triangulated when drawn). Only neighbours expanding while the cell is on the
- * frontier make events, so a cell reads a few words after the previous cell's. */
+ * meet a finer cell, and how the cell is drawn then, for every k at which it is on the
+ * frontier. Word 0: the node's transition record base; word 1: the splits when the cell
+ * appears (faces in bits 0-5, edges in bits 6-17) | event count << 24; word 2: the offset
+ * of that state's drawing in split_drawings; then per event, in increasing order, the
+ * expansion index s of a same-level neighbour, the splits its expansion adds (for k > s)
+ * and the drawing of the new state. Only neighbours expanding while the cell is on the
+ * frontier make events, so a cell reads a few words after the previous cell's.
+ *
+ * A drawing is the transition cell's triangles as crossing ids, worked out at load from
+ * the transition record (the crack compensation points) and the face-rule triangulation:
+ * word 0 = triangle count | 1 << 8 when a split lacked data (a crack the report counts),
+ * then 3 crossing ids per triangle. Offset SL_OCTREE_NONE: no split, or a configuration
+ * with centroid vertices or more than 18 triangles (drawn the general way). */
 #define SL_LOD_SPLIT_DIRS 18 /* 6 face and 12 edge neighbours: those that split a cell */
 #define SL_LOD_SPLIT_FACES(w) ((w) & 0x3fu)
 #define SL_LOD_SPLIT_EDGES(w) ((w) >> 6 & 0xfffu)
@@ -93,8 +96,8 @@ typedef struct sl_lod_model {
     uint32_t *frontier_end;  /* expansion_count + 1 entries */
     sl_lod_cell_ref *cells;  /* frontier_end[expansion_count] entries */
     uint32_t *split_words;   /* the cells' split lists, in LOD order */
-    uint8_t *split_triangles; /* their states' triangulations, in LOD order */
-    uint64_t split_triangle_bytes;
+    uint32_t *split_drawings; /* their states' drawings, in LOD order */
+    uint64_t split_drawing_words;
     /* Derived at load: surface_before[k] = how many of the first k expansions are of a
      * node with surface below it (a crossing on an edge of it or of a descendant);
      * expansion_count + 1 entries. The others (empty band cells) change no mesh, so LOD
@@ -119,9 +122,9 @@ int sl_lod_model_localize(sl_lod_model *m);
  * tree and the LOD array; part of sl_lod_model_prepare. Returns -1 when out of memory. */
 int sl_lod_surface_counts(sl_lod_model *m);
 void sl_lod_model_release(sl_lod_model *m);
-/* Triangulates every state of every split list into split_triangles (each distinct
- * configuration once); part of sl_lod_model_prepare. Returns -1 when out of memory. */
-int sl_lod_triangulate_states(sl_lod_model *m);
+/* Works out the drawing of every state of every split list (each distinct configuration
+ * triangulated once); part of sl_lod_model_prepare. Returns -1 when out of memory. */
+int sl_lod_draw_states(sl_lod_model *m);
 
 /* Neighbour in direction d of node n, or SL_OCTREE_NONE. */
 static inline uint32_t sl_neighbour(const sl_neighbours *nb, uint32_t n, int d)
