@@ -219,6 +219,17 @@ static uint32_t split_list(const sl_lod_model *m, const sl_lod_split_table *st, 
     return 3 + 3 * events;
 }
 
+/* The split list of the cell at LOD-order position pos (node n); its length in words. */
+static uint32_t cell_split_list(const sl_lod_model *m, const sl_lod_split_table *st, uint32_t pos,
+                                uint32_t n, uint32_t list[SPLIT_LIST_MAX])
+{
+    if (m->tree.nodes[n].level == 0 || m->transitions.base[n] == SL_OCTREE_NONE)
+        return 0; /* a leaf never meets a finer cell */
+    uint32_t e = m->expansion_count;
+    uint32_t last = m->expansion_index[n] == SL_OCTREE_NONE ? e : m->expansion_index[n];
+    return split_list(m, st, n, sl_lod_first_frontier(m, pos), last, list);
+}
+
 /* The cell records and split lists in LOD order, and frontier_end. */
 static int lay_out_cells(sl_lod_model *m)
 {
@@ -247,46 +258,44 @@ static int lay_out_cells(sl_lod_model *m)
         free(order);
         return -1;
     }
-    /* Two passes over the split lists: their total size, then their words. */
+    /* The lists' sizes (in the cells' `splits` for now), their offsets, their words. */
+#pragma omp parallel for schedule(static)
+    for (uint32_t pos = 0; pos < end; pos++) {
+        uint32_t list[SPLIT_LIST_MAX];
+        m->cells[pos].splits = cell_split_list(m, st, pos, order[pos], list);
+    }
     uint64_t words = 0;
-    for (int pass = 0; pass < 2; pass++) {
-        uint32_t parent = 0;
-        words = 0;
-        for (uint32_t pos = 0; pos < end; pos++) {
-            while (parent < e && m->frontier_end[parent + 1] <= pos)
-                parent++;
-            uint32_t n = order[pos], list[SPLIT_LIST_MAX], size = 0;
-            const sl_octree_node *node = &t->nodes[n];
-            if (node->level > 0 && m->transitions.base[n] != SL_OCTREE_NONE) {
-                uint32_t first = pos == 0 ? 0 : parent + 1;
-                uint32_t last = m->expansion_index[n] == SL_OCTREE_NONE ? e : m->expansion_index[n];
-                size = split_list(m, st, n, first, last, list);
-            }
-            if (pass == 1) {
-                sl_lod_cell_ref *c = &m->cells[pos];
-                c->expansion = m->expansion_index[n];
-                c->crossing_base = node->crossing_base;
-                c->edge_mask = node->edge_mask;
-                c->inside = node->inside;
-                /* A cell whose corners share one sign draws nothing unless a split brings
-                 * in a finer sample of the other sign. */
-                c->draws = node->edge_mask ||
-                           (size && !uniform_record(&m->transitions, n, node->inside));
-                c->splits = size ? (uint32_t)words : SL_OCTREE_NONE;
-                memcpy(m->split_words + words, list, size * sizeof *list);
-            }
-            words += size;
-        }
-        if (pass == 0) {
-            if (words >= SL_OCTREE_NONE)
-                break;
-            m->split_words = malloc((words ? words : 1) * sizeof *m->split_words);
-            if (!m->split_words)
-                break;
-        }
+    for (uint32_t pos = 0; pos < end; pos++) {
+        uint32_t size = m->cells[pos].splits;
+        m->cells[pos].splits = size ? (uint32_t)words : SL_OCTREE_NONE;
+        words += size;
+        if (words >= SL_OCTREE_NONE)
+            break;
+    }
+    if (words < SL_OCTREE_NONE)
+        m->split_words = malloc((words ? words : 1) * sizeof *m->split_words);
+    if (!m->split_words) {
+        free(order);
+        return -1;
+    }
+#pragma omp parallel for schedule(static)
+    for (uint32_t pos = 0; pos < end; pos++) {
+        uint32_t n = order[pos], list[SPLIT_LIST_MAX];
+        const sl_octree_node *node = &t->nodes[n];
+        sl_lod_cell_ref *c = &m->cells[pos];
+        uint32_t size = cell_split_list(m, st, pos, n, list);
+        c->expansion = m->expansion_index[n];
+        c->crossing_base = node->crossing_base;
+        c->edge_mask = node->edge_mask;
+        c->inside = node->inside;
+        /* A cell whose corners share one sign draws nothing unless a split brings in a
+         * finer sample of the other sign. */
+        c->draws = node->edge_mask || (size && !uniform_record(&m->transitions, n, node->inside));
+        if (size)
+            memcpy(m->split_words + c->splits, list, size * sizeof *list);
     }
     free(order);
-    return m->split_words && words < SL_OCTREE_NONE ? 0 : -1;
+    return 0;
 }
 
 int sl_lod_model_prepare(sl_lod_model *m)

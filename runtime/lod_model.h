@@ -126,6 +126,24 @@ void sl_lod_model_release(sl_lod_model *m);
  * triangulated once); part of sl_lod_model_prepare. Returns -1 when out of memory. */
 int sl_lod_draw_states(sl_lod_model *m);
 
+/* The first k at which the cell at LOD-order position pos (pos < frontier_end[E]) is on
+ * the frontier: one past its parent's expansion (cells [frontier_end[i],
+ * frontier_end[i + 1]) are the children of lod_array[i]); 0 for the root. */
+static inline uint32_t sl_lod_first_frontier(const sl_lod_model *m, uint32_t pos)
+{
+    uint32_t lo = 0, hi = m->expansion_count; /* largest i with frontier_end[i] <= pos */
+    if (pos == 0)
+        return 0;
+    while (lo < hi) {
+        uint32_t mid = lo + (hi - lo + 1) / 2;
+        if (m->frontier_end[mid] <= pos)
+            lo = mid;
+        else
+            hi = mid - 1;
+    }
+    return lo + 1;
+}
+
 /* Neighbour in direction d of node n, or SL_OCTREE_NONE. */
 static inline uint32_t sl_neighbour(const sl_neighbours *nb, uint32_t n, int d)
 {
