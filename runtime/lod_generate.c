@@ -368,6 +368,52 @@ static void rebase_chunk(sl_lod_model *m, uint32_t from, uint32_t to, uint64_t b
     }
 }
 
+/* Lays the drawings out by the k at which their state begins (then in LOD order), so that
+ * every drawing a cut after k expansions can use lies in the part of split_drawings
+ * holding states that begin at or before k: a small cut reads a compact prefix instead of
+ * picking its cells' first states from between their later ones. Leaves the drawings as
+ * they are when out of memory. */
+static void order_drawings(sl_lod_model *m)
+{
+    uint32_t e = m->expansion_count, end = m->frontier_end[e];
+    uint64_t *cursor = calloc((size_t)e + 2, sizeof *cursor);
+    uint32_t *words = malloc((m->split_drawing_words ? m->split_drawing_words : 1) * sizeof *words);
+    if (!cursor || !words) {
+        free(cursor);
+        free(words);
+        return;
+    }
+    for (int pass = 0; pass < 2; pass++) {
+        for (uint32_t pos = 0; pos < end; pos++) {
+            const sl_lod_cell_ref *c = &m->cells[pos];
+            if (c->splits == SL_OCTREE_NONE)
+                continue;
+            uint32_t *w = m->split_words + c->splits;
+            for (uint32_t i = 0; i <= w[1] >> 24; i++) {
+                uint32_t *entry = i == 0 ? w + 2 : w + 2 + 3 * i;
+                if (*entry == SL_OCTREE_NONE)
+                    continue;
+                uint32_t start = i == 0 ? sl_lod_first_frontier(m, pos) : w[3 * i] + 1u;
+                const uint32_t *drawing = m->split_drawings + *entry;
+                uint32_t size = 1 + 3 * (drawing[0] & 0xff);
+                if (pass == 0) {
+                    cursor[start + 1] += size;
+                } else {
+                    memcpy(words + cursor[start], drawing, size * sizeof *words);
+                    *entry = (uint32_t)cursor[start];
+                    cursor[start] += size;
+                }
+            }
+        }
+        if (pass == 0) /* cursor[k] = where the drawings of states beginning at k go */
+            for (uint32_t k = 1; k <= e + 1; k++)
+                cursor[k] += cursor[k - 1];
+    }
+    free(cursor);
+    free(m->split_drawings);
+    m->split_drawings = words;
+}
+
 #define DRAW_CHUNKS 256 /* fixed, so the result does not depend on the thread count */
 
 int sl_lod_draw_states(sl_lod_model *m)
@@ -413,6 +459,8 @@ int sl_lod_draw_states(sl_lod_model *m)
         free(runs[chunk].words);
     }
     m->split_drawing_words = none ? 0 : total;
+    if (!none)
+        order_drawings(m);
     return 0;
 }
 
@@ -421,7 +469,8 @@ int sl_lod_draw_states(sl_lod_model *m)
  * other cells and only roughly in that order: the walk asks for a cell's data a few cells
  * before drawing it, each step once the previous one's data has come. */
 #define LIST_AHEAD 16    /* cells whose split list and crossing ids are fetched */
-#define CROSSING_AHEAD 8 /* ... whose own crossings' vertex map entries and positions are */
+#define CROSSING_AHEAD 8 /* ... whose own crossings' vertex map entries and positions, and
+                            uniform table row, are */
 #define DRAWING_AHEAD 4  /* ... whose drawing is (its offset is in the list) */
 
 static inline int drawn_at(const sl_lod_cell_ref *c, uint32_t k)
@@ -453,9 +502,11 @@ static void fetch_ahead(const sl_lod_model *m, uint32_t k, uint32_t pos, uint32_
         if (c->splits != SL_OCTREE_NONE)
             __builtin_prefetch(m->split_words + c->splits);
     }
-    if (pos + CROSSING_AHEAD < end && drawn_at(c = &m->cells[pos + CROSSING_AHEAD], k))
+    if (pos + CROSSING_AHEAD < end && drawn_at(c = &m->cells[pos + CROSSING_AHEAD], k)) {
         fetch_crossings(m, m->tree.node_crossings + c->crossing_base,
                         __builtin_popcount(c->edge_mask));
+        __builtin_prefetch(sl_lod_uniform_cells[c->inside]);
+    }
     if (pos + DRAWING_AHEAD < end && drawn_at(c = &m->cells[pos + DRAWING_AHEAD], k) &&
         (drawing = drawing_of(m, k, c)))
         __builtin_prefetch(drawing);
