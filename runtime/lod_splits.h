@@ -1,6 +1,6 @@
-/* Which faces and edges of a cell a neighbour's expansion splits (runtime/lod_generate.c
- * draws transition cells with it; sl_lod_model_prepare lays out the split rows by its
- * slots). Built once, read-only afterwards. */
+/* Which faces and edges of a cell a neighbour's expansion splits (runtime/lod_layout.c
+ * builds the split lists with it, runtime/lod_states.c and lod_generate.c draw transition
+ * cells with it), and the frontier cell they share. Built once, read-only afterwards. */
 #ifndef SCANLOD_RUNTIME_LOD_SPLITS_H
 #define SCANLOD_RUNTIME_LOD_SPLITS_H
 
@@ -11,8 +11,7 @@
 /* Per neighbour direction: the faces (bit f) and edges (bit e) of a cell that must be
  * split when the neighbour in that direction is expanded (a face neighbour: that face and
  * its 4 edges; any of the 3 neighbours around an edge: that edge; a corner neighbour:
- * nothing). The directions that split anything, in increasing order, are the model's
- * split row slots. */
+ * nothing). The directions that split anything, in increasing order, are its slots. */
 typedef struct sl_lod_split_table {
     uint8_t faces[27];
     uint16_t edges[27];
@@ -24,5 +23,13 @@ typedef struct sl_lod_split_table {
 } sl_lod_split_table;
 
 const sl_lod_split_table *sl_lod_split_table_get(void);
+
+/* Frontier cell c after k expansions: its own signs and crossings, split where an expanded
+ * neighbour requires, the finer points taken from its transition record. *entry is the
+ * split list's word naming the state's drawing (NULL when not split: then the uniform
+ * table is the cell's drawing). Returns 0, or -1 when a split lacked data (a crack). */
+int sl_lod_frontier_cell(const sl_lod_model *m, uint32_t k, const sl_lod_cell_ref *c,
+                         const sl_lod_split_table *st, sl_mc_cell *cell,
+                         uint32_t point_crossing[SL_MC_MAX_POINTS], uint32_t **entry);
 
 #endif

@@ -5,6 +5,7 @@
  * sl_lod_frontier with sl_lod_cell and sl_mc_triangulate. The expansion orders are random
  * (parents first), so cells meet neighbours one and more levels finer. */
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -167,11 +168,47 @@ static void test_generation(int n, int coloured, int localized, uint64_t seed)
     sl_lod_model_release(&m);
 }
 
+/* The layout derived at load (cells, split lists, drawings) is the same on 1 and on 2
+ * threads: it is laid out in fixed chunks, not per thread. */
+static void test_layout_threads(uint64_t seed)
+{
+    rng_state ^= seed;
+    sl_lod_model m;
+    CHECK(build_model(13, 0, &m) == 0);
+    uint32_t cells = m.frontier_end[m.expansion_count];
+    uint64_t words = 0, drawing_words[2] = {0, 0};
+    for (uint32_t pos = 0; pos < cells; pos++)
+        if (m.cells[pos].splits != SL_OCTREE_NONE)
+            words = m.cells[pos].splits + 3u + 3u * (m.split_words[m.cells[pos].splits + 1] >> 24);
+    uint32_t *copy[2] = {NULL, NULL}, *lists[2] = {NULL, NULL};
+    for (int run = 0; run < 2; run++) {
+        omp_set_num_threads(run + 1);
+        CHECK(sl_lod_model_prepare(&m) == 0);
+        drawing_words[run] = m.split_drawing_words;
+        copy[run] = malloc((drawing_words[run] + 1) * sizeof(uint32_t));
+        lists[run] = malloc((words + 1) * sizeof(uint32_t));
+        memcpy(copy[run], m.split_drawings, drawing_words[run] * sizeof(uint32_t));
+        memcpy(lists[run], m.split_words, words * sizeof(uint32_t));
+    }
+    omp_set_num_threads(omp_get_num_procs());
+    CHECK(drawing_words[0] > 0 && drawing_words[0] == drawing_words[1]);
+    CHECK(!memcmp(copy[0], copy[1], drawing_words[0] * sizeof(uint32_t)));
+    CHECK(!memcmp(lists[0], lists[1], words * sizeof(uint32_t)));
+    printf("layout: %u cells, %llu split-list words, %llu drawing words, same on 1 and 2 threads\n",
+           cells, (unsigned long long)words, (unsigned long long)drawing_words[0]);
+    for (int run = 0; run < 2; run++) {
+        free(copy[run]);
+        free(lists[run]);
+    }
+    sl_lod_model_release(&m);
+}
+
 int main(void)
 {
     test_uniform_table();
     test_generation(13, 0, 0, 1);
     test_generation(14, 1, 1, 2);
     test_generation(12, 0, 1, 3);
+    test_layout_threads(4);
     return check_report();
 }
