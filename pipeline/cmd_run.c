@@ -121,7 +121,11 @@ static int run_or_work(int argc, char **argv, int scan)
     if (scan)
         sl_engine_scan(e, &err);
     sl_error_init(&err);
-    sl_engine_work(e, &err);
+    if (sl_engine_work(e, &err) != 0) {
+        char line[1600];
+        SL_LOG(SL_LOG_ERROR, NULL, NULL, "stopped working: %s",
+               sl_error_format(&err, line, sizeof line));
+    }
     exit_code = sl_engine_finish(e);
     if (sl_signals_received())
         SL_LOG(SL_LOG_WARN, NULL, NULL, "stopped by signal %d; rerun to finish",

@@ -114,6 +114,11 @@ static void reclaim_stale(sl_engine *e, int s)
              * the rename and the lease write, which a live claimer does at once. */
             struct stat st;
             stale = stat(path, &st) == 0 && st.st_ctime + UNLEASED_CLAIM_S < now;
+        } else if (t.pid == e->self.pid && strcmp(t.host, e->self.host) == 0) {
+            /* Ours: between two items this process holds no claim, so this is the
+             * leftover of a release that failed half-way; waiting on it would wait on
+             * ourselves forever. */
+            stale = 1;
         } else {
             stale = lease_owner_gone(e, &t, now);
         }
@@ -143,8 +148,10 @@ static int claim_one(sl_engine *e, int s, char *name, size_t name_size, sl_ticke
         sl_error merr;
         sl_error_init(&merr);
         rc = sl_queue_move(e->work, stage, names[i], SL_STATE_READY, SL_STATE_CLAIMED, &merr);
-        if (rc == SL_E_BUSY)
-            continue; /* another worker was first */
+        if (rc == SL_E_BUSY) {
+            rc = 0; /* another worker was first: not an error, even for the last name */
+            continue;
+        }
         if (rc) {
             sl_error_merge(err, &merr);
             break;

@@ -33,6 +33,7 @@ static int errno_from_name(const char *name)
     static const struct { const char *name; int value; } names[] = {
         {"ENOSPC", ENOSPC}, {"EIO", EIO},       {"EDQUOT", EDQUOT}, {"EROFS", EROFS},
         {"EACCES", EACCES}, {"EINTR", EINTR},   {"ENOMEM", ENOMEM}, {"EINVAL", EINVAL},
+        {"ENOENT", ENOENT}, /* a rename losing the race to another worker */
     };
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if (strcmp(names[i].name, name) == 0)

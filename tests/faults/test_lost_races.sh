@@ -1,0 +1,52 @@
+#!/usr/bin/env bash
+# Losing a race (reliability T14): any rename of the engine's own process may find its
+# source gone, as it does when another worker moved the ticket first. For each rename of
+# a one-item run in turn, ENOENT is injected there (SCANLOD_FAULT). Expected: no run
+# hangs; every run exits 0, or non-zero with an error on stderr (never a silent exit 75,
+# which a lost claim race used to cause: tests/e2e/test_concurrent_runs.sh saw it under
+# load); a plain rerun then finishes the collection identical to a clean run.
+source "$(dirname "$0")/../lib.sh"
+
+mkdir -p "$TMP/in"
+cp "$SCANS/bun_zipper_res4.ply" "$TMP/in/"
+write_config "$TMP/ref.ini" "$TMP/in" "$TMP/ref-work" "$TMP/ref-out"
+run_scanlod run "$TMP/ref.ini" -q
+check "clean run exits 0" [ "$rc" -eq 0 ]
+ref=$(tree_digest "$TMP/ref-work" "$TMP/ref-out")
+
+# run_timed CONFIG [env...]: like run_scanlod run CONFIG -q, under a 60 s timeout (124).
+run_timed() {
+  local config=$1; shift
+  set +e
+  env "$@" timeout 60 "$SCANLOD" run "$config" -q >/dev/null 2>"$TMP/err"
+  rc=$?
+  set -e
+  err=$(cat "$TMP/err")
+}
+
+hung=0 silent=0 unfinished=0 differ=0 faulted=0
+for n in $(seq 1 60); do
+  rm -rf "$TMP/work" "$TMP/out"
+  write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out"
+  run_timed "$TMP/c.ini" SCANLOD_FAULT=rename:$n:ENOENT SCANLOD_FAULT_SCOPE=parent
+  if [ "$rc" -eq 124 ]; then
+    hung=$((hung + 1)); echo "rename $n: the run hung" >&2
+  elif [ "$rc" -ne 0 ]; then
+    faulted=$((faulted + 1))
+    if ! grep -q "ERROR" <<<"$err"; then
+      silent=$((silent + 1)); echo "rename $n: exit $rc without an error" >&2
+    fi
+  fi
+  run_timed "$TMP/c.ini"
+  if [ "$rc" -ne 0 ]; then
+    unfinished=$((unfinished + 1)); echo "rename $n: the rerun exits $rc: $err" >&2
+  elif [ "$ref" != "$(tree_digest "$TMP/work" "$TMP/out")" ]; then
+    differ=$((differ + 1)); echo "rename $n: the rerun differs from a clean run" >&2
+  fi
+done
+echo "60 injected renames: $faulted runs failed with an error, the rest finished" >&2
+check "no run hangs ($hung did)" [ "$hung" -eq 0 ]
+check "no silent non-zero exit ($silent)" [ "$silent" -eq 0 ]
+check "every rerun exits 0 ($unfinished did not)" [ "$unfinished" -eq 0 ]
+check "every rerun equals a clean run ($differ differ)" [ "$differ" -eq 0 ]
+finish
