@@ -71,74 +71,71 @@ static int draw_chunk(sl_lod_model *m, sl_mc_cache *configs, uint32_t from, uint
     return 0;
 }
 
-/* Adds `base` to the drawing offsets of cells [from, to) (or makes them all
- * SL_OCTREE_NONE: drawn the general way). */
-static void rebase_chunk(sl_lod_model *m, uint32_t from, uint32_t to, uint64_t base, int none)
+#define DRAW_CHUNKS 256 /* fixed, so the result does not depend on the thread count */
+
+static uint32_t chunk_start(uint32_t end, int chunk)
+{
+    return (uint32_t)((uint64_t)end * (uint64_t)chunk / DRAW_CHUNKS);
+}
+
+/* Calls fn(m, entry, start, arg) for every state word of the split lists of cells [from, to)
+ * that names a drawing; start = the k at which the state begins. */
+static void for_each_drawn_state(sl_lod_model *m, uint32_t from, uint32_t to,
+                                 void (*fn)(uint32_t *entry, uint32_t start, void *arg),
+                                 void *arg)
 {
     for (uint32_t pos = from; pos < to; pos++) {
         const sl_lod_cell_ref *c = &m->cells[pos];
         if (c->splits == SL_OCTREE_NONE)
             continue;
         uint32_t *w = m->split_words + c->splits;
-        for (uint32_t i = 0; i <= w[1] >> 24; i++) {
-            uint32_t *entry = i == 0 ? w + 2 : w + 2 + 3 * i;
-            if (*entry != SL_OCTREE_NONE)
-                *entry = none ? SL_OCTREE_NONE : (uint32_t)(*entry + base);
-        }
+        for (uint32_t i = 0; i <= w[1] >> 24; i++)
+            if (w[2 + 3 * i] != SL_OCTREE_NONE)
+                fn(w + 2 + 3 * i, i == 0 ? sl_lod_first_frontier(m, pos) : w[3 * i] + 1u, arg);
     }
 }
 
-/* Lays the drawings out by the k at which their state begins (then in LOD order), so that
- * every drawing a cut after k expansions can use lies in the part of split_drawings
- * holding states that begin at or before k: a small cut reads a compact prefix instead of
- * picking its cells' first states from between their later ones. Leaves the drawings as
- * they are when out of memory. */
-static void order_drawings(sl_lod_model *m)
+static void forget(uint32_t *entry, uint32_t start, void *arg)
 {
-    uint32_t e = m->expansion_count, end = m->frontier_end[e];
-    uint64_t *cursor = calloc((size_t)e + 2, sizeof *cursor);
-    uint32_t *words = malloc((m->split_drawing_words ? m->split_drawing_words : 1) * sizeof *words);
-    if (!cursor || !words) {
-        free(cursor);
-        free(words);
-        return;
-    }
-    for (int pass = 0; pass < 2; pass++) {
-        for (uint32_t pos = 0; pos < end; pos++) {
-            const sl_lod_cell_ref *c = &m->cells[pos];
-            if (c->splits == SL_OCTREE_NONE)
-                continue;
-            uint32_t *w = m->split_words + c->splits;
-            for (uint32_t i = 0; i <= w[1] >> 24; i++) {
-                uint32_t *entry = i == 0 ? w + 2 : w + 2 + 3 * i;
-                if (*entry == SL_OCTREE_NONE)
-                    continue;
-                uint32_t start = i == 0 ? sl_lod_first_frontier(m, pos) : w[3 * i] + 1u;
-                const uint32_t *drawing = m->split_drawings + *entry;
-                uint32_t size = 1 + 3 * (drawing[0] & 0xff);
-                if (pass == 0) {
-                    cursor[start + 1] += size;
-                } else {
-                    memcpy(words + cursor[start], drawing, size * sizeof *words);
-                    *entry = (uint32_t)cursor[start];
-                    cursor[start] += size;
-                }
-            }
-        }
-        if (pass == 0) /* cursor[k] = where the drawings of states beginning at k go */
-            for (uint32_t k = 1; k <= e + 1; k++)
-                cursor[k] += cursor[k - 1];
-    }
-    free(cursor);
-    free(m->split_drawings);
-    m->split_drawings = words;
+    (void)start;
+    (void)arg;
+    *entry = SL_OCTREE_NONE; /* drawn the general way */
 }
 
-#define DRAW_CHUNKS 256 /* fixed, so the result does not depend on the thread count */
+/* The final layout: drawings ordered by the k at which their state begins (then in LOD
+ * order), so every drawing a cut after k expansions can use lies in the part of
+ * split_drawings holding states that begin at or before k: a small cut reads a compact
+ * prefix instead of picking its cells' first states from between their later ones. */
+typedef struct layout {
+    uint64_t *cursor;         /* per start k: where its next drawing goes (pass 1) */
+    const uint32_t *run;      /* the chunk's run the entries point into */
+    uint32_t *words;          /* split_drawings being filled */
+} layout;
+
+static uint32_t drawing_size(const uint32_t *drawing)
+{
+    return 1 + 3 * (drawing[0] & 0xff);
+}
+
+static void count_drawing(uint32_t *entry, uint32_t start, void *arg)
+{
+    layout *l = arg;
+    l->cursor[start + 1] += drawing_size(l->run + *entry);
+}
+
+static void place_drawing(uint32_t *entry, uint32_t start, void *arg)
+{
+    layout *l = arg;
+    const uint32_t *drawing = l->run + *entry;
+    uint32_t size = drawing_size(drawing);
+    memcpy(l->words + l->cursor[start], drawing, size * sizeof *drawing);
+    *entry = (uint32_t)l->cursor[start];
+    l->cursor[start] += size;
+}
 
 int sl_lod_draw_states(sl_lod_model *m)
 {
-    uint32_t end = m->frontier_end[m->expansion_count];
+    uint32_t e = m->expansion_count, end = m->frontier_end[e];
     drawing_run runs[DRAW_CHUNKS];
     memset(runs, 0, sizeof runs);
     free(m->split_drawings);
@@ -150,36 +147,44 @@ int sl_lod_draw_states(sl_lod_model *m)
         /* Each thread triangulates each distinct configuration it meets once. */
         sl_mc_cache *configs = sl_mc_cache_new();
 #pragma omp for schedule(dynamic, 1)
-        for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++) {
-            uint32_t from = (uint32_t)((uint64_t)end * (uint64_t)chunk / DRAW_CHUNKS);
-            uint32_t to = (uint32_t)((uint64_t)end * (uint64_t)(chunk + 1) / DRAW_CHUNKS);
-            if (!configs || draw_chunk(m, configs, from, to, &runs[chunk])) {
+        for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++)
+            if (!configs || draw_chunk(m, configs, chunk_start(end, chunk),
+                                       chunk_start(end, chunk + 1), &runs[chunk])) {
 #pragma omp atomic write
                 failed = 1;
             }
-        }
         sl_mc_cache_free(configs);
     }
-    uint64_t base[DRAW_CHUNKS], total = 0;
-    for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++) {
-        base[chunk] = total;
+    uint64_t total = 0;
+    for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++)
         total += runs[chunk].count;
+    layout l = {NULL, NULL, NULL};
+    if (!failed && total < SL_OCTREE_NONE) {
+        l.cursor = calloc((size_t)e + 2, sizeof *l.cursor);
+        l.words = malloc((total ? total : 1) * sizeof *l.words);
     }
-    if (!failed && total < SL_OCTREE_NONE)
-        m->split_drawings = malloc((total ? total : 1) * sizeof *m->split_drawings);
-    int none = !m->split_drawings; /* then every transition cell is drawn the general way */
-#pragma omp parallel for schedule(static)
-    for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++) {
-        uint32_t from = (uint32_t)((uint64_t)end * (uint64_t)chunk / DRAW_CHUNKS);
-        uint32_t to = (uint32_t)((uint64_t)end * (uint64_t)(chunk + 1) / DRAW_CHUNKS);
-        rebase_chunk(m, from, to, base[chunk], none);
-        if (!none && runs[chunk].count)
-            memcpy(m->split_drawings + base[chunk], runs[chunk].words,
-                   runs[chunk].count * sizeof *runs[chunk].words);
+    if (!l.cursor || !l.words) { /* out of memory: every transition cell drawn when cut */
+        for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++)
+            for_each_drawn_state(m, chunk_start(end, chunk), chunk_start(end, chunk + 1),
+                                 forget, NULL);
+        free(l.cursor);
+        free(l.words);
+    } else {
+        for (int pass = 0; pass < 2; pass++) {
+            for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++) {
+                l.run = runs[chunk].words;
+                for_each_drawn_state(m, chunk_start(end, chunk), chunk_start(end, chunk + 1),
+                                     pass ? place_drawing : count_drawing, &l);
+            }
+            if (pass == 0) /* cursor[k] = where the drawings of states beginning at k go */
+                for (uint32_t k = 1; k <= e + 1; k++)
+                    l.cursor[k] += l.cursor[k - 1];
+        }
+        free(l.cursor);
+        m->split_drawings = l.words;
+        m->split_drawing_words = total;
+    }
+    for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++)
         free(runs[chunk].words);
-    }
-    m->split_drawing_words = none ? 0 : total;
-    if (!none)
-        order_drawings(m);
     return 0;
 }
