@@ -44,19 +44,6 @@ void sl_mc_cache_free(sl_mc_cache *cache)
     free(cache);
 }
 
-uint32_t sl_mc_cache_count(const sl_mc_cache *cache)
-{
-    return cache ? cache->count : 0;
-}
-
-uint64_t sl_mc_cache_bytes(const sl_mc_cache *cache)
-{
-    if (!cache)
-        return 0;
-    return (uint64_t)cache->capacity * sizeof(sl_mc_cached) +
-           ((uint64_t)1 << cache->bits) * (sizeof *cache->keys + sizeof *cache->ids);
-}
-
 const sl_mc_cached *sl_mc_cache_entry(const sl_mc_cache *cache, uint32_t id)
 {
     return &cache->entries[id];

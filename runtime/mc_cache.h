@@ -31,10 +31,7 @@ void sl_mc_cache_free(sl_mc_cache *cache);
  * *id = its index, or SL_MC_CACHE_NONE when it cannot be kept. Returns -1 when out of
  * memory (the table stays usable). */
 int sl_mc_cache_add(sl_mc_cache *cache, const sl_mc_cell *cell, uint32_t *id);
-/* Entry id (id < sl_mc_cache_count). */
+/* Entry id (an id sl_mc_cache_add gave). */
 const sl_mc_cached *sl_mc_cache_entry(const sl_mc_cache *cache, uint32_t id);
-/* Entries in the table, and its size in bytes. */
-uint32_t sl_mc_cache_count(const sl_mc_cache *cache);
-uint64_t sl_mc_cache_bytes(const sl_mc_cache *cache);
 
 #endif
