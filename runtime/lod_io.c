@@ -136,6 +136,16 @@ static int validate(const sl_lod_model *m, const char *path, sl_error *err)
             seen[node] = 1;
     }
     free(seen);
+    /* A frontier after k expansions has at most 1 + 7k cells: the sizes generation
+     * allocates from this table stay bounded whatever the file says. */
+    for (uint32_t i = 0; i <= m->expansion_count && !rc; i++)
+        if (m->accumulation[i] > (uint64_t)SL_MC_MAX_TRIANGLES * (1 + 7 * (uint64_t)i))
+            rc = corrupt(err, path, "accumulation table out of range");
+    /* Records must not overlap: loading rewrites their crossing ids in place, and one
+     * record's ids read as another's header would change its length. */
+    uint8_t *used = calloc(m->transitions.count ? m->transitions.count : 1, 1);
+    if (!used && !rc)
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
     for (uint32_t i = 0; i < n && !rc; i++) {
         uint32_t mask = m->neighbours.mask[i];
         if (mask >> 27 || (mask >> 13 & 1) ||
@@ -154,11 +164,15 @@ static int validate(const sl_lod_model *m, const char *path, sl_error *err)
                 for (uint64_t j = 0; !rc && j < ids; j++)
                     if (w[3 + j] >= t->crossing_count)
                         rc = corrupt(err, path, "transition crossing out of range");
+                for (uint64_t j = 0; !rc && j < 3 + ids; j++)
+                    if (used[tb + j]++)
+                        rc = corrupt(err, path, "transition records overlap");
             }
         } else if (!rc && t->nodes[i].level > 0) {
             rc = corrupt(err, path, "internal node without a transition record");
         }
     }
+    free(used);
     for (uint64_t i = 0; i < m->neighbours.count && !rc; i++)
         if (m->neighbours.index[i] >= n)
             rc = corrupt(err, path, "neighbour index out of range");

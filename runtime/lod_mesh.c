@@ -2,6 +2,7 @@
 #include "runtime/lod_mesh.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -62,9 +63,11 @@ static int grow(void **p, uint64_t *cap, uint64_t need, size_t elem, int exact)
 {
     if (need <= *cap)
         return 0;
+    if (need > SIZE_MAX / elem) /* no size_t product that wraps into a short block */
+        return -1;
     uint64_t n = exact ? need : *cap ? *cap : 1024;
     while (n < need)
-        n *= 2;
+        n = n > SIZE_MAX / elem / 2 ? need : 2 * n;
     void *q = realloc(*p, (size_t)n * elem);
     if (!q)
         return -1;

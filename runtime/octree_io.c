@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "runtime/mc_cube.h"
+
 _Static_assert(sizeof(sl_octree_node) == 32, "sl_octree_node is stored as 32 bytes");
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
 #error "scanlod's binary formats are little-endian; add byte swapping for this host"
@@ -65,7 +67,22 @@ static int bad(sl_error *err, const char *name, const char *what)
     return sl_error_set(err, SL_E_CORRUPT, 0, name, "invalid octree: %s", what);
 }
 
-/* Every index in range, levels consistent: nothing downstream re-checks. */
+static uint64_t morton_of(const sl_octree_node *n)
+{
+    return sl_morton3((uint32_t)n->x, (uint32_t)n->y, (uint32_t)n->z);
+}
+
+/* The edges of a cube with corner signs `inside` whose two ends differ. */
+static uint16_t sign_change_edges(uint8_t inside)
+{
+    uint16_t mask = 0;
+    for (int e = 0; e < 12; e++)
+        mask |= (uint16_t)(((inside >> sl_mc_edge_c0(e)) ^ (inside >> sl_mc_edge_c1(e))) & 1) << e;
+    return mask;
+}
+
+/* Every index in range, levels consistent, the tree a tree: nothing downstream
+ * re-checks, so a file with a valid checksum but hostile contents stops here. */
 static int validate(const sl_octree *t, const char *name, sl_error *err)
 {
     if (t->depth >= SL_OCTREE_MAX_LEVELS || !(t->leaf_size > 0) || !isfinite(t->leaf_size))
@@ -80,6 +97,7 @@ static int validate(const sl_octree *t, const char *name, sl_error *err)
     }
     if (sum != t->node_count || t->level_count[t->depth] != 1 || t->level_first[t->depth] != 0)
         return bad(err, name, "level counts do not add up to one root");
+    uint64_t children = 0;
     for (uint32_t i = 0; i < t->node_count; i++) {
         const sl_octree_node *n = &t->nodes[i];
         int kids = __builtin_popcount(n->child_mask);
@@ -96,10 +114,27 @@ static int validate(const sl_octree *t, const char *name, sl_error *err)
                      (uint64_t)n->first_child + (uint64_t)kids >
                          (uint64_t)t->level_first[n->level - 1] + t->level_count[n->level - 1]))
             return bad(err, name, "bad child range");
+        /* Each child names this node as its parent and sits in its octant: child ranges
+         * are then disjoint, and a walk down the tree meets every node once. */
+        for (int j = 0, mask = n->child_mask; mask; mask &= mask - 1, j++) {
+            const sl_octree_node *c = &t->nodes[n->first_child + (uint32_t)j];
+            int o = __builtin_ctz((unsigned)mask);
+            if (c->parent != i || c->x != 2 * n->x + (o & 1) || c->y != 2 * n->y + (o >> 1 & 1) ||
+                c->z != 2 * n->z + (o >> 2))
+                return bad(err, name, "child does not belong to its parent");
+        }
+        children += (uint64_t)kids;
+        if (i > t->level_first[n->level] && t->nodes[i - 1].level == n->level &&
+            morton_of(&t->nodes[i - 1]) >= morton_of(n))
+            return bad(err, name, "nodes of a level out of Morton order");
+        /* The crossings are exactly the edges whose corners differ in sign: generation
+         * looks up a crossing for every such edge and for no other. */
         if ((uint64_t)n->crossing_base + (uint64_t)__builtin_popcount(n->edge_mask) >
-                t->node_crossing_count || n->edge_mask >> 12)
+                t->node_crossing_count || n->edge_mask != sign_change_edges(n->inside))
             return bad(err, name, "bad crossing range");
     }
+    if (children != (uint64_t)t->node_count - 1)
+        return bad(err, name, "nodes outside the tree");
     for (uint64_t i = 0; i < t->node_crossing_count; i++)
         if (t->node_crossings[i] >= t->crossing_count)
             return bad(err, name, "crossing id out of range");

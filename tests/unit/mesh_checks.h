@@ -36,11 +36,11 @@ static inline uint64_t bad_edges(const sl_lod_mesh *m)
     return bad;
 }
 
-/* Does some frontier cell touch a frontier cell 2 or more levels coarser? A coarser
- * frontier cell around cell a shows as the level-(a + 1) node over a neighbour position
- * being unexpanded and not a frontier cell itself (so its own ancestors are unexpanded).
- * (A 2-levels-coarser node over an empty position would touch a's expanded grandparent's
- * region, which the order forbids before it expands, so level a + 1 is enough to look at.) */
+/* Does some frontier cell touch a frontier cell 2 or more levels coarser? For each of the 26
+ * positions around frontier cell a (at a's level), walk up from level a + 1 to the first
+ * node that exists over the position: if it is expanded, what covers the position is finer
+ * than it (or nothing: an empty octant); if not, the frontier cell there is that node or an
+ * ancestor, and a gap when that is 2 or more levels above a. */
 static inline int level_gap(const sl_lod_model *m, uint32_t k)
 {
     uint32_t *cells = malloc(sl_lod_frontier_bound(m, k) * sizeof *cells);
@@ -49,17 +49,22 @@ static inline int level_gap(const sl_lod_model *m, uint32_t k)
     const sl_octree *t = &m->tree;
     for (uint64_t i = 0; i < count && !gap; i++) {
         const sl_octree_node *a = &t->nodes[cells[i]];
-        if (a->level + 1u > t->depth)
-            continue;
         for (int d = 0; d < 27 && !gap; d++) {
             int64_t q[3] = {a->x + d % 3 - 1, a->y + d / 3 % 3 - 1, a->z + d / 9 - 1};
-            if (q[0] < 0 || q[1] < 0 || q[2] < 0)
+            if (d == 13 || q[0] < 0 || q[1] < 0 || q[2] < 0)
                 continue;
-            uint32_t c = sl_octree_find(t, a->level + 1u, q[0] >> 1, q[1] >> 1, q[2] >> 1);
-            if (c == SL_OCTREE_NONE || m->expansion_index[c] < k)
-                continue;
-            uint32_t parent = t->nodes[c].parent;
-            gap = parent != SL_OCTREE_NONE && m->expansion_index[parent] >= k;
+            for (uint32_t level = a->level + 1u; level <= t->depth; level++) {
+                int shift = (int)(level - a->level);
+                uint32_t c = sl_octree_find(t, level, q[0] >> shift, q[1] >> shift, q[2] >> shift);
+                if (c == SL_OCTREE_NONE)
+                    continue;
+                if (m->expansion_index[c] >= k) { /* unexpanded: it or an ancestor is drawn */
+                    uint32_t parent = t->nodes[c].parent;
+                    gap = level >= a->level + 2u ||
+                          (parent != SL_OCTREE_NONE && m->expansion_index[parent] >= k);
+                }
+                break;
+            }
         }
     }
     free(cells);

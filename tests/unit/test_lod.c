@@ -1,7 +1,8 @@
 /* LOD model on analytic closed surfaces, under every priority metric, at every expansion
  * count K: neighbouring frontier cells differ by less than 2 levels, the accumulation table
  * equals the triangles actually generated, every mesh is watertight (no cracks), and a
- * .slod roundtrip is exact. The order is the same on 1 and 2 threads. */
+ * .slod roundtrip is exact and hostile files are refused. The order is the same on 1
+ * and 2 threads. */
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
@@ -90,6 +91,121 @@ static int build_model(sdf_fn sdf, int n, sl_priority_metric metric, sl_lod_mode
     return rc;
 }
 
+
+/* The level check can fail: an order that dives from the root to a leaf's parent, always
+ * into the first child, leaves level-0 cells beside unexpanded cells 2+ levels up. */
+static void test_level_check_catches_a_dive(const sl_lod_model *good)
+{
+    sl_lod_model dive = *good; /* shares the tree: only the order and its index differ */
+    const sl_octree *t = &good->tree;
+    uint32_t n = t->node_count, order[SL_OCTREE_MAX_LEVELS], count = 0;
+    for (uint32_t node = 0; t->nodes[node].level > 0 && t->nodes[node].child_mask;
+         node = t->nodes[node].first_child)
+        order[count++] = node;
+    uint32_t *index = malloc(n * sizeof *index);
+    memset(index, 0xff, n * sizeof *index);
+    for (uint32_t i = 0; i < count; i++)
+        index[order[i]] = i;
+    dive.lod_array = order;
+    dive.expansion_count = count;
+    dive.expansion_index = index;
+    CHECK_MSG(count >= 3 && level_gap(&dive, count),
+              "a %u-expansion dive to the leaves is not seen as a level gap", count);
+    CHECK(!level_gap(&dive, 1)); /* the root's children alone are one level */
+    free(index);
+}
+
+/* Writes m (a valid checksum over whatever it holds) and expects reading it back to be
+ * refused as corrupt with `cause` in the message: no crash, no hang (ASan in CI). */
+static void expect_refused(const sl_lod_model *m, const char *path, const char *what,
+                           const char *cause)
+{
+    sl_error err;
+    sl_error_init(&err);
+    CHECK(sl_lod_model_write(path, m, 1, &err) == 0);
+    sl_lod_model back;
+    int rc = sl_lod_model_read(path, &back, &err);
+    CHECK_MSG(rc == SL_E_CORRUPT && strstr(err.message, cause),
+              "%s: read gave %d (%s), expected corrupt: %s", what, rc, err.message, cause);
+    if (rc == 0)
+        sl_lod_model_release(&back);
+}
+
+static int internal_level_one(const sl_lod_model *m, uint32_t i)
+{
+    return m->tree.nodes[i].child_mask && m->tree.nodes[i].level == 1;
+}
+
+static int has_record(const sl_lod_model *m, uint32_t i)
+{
+    return m->transitions.base[i] != SL_OCTREE_NONE;
+}
+
+/* The first two nodes with a property; 0 when there are not two. */
+static int first_two(const sl_lod_model *m, int (*want)(const sl_lod_model *, uint32_t),
+                     uint32_t *a, uint32_t *b)
+{
+    int found = 0;
+    for (uint32_t i = 0; i < m->tree.node_count && found < 2; i++)
+        if (want(m, i))
+            *(found++ ? b : a) = i;
+    return found == 2;
+}
+
+/* Files with a valid checksum and hostile contents (docs/formats.md "Validation"): each
+ * mutation of a good model is refused by the reader, which is all that stands between such
+ * a file and the extraction code. */
+static void test_hostile_files(sl_lod_model *m, const char *path)
+{
+    sl_octree *t = &m->tree;
+    /* Two internal nodes of one level claiming the same children. */
+    uint32_t a = SL_OCTREE_NONE, b = SL_OCTREE_NONE;
+    int found = first_two(m, internal_level_one, &a, &b);
+    CHECK(found);
+    if (found) {
+        sl_octree_node saved = t->nodes[a];
+        t->nodes[a].first_child = t->nodes[b].first_child;
+        t->nodes[a].child_mask = t->nodes[b].child_mask;
+        expect_refused(m, path, "shared children", "child does not belong");
+        t->nodes[a] = saved;
+    }
+    /* A triangle count whose byte size wraps around 64 bits. */
+    uint32_t k = m->expansion_count / 2;
+    uint64_t count = m->accumulation[k];
+    m->accumulation[k] = 0x1555555555555556ull;
+    expect_refused(m, path, "huge accumulation", "accumulation table out of range");
+    m->accumulation[k] = count;
+    /* A crossing on an edge whose corners agree (and none where they differ). */
+    uint32_t node = SL_OCTREE_NONE;
+    for (uint32_t i = 0; i < t->node_count && node == SL_OCTREE_NONE; i++)
+        if (t->nodes[i].edge_mask && t->nodes[i].edge_mask != 0xfff)
+            node = i;
+    CHECK(node != SL_OCTREE_NONE);
+    if (node != SL_OCTREE_NONE) {
+        uint16_t mask = t->nodes[node].edge_mask, low = mask & (uint16_t)-mask;
+        uint16_t free_edges = (uint16_t)(~mask & 0xfff), moved = free_edges & (uint16_t)-free_edges;
+        t->nodes[node].edge_mask = (uint16_t)((mask & ~low) | moved);
+        expect_refused(m, path, "edge mask against the signs", "bad crossing range");
+        t->nodes[node].edge_mask = mask;
+    }
+    /* Two nodes sharing one transition record. */
+    uint32_t r1 = SL_OCTREE_NONE, r2 = SL_OCTREE_NONE;
+    found = first_two(m, has_record, &r1, &r2);
+    CHECK(found);
+    if (found) {
+        uint32_t base = m->transitions.base[r2];
+        m->transitions.base[r2] = m->transitions.base[r1];
+        expect_refused(m, path, "shared transition record", "transition records overlap");
+        m->transitions.base[r2] = base;
+    }
+    /* Undone, the model reads again. */
+    sl_error err;
+    sl_error_init(&err);
+    sl_lod_model back;
+    CHECK(sl_lod_model_write(path, m, 1, &err) == 0);
+    CHECK_MSG(sl_lod_model_read(path, &back, &err) == 0, "restored model: %s", err.message);
+    sl_lod_model_release(&back);
+}
 
 static void test_model(sdf_fn sdf, int n, sl_priority_metric metric, const char *shape)
 {
@@ -223,6 +339,10 @@ static void test_model(sdf_fn sdf, int n, sl_priority_metric metric, const char 
     fclose(f);
     sl_error_init(&err);
     CHECK(sl_lod_model_read(path, &back, &err) == SL_E_CORRUPT);
+    if (metric == SL_PRIORITY_ERROR) {
+        test_hostile_files(&m, path);
+        test_level_check_catches_a_dive(&m);
+    }
     unlink(path);
     sl_lod_model_release(&m);
 }
