@@ -1,6 +1,6 @@
 /* The collection summary: OUTPUT/summary.json (every published item's report, and the
- * quarantined items with their reasons) and OUTPUT/summary.md (a Table-1-style row per
- * item from the export stage's summary-row.md, thumbnails, quarantine list). Both are
+ * quarantined items with their reasons) and OUTPUT/summary.md (per item the export stage's
+ * summary-item.md: a Table-1-style table and the thumbnails; then the quarantine list). Both are
  * rewritten atomically at the end of every `scanlod run`. */
 #include <limits.h>
 #include <stdio.h>
@@ -52,9 +52,11 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory");
     fprintf(out, "# scanlod collection summary\n\n%llu items in `%s`.\n\n",
             (unsigned long long)e->item_count, e->input);
-    fprintf(out, "Each level: triangles/vertices (k = expansions of the LOD array). Fidelity, "
-                 "watertightness and timings per level: `ITEM/report.json`, `ITEM/timings.json`.\n\n");
-    fprintf(out, "| item | levels |\n|---|---|\n");
+    fprintf(out, "Per item, its levels as in Table 1 of the paper (k = expansions of the LOD "
+                 "array; RMS and Hausdorff distance to the input in %% of its bounding-box "
+                 "diagonal, symmetric) and their thumbnails. Everything per level: "
+                 "`ITEM/report.json`; timings and memory: `ITEM/timings.json`.\n\n"
+                 "## Items\n\n");
     sl_json_object_begin(&js, NULL);
     sl_json_array_begin(&js, "items");
     uint64_t published = 0;
@@ -67,23 +69,18 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
         published++;
         sl_json_raw(&js, NULL, report);
         free(report);
-        sl_engine_path(path, sizeof path, "%s/%s/summary-row.md", e->output, e->items[i]);
-        char *row = read_optional(path);
-        if (row)
-            fputs(row, out);
+        sl_engine_path(path, sizeof path, "%s/%s/summary-item.md", e->output, e->items[i]);
+        char *section = read_optional(path);
+        if (section)
+            fputs(section, out);
         else
-            fprintf(out, "| %s | (no levels) |\n", e->items[i]);
-        free(row);
+            fprintf(out, "### %s\n\n(no levels)\n\n", e->items[i]);
+        free(section);
     }
     sl_json_array_end(&js);
-    fprintf(out, "\n## Thumbnails\n\n");
-    for (uint64_t i = 0; i < e->item_count; i++) {
-        char path[PATH_MAX];
-        sl_engine_path(path, sizeof path, "%s/%s/lod20.png", e->output, e->items[i]);
-        if (access(path, F_OK) == 0)
-            fprintf(out, "![%s](%s/lod20.png) ", e->items[i], e->items[i]);
-    }
-    fprintf(out, "\n\n## Quarantined\n\n");
+    if (!published)
+        fprintf(out, "None published.\n\n");
+    fprintf(out, "## Quarantined\n\n");
     sl_json_array_begin(&js, "quarantined");
     uint64_t bad = 0;
     for (uint64_t i = 0; i < e->item_count; i++) {

@@ -91,8 +91,16 @@ static int write_files(const sl_export_config *c, const sl_export_level *lv,
     return rc;
 }
 
+/* One level's line of the collection summary. */
+typedef struct level_row {
+    uint32_t k;
+    uint64_t triangles, vertices;
+    int watertight, measured, thumbnail;
+    double rms, hausdorff; /* fractions of the input's diagonal, when measured */
+} level_row;
+
 static int measure_level(const sl_export_config *c, const sl_mesh *input, const sl_lod_mesh *mesh,
-                         const sl_stage_io *io, sl_json *r, sl_error *err)
+                         const sl_stage_io *io, sl_json *r, level_row *row, sl_error *err)
 {
     sl_mesh view = mesh_view(mesh);
     sl_mesh_topology topo;
@@ -102,6 +110,7 @@ static int measure_level(const sl_export_config *c, const sl_mesh *input, const 
     sl_json_u64(r, "boundary_edges", topo.boundary_edges);
     sl_json_u64(r, "nonmanifold_edges", topo.nonmanifold_edges);
     sl_json_bool(r, "watertight", topo.watertight);
+    row->watertight = topo.watertight;
     if (!input || mesh->triangle_count == 0)
         return 0;
     sl_mesh_distance_config dc = sl_mesh_distance_default_config();
@@ -118,15 +127,57 @@ static int measure_level(const sl_export_config *c, const sl_mesh *input, const 
         sl_json_double(r, "rms", d.fraction.rms);
         sl_json_double(r, "hausdorff", d.fraction.hausdorff);
         sl_json_double(r, "mean", d.fraction.mean);
+        row->measured = 1;
+        row->rms = d.fraction.rms;
+        row->hausdorff = d.fraction.hausdorff;
     }
     return 0;
 }
 
-static void summary_row(FILE *md, const sl_export_level *lv, const sl_lod_mesh *mesh,
-                        uint32_t k)
+/* The item's section of OUTPUT/summary.md: paper Table 1 for this item (a row per level)
+ * and its thumbnails, linked relative to OUTPUT/. The engine concatenates the sections. */
+static int write_summary_section(const sl_export_config *c, const sl_lod_model *model,
+                                 const sl_mesh *input, const level_row *rows,
+                                 const sl_stage_io *io, sl_error *err)
 {
-    fprintf(md, " %s %llu/%llu (k=%u) |", lv->name, (unsigned long long)mesh->triangle_count,
-            (unsigned long long)mesh->vertex_count, k);
+    char *text = NULL;
+    size_t size = 0;
+    FILE *md = open_memstream(&text, &size);
+    if (!md)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    fprintf(md, "### %s\n\nLOD model: %u expansions, %llu triangles at the finest level",
+            io->item, model->expansion_count,
+            (unsigned long long)model->accumulation[model->expansion_count]);
+    if (input)
+        fprintf(md, "; input: %llu triangles", (unsigned long long)input->triangle_count);
+    fprintf(md, ".\n\n| level | k | triangles | vertices | RMS | Hausdorff | watertight |\n"
+                "|---|---:|---:|---:|---:|---:|---|\n");
+    for (int i = 0; i < c->level_count; i++) {
+        const level_row *w = &rows[i];
+        fprintf(md, "| %s | %u | %llu | %llu |", c->levels[i].name, w->k,
+                (unsigned long long)w->triangles, (unsigned long long)w->vertices);
+        if (w->measured)
+            fprintf(md, " %.3f %% | %.3f %% |", 100 * w->rms, 100 * w->hausdorff);
+        else
+            fputs(" – | – |", md);
+        fprintf(md, " %s |\n", w->watertight ? "yes" : "no");
+    }
+    fputc('\n', md);
+    int thumbnails = 0;
+    for (int i = 0; i < c->level_count; i++)
+        if (rows[i].thumbnail) {
+            fprintf(md, "%s![%s %s](<%s/%s.png>)", thumbnails++ ? " " : "", io->item,
+                    c->levels[i].name, io->item, c->levels[i].name);
+        }
+    if (thumbnails)
+        fputs("\n\n", md);
+    fclose(md);
+    char path[PATH_MAX];
+    snprintf(path, sizeof path, "%s/summary-item.md", io->out_dir);
+    int rc = text ? sl_write_file_atomic(path, text, size, err)
+                  : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    free(text);
+    return rc;
 }
 
 int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_mesh *input,
@@ -138,14 +189,9 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
     sl_json_u64(r, "triangles_finest", finest);
     sl_json_bool(r, "fidelity_measured", input != NULL);
     sl_json_array_begin(r, "levels");
-    char row_path[PATH_MAX];
-    snprintf(row_path, sizeof row_path, "%s/summary-row.md", io->out_dir);
-    char *row = NULL;
-    size_t row_size = 0;
-    FILE *md = open_memstream(&row, &row_size);
-    if (!md)
+    level_row *rows = calloc((size_t)c->level_count + 1, sizeof *rows);
+    if (!rows)
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    fprintf(md, "| %s |", io->item);
     int rc = 0;
     for (int i = 0; i < c->level_count && rc == 0; i++) {
         const sl_export_level *lv = &c->levels[i];
@@ -178,18 +224,20 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
         sl_json_u64(r, "vertices", mesh.vertex_count);
         sl_json_double(r, "max_error", model->error_after[k]);
         sl_json_u64(r, "unpatched_cells", cracks);
+        level_row *row = &rows[i];
+        row->k = k;
+        row->triangles = mesh.triangle_count;
+        row->vertices = mesh.vertex_count;
+        row->thumbnail = mesh.triangle_count && c->thumbnail_size > 0;
         rc = mesh.triangle_count ? write_files(c, lv, &mesh, extras, io, err) : 0;
         if (rc == 0)
-            rc = measure_level(c, input, &mesh, io, r, err);
+            rc = measure_level(c, input, &mesh, io, r, row, err);
         sl_json_object_end(r);
-        summary_row(md, lv, &mesh, k);
         sl_lod_mesh_release(&mesh);
     }
     sl_json_array_end(r);
-    fputc('\n', md);
-    fclose(md);
     if (rc == 0)
-        rc = sl_write_file_atomic(row_path, row, row_size, err);
-    free(row);
+        rc = write_summary_section(c, model, input, rows, io, err);
+    free(rows);
     return rc;
 }
