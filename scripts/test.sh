@@ -23,6 +23,9 @@ grep -q "^nothing to do" "$demo_log" || { cat "$demo_log"; echo "demo rerun did 
 
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+# The unoptimised sanitizer build checks memory safety; the 200 expansion counts of the
+# large shared models are checked by the first pass (test_lod_shared).
+export SCANLOD_LOD_CHECK_SAMPLES=20
 "$root/scripts/build.sh" "$root/build-asan" -DSCANLOD_SANITIZE=ON -DSCANLOD_BENCH=OFF \
   -DCMAKE_BUILD_TYPE=Debug
 (cd "$root/build-asan" && ctest --output-on-failure --timeout 1800 -j "$jobs")

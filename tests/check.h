@@ -59,8 +59,12 @@ static inline const char *check_source_path(const char *rel, char *buf, size_t s
 static inline const char *check_shared_path(const char *rel, char *buf, size_t size)
 {
     const char *root = getenv("SCANLOD_SHARED_DATA");
-    if (!root || !root[0])
+    if (!root || !root[0]) {
+        /* Said on every call, so a log shows exactly which checks did not run. */
+        printf("SKIP: %s: no ../shared/data (SCANLOD_SHARED_DATA is empty)\n",
+               rel[0] ? rel : "the shared scans");
         return NULL;
+    }
     snprintf(buf, size, "%s/%s", root, rel);
     return buf;
 }

@@ -23,6 +23,10 @@ check() { # check "description" command...
   if "$@"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "FAIL: $what" >&2; fi
 }
 
+contains() { # contains REGEX TEXT: for checks on a command's message
+  grep -q -- "$1" <<<"$2"
+}
+
 finish() {
   echo "$passed passed, $failed failed"
   [ "$failed" -eq 0 ]

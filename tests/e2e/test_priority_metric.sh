@@ -22,7 +22,8 @@ done
 run_scanlod run "$TMP/c.ini" -q -s priority.metric=area -s run.output="$TMP/out-area"
 check "area run exits 0 ($err)" [ "$rc" -eq 0 ]
 run_scanlod run "$TMP/c.ini" -q -s priority.metric=nearest
-check "an unknown metric is a config error (rc $rc: $err)" [ "$rc" -ne 0 ] && grep -q "metric" <<<"$err"
+check "an unknown metric is a config error (rc $rc)" [ "$rc" -eq 78 ]
+check "an unknown metric: the error names the key ($err)" contains "metric" "$err"
 
 report_value() { # report_value OUTPUT ITEM PYTHON-EXPRESSION-ON-r
   python3 -c "import json; r=json.load(open('$1/$2/report.json')); print($3)"

@@ -139,7 +139,9 @@ static int load(const char *path, sl_pointset *ps)
     sl_range_config rcfg = sl_range_default_config();
     sl_error err;
     sl_error_init(&err);
-    if (sl_ply_read(path, NULL, &m, NULL, NULL, &err) != SL_OK)
+    int read = sl_ply_read(path, NULL, &m, NULL, NULL, &err);
+    CHECK_MSG(read == SL_OK, "%s: %s", path, err.message);
+    if (read != SL_OK)
         return 0;
     int rc1 = sl_range_points_from_mesh(&rcfg, &m, NULL, ps, &rc, NULL, &err);
     sl_mesh_release(&m);
