@@ -152,7 +152,7 @@ static int first_two(const sl_lod_model *m, int (*want)(const sl_lod_model *, ui
     return found == 2;
 }
 
-/* Files with a valid checksum and hostile contents (docs/formats.md "Validation"): each
+/* Files with a valid checksum and hostile contents (docs/formats.md, model.slod): each
  * mutation of a good model is refused by the reader, which is all that stands between such
  * a file and the extraction code. */
 static void test_hostile_files(sl_lod_model *m, const char *path)
