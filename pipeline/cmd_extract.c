@@ -39,6 +39,8 @@ typedef struct request {
     long repeat; /* --repeat: warm extractions timed after the first */
 } request;
 
+/* 0; -1 when the command line is malformed (the caller prints the usage); -2 when a
+ * value is not a number (said here, in one line naming the flag). */
 static int parse(int argc, char **argv, request *r)
 {
     memset(r, 0, sizeof *r);
@@ -55,9 +57,13 @@ static int parse(int argc, char **argv, request *r)
             if (i + 1 >= argc || r->kind)
                 return -1;
             r->kind = flags[f].kind;
-            r->value = strtod(argv[++i], &end);
-            if (*end || !isfinite(r->value))
-                return -1;
+            const char *text = argv[++i];
+            r->value = strtod(text, &end);
+            if (!text[0] || *end || !isfinite(r->value)) {
+                fprintf(stderr, "scanlod extract: %s: '%s' is not a finite number\n",
+                        flags[f].flag, text);
+                return -2;
+            }
             matched = 1;
         }
         if (matched)
@@ -66,9 +72,13 @@ static int parse(int argc, char **argv, request *r)
             r->output = argv[++i];
         } else if (!strcmp(argv[i], "--repeat") && i + 1 < argc) {
             char *end;
-            r->repeat = strtol(argv[++i], &end, 10);
-            if (*end || r->repeat < 1 || r->repeat > 100000)
-                return -1;
+            const char *text = argv[++i];
+            r->repeat = strtol(text, &end, 10);
+            if (!text[0] || *end || r->repeat < 1 || r->repeat > 100000) {
+                fprintf(stderr, "scanlod extract: --repeat: '%s' is not a count in [1, 100000]\n",
+                        text);
+                return -2;
+            }
         }
         else if (argv[i][0] != '-' && !r->input)
             r->input = argv[i];
@@ -204,7 +214,7 @@ static int choose_k(const request *r, const sl_lod_model *m, uint32_t *k)
         if (r->value < 1 || r->value != floor(r->value))
             return bad_request("--triangles must be a whole number >= 1 (got %g)", r->value);
         if (r->value > (double)finest) {
-            fprintf(stderr, "scanlod extract: --triangles %.0f exceeds the finest level (%llu "
+            fprintf(stderr, "scanlod extract: --triangles %.15g exceeds the finest level (%llu "
                             "triangles)\n", r->value, (unsigned long long)finest);
             return SL_EXIT_USAGE;
         }
@@ -232,8 +242,10 @@ int sl_cmd_extract(int argc, char **argv)
         fputs(usage, stdout);
         return SL_EXIT_OK;
     }
-    if (parse(argc, argv, &r) != 0) {
-        fputs(usage, stderr);
+    int parsed = parse(argc, argv, &r);
+    if (parsed != 0) {
+        if (parsed == -1) /* -2: a bad value, said in one line already */
+            fputs(usage, stderr);
         return SL_EXIT_USAGE;
     }
     if (r.kind == 'l')

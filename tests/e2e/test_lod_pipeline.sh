@@ -99,6 +99,11 @@ done
 run_scanlod extract "$model" --triangles 0 -o "$TMP/x.ply"
 check "--triangles 0: usage error (rc $rc)" [ "$rc" -eq 64 ]
 check "--triangles 0: says why ($err)" contains "triangles must be a whole number >= 1" "$err"
+for value in nan inf '' 12abc; do
+  run_scanlod extract "$model" --lod-percent "$value" -o "$TMP/x.ply"
+  check "--lod-percent '$value': usage error (rc $rc)" [ "$rc" -eq 64 ]
+  check "--lod-percent '$value': one line saying why ($err)" [ "$err" = "scanlod extract: --lod-percent: '$value' is not a finite number" ]
+done
 run_scanlod extract "$model" --triangles $((finest + 1)) -o "$TMP/x.ply"
 check "--triangles above the finest: usage error (rc $rc)" [ "$rc" -eq 64 ]
 check "--triangles above the finest: says why ($err)" contains "exceeds the finest" "$err"
