@@ -7,8 +7,9 @@
  * Pass 2, per output pixel, shades only the visible samples of its ss x ss block,
  * recomputing the barycentric coordinates from the stored triangle (so the cost of shading
  * does not grow with overdraw), darkens samples on the silhouette and on depth jumps,
- * box-filters the block in linear light and encodes sRGB. Pass 2 is parallel over rows;
- * every pixel depends only on pass 1's buffers, so the result does not depend on threads.
+ * box-filters the block in linear light and encodes sRGB. Pass 1 is parallel over bands
+ * of rows, pass 2 over rows; every sample and pixel depends only on the mesh (pass 1) and
+ * on pass 1's buffers (pass 2), so the result does not depend on the thread count.
  */
 #include <float.h>
 #include <math.h>
@@ -120,21 +121,24 @@ static float edge(const float *a, const float *b, float px, float py)
     return (b[0] - a[0]) * (py - a[1]) - (b[1] - a[1]) * (px - a[0]);
 }
 
-/* Pass 1: nearest triangle per sample. */
-static void scan_convert(const sl_glb_mesh *m, const float *screen, sample_grid *g)
+/* Pass 1 over the rows [row0, row1) of the grid: nearest triangle per sample. */
+static void scan_convert_rows(const sl_glb_mesh *m, const float *screen, sample_grid *g,
+                              int row0, int row1)
 {
     for (uint64_t t = 0; t < m->triangle_count; t++) {
         const float *a = screen + 3 * (uint64_t)m->indices[3 * t];
         const float *b = screen + 3 * (uint64_t)m->indices[3 * t + 1];
         const float *c = screen + 3 * (uint64_t)m->indices[3 * t + 2];
+        float y0 = fminf(a[1], fminf(b[1], c[1])), y1 = fmaxf(a[1], fmaxf(b[1], c[1]));
+        if (y1 < row0 || y0 >= row1)
+            continue; /* outside this band: the cheap test first */
         float area = edge(a, b, c[0], c[1]);
         if (fabsf(area) < 1e-12f)
             continue; /* degenerate seen edge-on: covers no sample centre */
         float x0 = fminf(a[0], fminf(b[0], c[0])), x1 = fmaxf(a[0], fmaxf(b[0], c[0]));
-        float y0 = fminf(a[1], fminf(b[1], c[1])), y1 = fmaxf(a[1], fmaxf(b[1], c[1]));
-        int ix0 = x0 < 0 ? 0 : (int)x0, iy0 = y0 < 0 ? 0 : (int)y0;
+        int ix0 = x0 < 0 ? 0 : (int)x0, iy0 = y0 < row0 ? row0 : (int)y0;
         int ix1 = x1 >= g->width ? g->width - 1 : (int)x1;
-        int iy1 = y1 >= g->height ? g->height - 1 : (int)y1;
+        int iy1 = y1 >= row1 ? row1 - 1 : (int)y1;
         for (int y = iy0; y <= iy1; y++)
             for (int x = ix0; x <= ix1; x++) {
                 float px = x + 0.5f, py = y + 0.5f;
@@ -150,6 +154,19 @@ static void scan_convert(const sl_glb_mesh *m, const float *screen, sample_grid 
                 }
             }
     }
+}
+
+/* Pass 1, in horizontal bands of the grid, in parallel: a band owns its samples and visits
+ * the triangles in index order, so every sample ends as the serial pass would leave it,
+ * whatever the thread count. A fixed band count keeps the work the same too. */
+#define SCAN_BANDS 16
+
+static void scan_convert(const sl_glb_mesh *m, const float *screen, sample_grid *g)
+{
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int band = 0; band < SCAN_BANDS; band++)
+        scan_convert_rows(m, screen, g, (int)((int64_t)g->height * band / SCAN_BANDS),
+                          (int)((int64_t)g->height * (band + 1) / SCAN_BANDS));
 }
 
 /* What pass 2 needs besides the mesh. */

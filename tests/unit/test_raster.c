@@ -2,10 +2,11 @@
  * fitted with a 6% margin covers pi/4 * 0.88^2 = 61% of the image; its centre is lit,
  * the corners are background, the side towards the key light (upper left) is brighter
  * than the opposite side; vertex colours show; a face seen from its back is still lit
- * (two-sided); the same input gives the same pixels; PNGs round-trip through
+ * (two-sided); the same input gives the same pixels, on 1 thread or 2; PNGs round-trip through
  * OpenImageIO at the requested size. With SCANLOD_THUMB_OUT set, also writes thumbnails
  * of the bundled scans there (to look at).
  */
+#include <omp.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -222,6 +223,29 @@ static void write_scans(const char *dir)
     }
 }
 
+/* The same pixels whatever the thread count: pass 1 runs in bands, pass 2 in rows. */
+static void test_threads(void)
+{
+    sl_mesh m;
+    if (meshes_read_scan("cow", &m) != 0) {
+        CHECK_MSG(0, "cannot read cow");
+        return;
+    }
+    meshes_vertex_normals(&m);
+    omp_set_num_threads(1);
+    float *one = render(&m, 256, 256);
+    omp_set_num_threads(2);
+    float *two = render(&m, 256, 256);
+    CHECK(one && two && memcmp(one, two, 256 * 256 * 4 * sizeof *one) == 0);
+    int drawn = 0;
+    for (int i = 0; one && i < 256 * 256; i++)
+        drawn += !is_background(one + 4 * i);
+    CHECK_MSG(drawn > 256 * 256 / 10, "the cow covers %d of 65536 pixels", drawn);
+    free(one);
+    free(two);
+    sl_mesh_release(&m);
+}
+
 int main(void)
 {
     sl_oiio_init();
@@ -230,6 +254,7 @@ int main(void)
     test_colors_and_back_faces();
     test_rejections();
     test_png();
+    test_threads();
     const char *out = getenv("SCANLOD_THUMB_OUT");
     if (out && out[0])
         write_scans(out);
