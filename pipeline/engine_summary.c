@@ -12,6 +12,7 @@
 #include "pipeline/engine_internal.h"
 #include "pipeline/json.h"
 #include "pipeline/log.h"
+#include "pipeline/markdown.h"
 
 static char *read_optional(const char *path)
 {
@@ -73,8 +74,11 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
         char *section = read_optional(path);
         if (section)
             fputs(section, out);
-        else
-            fprintf(out, "### %s\n\n(no levels)\n\n", e->items[i]);
+        else {
+            fputs("### ", out);
+            sl_md_text(out, e->items[i]);
+            fputs("\n\n(no levels)\n\n", out);
+        }
         free(section);
     }
     sl_json_array_end(&js);
@@ -88,7 +92,11 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
         if (!quarantined(e, e->items[i], &t))
             continue;
         bad++;
-        fprintf(out, "- `%s` (%s): %s\n", e->items[i], t.cls, t.reason);
+        fputs("- ", out);
+        sl_md_text(out, e->items[i]);
+        fprintf(out, " (%s): ", t.cls);
+        sl_md_text(out, t.reason);
+        fputc('\n', out);
         sl_json_object_begin(&js, NULL);
         sl_json_string(&js, "item", e->items[i]);
         sl_json_string(&js, "class", t.cls);

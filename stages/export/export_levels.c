@@ -7,6 +7,7 @@
 
 #include "geometry/mesh_distance.h"
 #include "pipeline/atomicfile.h"
+#include "pipeline/markdown.h"
 #include "stages/export/export_internal.h"
 
 int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_config *c,
@@ -145,8 +146,10 @@ static int write_summary_section(const sl_export_config *c, const sl_lod_model *
     FILE *md = open_memstream(&text, &size);
     if (!md)
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    fprintf(md, "### %s\n\nLOD model: %u expansions, %llu triangles at the finest level",
-            io->item, model->expansion_count,
+    fputs("### ", md);
+    sl_md_text(md, io->item);
+    fprintf(md, "\n\nLOD model: %u expansions, %llu triangles at the finest level",
+            model->expansion_count,
             (unsigned long long)model->accumulation[model->expansion_count]);
     if (input)
         fprintf(md, "; input: %llu triangles", (unsigned long long)input->triangle_count);
@@ -154,8 +157,10 @@ static int write_summary_section(const sl_export_config *c, const sl_lod_model *
                 "|---|---:|---:|---:|---:|---:|---|\n");
     for (int i = 0; i < c->level_count; i++) {
         const level_row *w = &rows[i];
-        fprintf(md, "| %s | %u | %llu | %llu |", c->levels[i].name, w->k,
-                (unsigned long long)w->triangles, (unsigned long long)w->vertices);
+        fputs("| ", md);
+        sl_md_text(md, c->levels[i].name);
+        fprintf(md, " | %u | %llu | %llu |", w->k, (unsigned long long)w->triangles,
+                (unsigned long long)w->vertices);
         if (w->measured)
             fprintf(md, " %.3f %% | %.3f %% |", 100 * w->rms, 100 * w->hausdorff);
         else
@@ -166,8 +171,15 @@ static int write_summary_section(const sl_export_config *c, const sl_lod_model *
     int thumbnails = 0;
     for (int i = 0; i < c->level_count; i++)
         if (rows[i].thumbnail) {
-            fprintf(md, "%s![%s %s](<%s/%s.png>)", thumbnails++ ? " " : "", io->item,
-                    c->levels[i].name, io->item, c->levels[i].name);
+            fputs(thumbnails++ ? " ![" : "![", md);
+            sl_md_text(md, io->item);
+            fputc(' ', md);
+            sl_md_text(md, c->levels[i].name);
+            fputs("](<", md);
+            sl_md_link(md, io->item);
+            fputc('/', md);
+            sl_md_link(md, c->levels[i].name);
+            fputs(".png>)", md);
         }
     if (thumbnails)
         fputs("\n\n", md);

@@ -10,7 +10,7 @@ promises (docs/formats.md "Published per item"), item by item:
 - summary.json lists every item's report; summary.md has each item's section with one
   table row per level (matching the report) and links to thumbnails that exist.
 
-Usage: check_outputs.py OUTPUT ITEM... [--formats ply,glb] [--thumbnails] [--fidelity]
+Usage: check_outputs.py OUTPUT ITEM... [--formats=ply,glb] [--thumbnails] [--fidelity]
 Prints one line per failed expectation and "N passed, N failed"; exit 1 on any failure."""
 import json
 import math
@@ -29,6 +29,28 @@ def check(ok, what):
     else:
         failed += 1
         print("FAIL: " + what, file=sys.stderr)
+
+
+def md_text(s):
+    """pipeline/markdown.c sl_md_text."""
+    out = ""
+    for c in s:
+        if c in "\n\r":
+            out += " "
+        else:
+            out += ("\\" if c in "\\`*_[]<>|~" else "") + c
+    return out
+
+
+def md_link(s):
+    """pipeline/markdown.c sl_md_link."""
+    out = ""
+    for c in s:
+        if ord(c) < 0x20 or ord(c) == 0x7f:
+            out += "%%%02X" % ord(c)
+        else:
+            out += ("\\" if c in "<>\\" else "") + c
+    return out
 
 
 def ply_counts(path):
@@ -82,10 +104,11 @@ def check_item(out, item, formats, thumbnails, fidelity, summary_md):
         if thumbnails:
             check(os.path.isfile(png) and open(png, "rb").read(8) == b"\x89PNG\r\n\x1a\n",
                   f"{item}/{name}.png is a PNG")
-            check(f"(<{item}/{name}.png>)" in summary_md, f"summary.md shows {item}/{name}.png")
-        row = f"| {name} | {lv.get('expansions')} | {tri} | {ver} |"
+            check(f"(<{md_link(item)}/{md_link(name)}.png>)" in summary_md,
+                  f"summary.md shows {item}/{name}.png")
+        row = f"| {md_text(name)} | {lv.get('expansions')} | {tri} | {ver} |"
         check(row in summary_md, f"summary.md has the row {row}")
-    check(f"### {item}\n" in summary_md, f"summary.md has a section for {item}")
+    check(f"### {md_text(item)}\n" in summary_md, f"summary.md has a section for {item}")
     timings = json.load(open(os.path.join(folder, "timings.json")))
     for stage in ("range", "samples", "merge", "priority", "crack", "export"):
         t = timings.get("stages", {}).get(stage, {})
