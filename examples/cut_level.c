@@ -27,7 +27,7 @@ int main(int argc, char **argv)
     }
     uint32_t k = scanlod_expansions_for_triangles(model, strtoull(argv[2], NULL, 10));
     scanlod_mesh_bound bound = scanlod_extract_bound(model, k);
-    /* One allocation per array, sized once: a viewer keeps them for the next cut. */
+    /* Sized for this k; a viewer that reuses them sizes them for the finest k it cuts. */
     float *positions = malloc((bound.vertices + 1) * 3 * sizeof *positions);
     float *normals = malloc((bound.vertices + 1) * 3 * sizeof *normals);
     uint8_t *colors = malloc((bound.vertices + 1) * 4);

@@ -60,7 +60,8 @@ for k in $(seq 1 "$kills"); do
   if [ "$done_now" -ge "$total" ]; then rm -rf "$TMP/work" "$TMP/out"; fi
 done
 echo "stage results done at each kill: ${done_at_kill[*]} (of $total)" >&2
-check "some kills found published items to compare ($published_seen)" [ "$published_seen" -gt 0 ]
+# With many kills some land after a publication (with a handful, all may land before).
+[ "$kills" -lt 10 ] || check "some kills found published items to compare ($published_seen)" [ "$published_seen" -gt 0 ]
 check "no published item folder ever differed from the clean run ($bad_publications)" [ "$bad_publications" -eq 0 ]
 check "every record verified after every kill ($unverified failures)" [ "$unverified" -eq 0 ]
 

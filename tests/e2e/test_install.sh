@@ -12,12 +12,12 @@ check "library, header, pkg-config file and binary installed" \
   [ -f "$libdir/libscanlod_runtime.so" -a -f "$prefix/include/scanlod/scanlod.h" \
     -a -f "$libdir/pkgconfig/scanlod.pc" -a -x "$prefix/bin/scanlod" ]
 
-exported=$(nm -D --defined-only "$libdir/libscanlod_runtime.so" | awk '$2 == "T" { print $3 }' | sort -u)
+exported=$(nm -D --defined-only "$libdir/libscanlod_runtime.so" | awk '$2 == "T" { print $3 }' |
+  sed 's/@.*//' | LC_ALL=C sort -u)
 check "exports only the public API ($(echo $exported))" \
   [ -n "$exported" -a -z "$(grep -v '^scanlod_' <<<"$exported")" ]
-declared=$(grep -o 'scanlod_[a-z_]*(' "$prefix/include/scanlod/scanlod.h" | tr -d '(' | sort -u)
-check "exports every function the header declares" \
-  [ "$(sed 's/@.*//' <<<"$exported")" = "$declared" ]
+declared=$(grep -o 'scanlod_[a-z_]*(' "$prefix/include/scanlod/scanlod.h" | tr -d '(' | LC_ALL=C sort -u)
+check "exports every function the header declares" [ "$exported" = "$declared" ]
 
 # The example, built the way docs/api.md says (sanitizer builds need the same flags).
 flags=()
@@ -30,6 +30,7 @@ check "examples/cut_level.c builds against the prefix with pkg-config" \
 mkdir -p "$TMP/in"
 cp "$SCANS/fandisk.ply" "$TMP/in/"
 write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out"
+SCANLOD="$prefix/bin/scanlod" # from here on, the installed binary
 run_scanlod run "$TMP/c.ini" -q
 check "the installed binary's pipeline ran (rc $rc: $err)" [ "$rc" -eq 0 ]
 model="$TMP/out/fandisk/model.slod"
@@ -46,6 +47,6 @@ bad=$(LD_LIBRARY_PATH="$libdir" "$TMP/cut_level" "$TMP/missing.slod" 10 2>&1)
 brc=$?
 set -e
 check "a missing model: exit 1 with one line naming it ($bad)" \
-  [ "$brc" -eq 1 -a "$(wc -l <<<"$bad")" -eq 1 ]
+  [ "$brc" -eq 1 -a -n "$bad" -a "$(wc -l <<<"$bad")" -eq 1 ]
 check "the line names the file" contains "missing.slod" "$bad"
 finish

@@ -117,7 +117,7 @@ for cut in 0 20 1000 $((size / 2)) $((size - 1)); do # empty, in the header, the
   head -c "$cut" "$model" >"$TMP/short.slod"
   run_scanlod extract "$TMP/short.slod" --lod-percent 50 -o "$TMP/x.ply"
   check "truncated .slod ($cut of $size bytes): exit 65 (rc $rc)" [ "$rc" -eq 65 ]
-  check "truncated .slod ($cut bytes): one line of error ($err)" [ "$(wc -l <<<"$err")" -eq 1 ]
+  check "truncated .slod ($cut bytes): one line of error ($err)" [ -n "$err" -a "$(wc -l <<<"$err")" -eq 1 ]
   check "truncated .slod ($cut bytes): it names the file" contains short.slod "$err"
 done
 cp "$model" "$TMP/v9.slod"
