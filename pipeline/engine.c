@@ -235,7 +235,18 @@ int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err
     }
     sl_identity_self(&e->self);
 
-    rc = check_directory(e->input, "[run] input", err);
+    /* Every stage reads its section now, once, so a value only a stage can judge (a
+     * level name, a list) stops the run before any work, as a bad key does. */
+    for (int i = 0; rc == 0 && i < e->stage_count; i++) {
+        void *stage_config = NULL;
+        if (!e->stages[i]->configure)
+            continue;
+        rc = e->stages[i]->configure(e->cfg, &stage_config, err);
+        if (rc == 0 && e->stages[i]->release_config)
+            e->stages[i]->release_config(stage_config);
+    }
+    if (rc == 0)
+        rc = check_directory(e->input, "[run] input", err);
     if (rc == 0 && opts->open_logs) {
         char run_id[160];
         make_run_id(&e->self, opts->command, run_id, sizeof run_id);

@@ -1,4 +1,5 @@
 /* Per-level work of the export stage: cut, write, measure, report (export.h). */
+#include <ctype.h>
 #include <errno.h>
 #include <limits.h>
 #include <stdio.h>
@@ -9,6 +10,19 @@
 #include "pipeline/atomicfile.h"
 #include "pipeline/markdown.h"
 #include "stages/export/export_internal.h"
+
+/* A level's name becomes its file names (NAME.ply, NAME.png) in the item's folder: letters,
+ * digits, '.', '_' and '-', starting with a letter or digit, so that no name can reach
+ * outside the folder, hide a file or need quoting. */
+static int good_level_name(const char *name)
+{
+    if (!isalnum((unsigned char)name[0]))
+        return 0;
+    for (const char *p = name; *p; p++)
+        if (!isalnum((unsigned char)*p) && !strchr("._-", *p))
+            return 0;
+    return 1;
+}
 
 int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_config *c,
                            sl_error *err)
@@ -50,7 +64,17 @@ int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_
                                         "'%s': the budget must be a whole number >= 1", word);
                 snprintf(lv->name, sizeof lv->name, "%.31s", word);
                 lv->budget = (uint64_t)v;
+                if (!good_level_name(lv->name))
+                    return sl_error_set(err, SL_E_CONFIG, 0, "[export] budgets",
+                                        "'%s': a level name is letters, digits, '.', '_' "
+                                        "and '-', starting with a letter or digit", lv->name);
             }
+            for (int j = 0; j < c->level_count; j++)
+                if (!strcmp(c->levels[j].name, lv->name))
+                    return sl_error_set(err, SL_E_CONFIG, 0,
+                                        l ? "[export] budgets" : "[export] lod_percents",
+                                        "two levels are named '%s' (their files would overwrite "
+                                        "each other)", lv->name);
             c->level_count++;
         }
     }

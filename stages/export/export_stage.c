@@ -25,7 +25,9 @@ static const sl_option export_options[] = {
      NULL,
      "Named triangle budgets (name:triangles), as museum web viewers use: the largest level "
      "within each budget. A budget above the finest level gives the finest (\"clamped\" in "
-     "the report). Empty for none."},
+     "the report). A name becomes the level's file names: letters, digits, '.', '_' and '-', "
+     "starting with a letter or digit, and no two levels (budgets or lodP percents) alike. "
+     "Empty for none."},
     {"export", "formats", SL_OPT_LIST, "ply,glb", 0, 0, NULL,
      "Mesh files written per level: any of ply, glb, obj."},
     {"export", "thumbnail_size", SL_OPT_INT, "256", 0, 4096, NULL,

@@ -129,6 +129,16 @@ check "no partial output was left by failed extractions" [ ! -e "$TMP/x.ply" ]
 
 check "public API on the built model" "$api_check" "$model"
 
+# Level names become file names: a path in one, or two levels alike, is a config error
+# before any work (exit 78, no work folder), not a file outside the item or overwritten.
+for budgets in "../evil:100" "a/b:100" "thumb:100,thumb:200" "lod20:300"; do
+  write_config "$TMP/bad.ini" "$TMP/in" "$TMP/bad-work" "$TMP/bad-out" "[export]" "budgets = $budgets"
+  run_scanlod run "$TMP/bad.ini" -q
+  check "budgets = $budgets: config error (rc $rc)" [ "$rc" -eq 78 ]
+  check "budgets = $budgets: before any work" [ ! -e "$TMP/bad-work" ]
+  check "budgets = $budgets: says why ($err)" contains "\[export\] budgets: .*\(a level name is\|two levels are named\)" "$err"
+done
+
 # The models of the real scans at every K (fandisk: small) or 200-300 spread K:
 # level rule, accumulation = generated, watertight (all three are closed).
 lod_check="${SCANLOD_BUILD_DIR}/tests/lod_check"
