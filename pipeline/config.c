@@ -263,6 +263,8 @@ static int append_element(const sl_option *o, const char *p, size_t len, char **
     snprintf(word, sizeof word, "%.*s", (int)len, p);
     if (o->min < o->max && parse_double(o, word, &v, cause))
         return -1;
+    if (o->choices && parse_enum(o, word, cause)) /* a list of choices ("ply|glb|obj") */
+        return -1;
     if (o->min < o->max)
         *w += sprintf(*w, "%s%.17g", first ? "" : ",", v);
     else

@@ -42,7 +42,7 @@ typedef enum sl_option_type {
     SL_OPT_PATH,   /* resolved to an absolute path */
     SL_OPT_ENUM,   /* one of `choices` ("a|b|c") */
     SL_OPT_LIST    /* comma-separated words, each checked like an INT/DOUBLE range if
-                      min < max, else free text */
+                      min < max, else one of `choices` if given, else free text */
 } sl_option_type;
 
 typedef struct sl_option {
@@ -52,7 +52,7 @@ typedef struct sl_option {
     const char *default_value; /* text; NULL = required (no default) */
     double min, max;           /* INT/DOUBLE/LIST ranges, inclusive; checked only if
                                   min < max (0, 0 = unbounded) */
-    const char *choices;       /* ENUM only */
+    const char *choices;       /* ENUM, and LIST elements when set */
     const char *help;          /* one or more sentences; shown in reference.ini */
 } sl_option;
 

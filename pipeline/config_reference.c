@@ -69,6 +69,8 @@ static void write_type(FILE *out, const sl_option *o)
     fprintf(out, "# type: %s", names[o->type]);
     if (o->type == SL_OPT_ENUM)
         fprintf(out, " %s", o->choices ? o->choices : "");
+    if (o->type == SL_OPT_LIST && o->choices)
+        fprintf(out, " of %s", o->choices);
     int ranged = o->type == SL_OPT_INT || o->type == SL_OPT_DOUBLE || o->type == SL_OPT_LIST;
     if (ranged && o->min < o->max)
         fprintf(out, ", %srange [%.17g, %.17g]", o->type == SL_OPT_LIST ? "each number in " : "",

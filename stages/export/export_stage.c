@@ -28,8 +28,9 @@ static const sl_option export_options[] = {
      "the report). A name becomes the level's file names: letters, digits, '.', '_' and '-', "
      "starting with a letter or digit, and no two levels (budgets or lodP percents) alike. "
      "Empty for none."},
-    {"export", "formats", SL_OPT_LIST, "ply,glb", 0, 0, NULL,
-     "Mesh files written per level: any of ply, glb, obj."},
+    {"export", "formats", SL_OPT_LIST, "ply,glb", 0, 0, "ply|glb|obj",
+     "Mesh files written per level: any of ply, glb, obj (empty: none, only thumbnails and "
+     "the report)."},
     {"export", "thumbnail_size", SL_OPT_INT, "256", 0, 4096, NULL,
      "Edge of the square PNG thumbnail rendered per level, in pixels; 0 = none."},
     {"export", "fidelity", SL_OPT_BOOL, "true", 0, 0, NULL,
@@ -57,10 +58,13 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     int rc = sl_export_parse_levels(sl_config_string(cfg, "export", "lod_percents"),
                                     sl_config_string(cfg, "export", "budgets"), c, err);
-    const char *formats = sl_config_string(cfg, "export", "formats");
-    c->write_ply = strstr(formats, "ply") != NULL;
-    c->write_glb = strstr(formats, "glb") != NULL;
-    c->write_obj = strstr(formats, "obj") != NULL;
+    /* The config checked every element against ply|glb|obj; the canonical list is
+     * "a,b,c", so a name is in it when it is a whole element. */
+    char formats[64];
+    snprintf(formats, sizeof formats, ",%s,", sl_config_string(cfg, "export", "formats"));
+    c->write_ply = strstr(formats, ",ply,") != NULL;
+    c->write_glb = strstr(formats, ",glb,") != NULL;
+    c->write_obj = strstr(formats, ",obj,") != NULL;
     c->thumbnail_size = (int)sl_config_int(cfg, "export", "thumbnail_size");
     c->fidelity = sl_config_bool(cfg, "export", "fidelity");
     c->fidelity_samples = (uint64_t)sl_config_int(cfg, "export", "fidelity_samples");

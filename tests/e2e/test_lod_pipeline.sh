@@ -138,6 +138,10 @@ for budgets in "../evil:100" "a/b:100" "thumb:100,thumb:200" "lod20:300"; do
   check "budgets = $budgets: before any work" [ ! -e "$TMP/bad-work" ]
   check "budgets = $budgets: says why ($err)" contains "\[export\] budgets: .*\(a level name is\|two levels are named\)" "$err"
 done
+write_config "$TMP/bad.ini" "$TMP/in" "$TMP/bad-work" "$TMP/bad-out" "[export]" "formats = ply,stl"
+run_scanlod run "$TMP/bad.ini" -q
+check "formats = ply,stl: config error before any work (rc $rc)" [ "$rc" -eq 78 -a ! -e "$TMP/bad-work" ]
+check "formats = ply,stl: names file, line and the word ($err)" contains "bad.ini:[0-9]*: \[export\] formats: 'stl' is not one of ply|glb|obj" "$err"
 
 # The models of the real scans at every K (fandisk: small) or 200-300 spread K:
 # level rule, accumulation = generated, watertight (all three are closed).
