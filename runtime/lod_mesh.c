@@ -181,28 +181,35 @@ static int reserve_triangles(sl_mesh_builder *b, int count)
     return 0;
 }
 
+/* Where the next `count` triangles' indices go, or NULL when there is nothing to add or
+ * no room (the builder is then failed). The caller fills them and counts them in. */
+static inline uint32_t *triangle_slots(sl_mesh_builder *b, int count)
+{
+    if (b->failed || count == 0 || reserve_triangles(b, count))
+        return NULL;
+    return b->mesh.indices + 3 * (size_t)b->mesh.triangle_count;
+}
+
 void sl_mesh_builder_add_triangles(sl_mesh_builder *b, int count, const uint8_t *points,
                                    const uint32_t *point_crossing)
 {
-    if (b->failed || count == 0 || reserve_triangles(b, count))
+    uint32_t *out = triangle_slots(b, count);
+    if (!out)
         return;
-    sl_lod_mesh *m = &b->mesh;
-    uint32_t *out = m->indices + 3 * (size_t)m->triangle_count;
     for (int i = 0; i < 3 * count; i++)
         out[i] = vertex_of(b, point_crossing[points[i]]);
-    m->triangle_count += (uint64_t)count;
+    b->mesh.triangle_count += (uint64_t)count;
 }
 
 void sl_mesh_builder_add_crossing_triangles(sl_mesh_builder *b, int count,
                                             const uint32_t *crossings)
 {
-    if (b->failed || count == 0 || reserve_triangles(b, count))
+    uint32_t *out = triangle_slots(b, count);
+    if (!out)
         return;
-    sl_lod_mesh *m = &b->mesh;
-    uint32_t *out = m->indices + 3 * (size_t)m->triangle_count;
     for (int i = 0; i < 3 * count; i++)
         out[i] = vertex_of(b, crossings[i]);
-    m->triangle_count += (uint64_t)count;
+    b->mesh.triangle_count += (uint64_t)count;
 }
 
 void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
@@ -218,17 +225,16 @@ void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
     for (int l = 0; l < tri->loops; l++)
         if (tri->centroids >> l & 1)
             centroid[l] = centroid_vertex(b, tri, l, point_crossing);
-    if (reserve_triangles(b, tri->count))
+    uint32_t *out = triangle_slots(b, tri->count);
+    if (!out)
         return;
-    sl_lod_mesh *m = &b->mesh;
-    uint32_t *out = m->indices + 3 * (size_t)m->triangle_count;
     for (int t = 0; t < tri->count; t++, out += 3)
         for (int k = 0; k < 3; k++) {
             int p = tri->points[t][k];
             out[k] = p >= SL_MC_MAX_POINTS ? centroid[p - SL_MC_MAX_POINTS]
                                            : vertex_of(b, point_crossing[p]);
         }
-    m->triangle_count += tri->count;
+    b->mesh.triangle_count += tri->count;
 }
 
 static void compute_normals(sl_lod_mesh *m)

@@ -23,6 +23,13 @@ check() { # check "description" command...
   if "$@"; then passed=$((passed + 1)); else failed=$((failed + 1)); echo "FAIL: $what" >&2; fi
 }
 
+# Node and the Khronos glTF validator (scripts/install-deps.sh installs both): 0 when
+# scripts/gltf/validate.mjs can run.
+gltf_validator_ready() {
+  command -v node >/dev/null &&
+    [ -f "$SCANLOD_SOURCE_DIR/scripts/gltf/node_modules/gltf-validator/package.json" ]
+}
+
 contains() { # contains REGEX TEXT: for checks on a command's message
   grep -q -- "$1" <<<"$2"
 }

@@ -41,7 +41,7 @@ check "published outputs agree with the reports" python3 "$SCANLOD_SOURCE_DIR/te
 # Every GLB the export stage published passes the Khronos validator with 0 errors and 0
 # warnings (the GLB writer's own samples: tests/export/test_gltf_validator.sh).
 gltf="$SCANLOD_SOURCE_DIR/scripts/gltf"
-if command -v node >/dev/null && [ -f "$gltf/node_modules/gltf-validator/package.json" ]; then
+if gltf_validator_ready; then
   mapfile -t glbs < <(find "$TMP/out" -name '*.glb' | sort)
   levels_drawn=$(python3 -c "import json; print(sum(1 for i in ['fandisk','rocker_arm','cow','bun_zipper_res3'] for l in json.load(open('$TMP/out/'+i+'/report.json'))['stages']['export']['levels'] if l['triangles'] > 0))")
   set +e
@@ -73,7 +73,7 @@ run_scanlod extract "$model" --triangles "$half" --repeat 0 -o "$TMP/x.ply"
 check "--repeat 0: usage error (rc $rc)" [ "$rc" -eq 64 ]
 run_scanlod extract "$model" --lod-percent 20 -o "$TMP/p20.glb"
 check "extract --lod-percent 20 to GLB" [ "$rc" -eq 0 -a -s "$TMP/p20.glb" ]
-if command -v node >/dev/null && [ -f "$gltf/node_modules/gltf-validator/package.json" ]; then
+if gltf_validator_ready; then
   check "extract's GLB passes the validator" node "$gltf/validate.mjs" "$TMP/p20.glb"
 fi
 run_scanlod extract "$model" --max-error 0.01 -o "$TMP/e.obj"
