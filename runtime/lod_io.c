@@ -212,21 +212,30 @@ static int parse_lod(sl_lod_model *m, const unsigned char *p, uint64_t size, con
     return validate(m, path, err);
 }
 
+int sl_lod_model_parse(const void *body, uint64_t size, const char *name, sl_lod_model *out,
+                       sl_error *err)
+{
+    sl_lod_model_init(out);
+    uint64_t used = 0;
+    int rc = sl_octree_parse(body, size, name, &out->tree, &used, err);
+    if (rc == 0)
+        rc = parse_lod(out, (const unsigned char *)body + used, size - used, name, err);
+    if (rc == 0 && (sl_lod_model_localize(out) || sl_lod_model_prepare(out)))
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
+    if (rc)
+        sl_lod_model_release(out);
+    return rc;
+}
+
 int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err)
 {
     sl_lod_model_init(out);
     void *body = NULL;
-    uint64_t size = 0, used = 0;
+    uint64_t size = 0;
     int rc = sl_artifact_read(path, SL_LOD_MAGIC, SL_LOD_FORMAT_VERSION, (uint64_t)1 << 40, &body,
                               &size, NULL, err);
     if (rc == 0)
-        rc = sl_octree_parse(body, size, path, &out->tree, &used, err);
-    if (rc == 0)
-        rc = parse_lod(out, (const unsigned char *)body + used, size - used, path, err);
+        rc = sl_lod_model_parse(body, size, path, out, err);
     free(body);
-    if (rc == 0 && (sl_lod_model_localize(out) || sl_lod_model_prepare(out)))
-        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
-    if (rc)
-        sl_lod_model_release(out);
     return rc;
 }

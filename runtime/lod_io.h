@@ -24,6 +24,11 @@ int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_v
                        sl_error *err);
 /* Loads and validates; derives what generation needs (sl_lod_model_prepare). */
 int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err);
+/* The same from a body already out of its envelope (what sl_artifact_read returns; the
+ * fuzz target feeds bodies here, past the checksum). `name` is used in messages. On
+ * failure `out` holds nothing. */
+int sl_lod_model_parse(const void *body, uint64_t size, const char *name, sl_lod_model *out,
+                       sl_error *err);
 
 /* Completes a model whose tree, lod_array, neighbours and transitions are set: derives
  * expansion_index, the accumulation table (by drawing the cells each expansion changes)

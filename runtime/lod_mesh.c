@@ -253,10 +253,11 @@ static void compute_normals(sl_lod_mesh *m)
     }
     for (uint64_t v = 0; v < m->vertex_count; v++) {
         float *n = m->normals + 3 * v;
-        float len = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        /* In double: the squares of a large model's area-weighted sums overflow a float. */
+        double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
         if (len > 0)
             for (int a = 0; a < 3; a++)
-                n[a] /= len;
+                n[a] = (float)(n[a] / len);
     }
 }
 

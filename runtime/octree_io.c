@@ -87,6 +87,12 @@ static int validate(const sl_octree *t, const char *name, sl_error *err)
 {
     if (t->depth >= SL_OCTREE_MAX_LEVELS || !(t->leaf_size > 0) || !isfinite(t->leaf_size))
         return bad(err, name, "depth or leaf size out of range");
+    /* Coordinates any scan has (a root cube of 1e15 units is a light-year in millimetres)
+     * keep every product generation forms finite: normals are cross products of edges. */
+    double root = ldexp(t->leaf_size, (int)t->depth);
+    for (int a = 0; a < 3; a++)
+        if (!(fabs(t->origin[a]) <= SL_OCTREE_MAX_EXTENT) || root > SL_OCTREE_MAX_EXTENT)
+            return bad(err, name, "grid origin or extent out of range");
     uint64_t sum = 0;
     for (uint32_t l = 0; l < SL_OCTREE_MAX_LEVELS; l++) {
         if (l > t->depth && t->level_count[l])
@@ -138,9 +144,17 @@ static int validate(const sl_octree *t, const char *name, sl_error *err)
     for (uint64_t i = 0; i < t->node_crossing_count; i++)
         if (t->node_crossings[i] >= t->crossing_count)
             return bad(err, name, "crossing id out of range");
-    for (uint64_t i = 0; i < 3 * (uint64_t)t->crossing_count; i++)
+    /* Crossings lie on cube edges, so inside the root's cube (a leaf of slack for
+     * rounding). */
+    const double corner[3] = {t->nodes[0].x * root, t->nodes[0].y * root, t->nodes[0].z * root};
+    for (uint64_t i = 0; i < 3 * (uint64_t)t->crossing_count; i++) {
+        double v = t->crossing_position[i],
+               lo = t->origin[i % 3] + corner[i % 3] - t->leaf_size;
         if (!isfinite(t->crossing_position[i]))
             return bad(err, name, "non-finite crossing position");
+        if (!(v >= lo && v <= lo + root + 2 * t->leaf_size))
+            return bad(err, name, "crossing outside the octree's cube");
+    }
     return 0;
 }
 

@@ -24,6 +24,8 @@
 #define SL_OCTREE_MAGIC "SLOCTREE"
 #define SL_OCTREE_FORMAT_VERSION 1u
 #define SL_OCTREE_PARTS 5
+/* Largest |origin| and root cube edge a file may declare (world units). */
+#define SL_OCTREE_MAX_EXTENT 1e15
 
 /* Describes the octree as artifact parts (pointing into `t` and `header`, which must
  * outlive the write). Returns the number of parts used. */

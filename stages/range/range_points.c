@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "geometry/mesh_distance.h"
+#include "runtime/octree_io.h"
 #include "stages/range/range_internal.h"
 
 int range_mean_spacing(const sl_kdtree *tree, const float *positions, uint64_t point_count,
@@ -67,6 +68,24 @@ static int check_usable(const sl_range_config *cfg, const sl_mesh *mesh,
                             (unsigned long long)mesh->triangle_count,
                             (unsigned long long)counts->degenerate_faces,
                             (unsigned long long)counts->nonfinite_faces);
+    return SL_OK;
+}
+
+/* Refused here, not three stages later: the octree's grid (its origin and a root cube of
+ * a power of two leaves around the padded box) must stay within SL_OCTREE_MAX_EXTENT,
+ * which the octree readers enforce (docs/formats.md), and a sixteenth of it leaves room. */
+#define RANGE_MAX_COORDINATE (SL_OCTREE_MAX_EXTENT / 16)
+
+static int check_extent(const float lo[3], const float hi[3], sl_error *err)
+{
+    double reach = 0;
+    for (int k = 0; k < 3; k++)
+        reach = fmax(reach, fmax(fabs((double)lo[k]), fabs((double)hi[k])));
+    if (reach > RANGE_MAX_COORDINATE)
+        return sl_error_set(err, SL_E_BADINPUT, 0, NULL,
+                            "coordinates reach %.3g: scanlod takes up to %.3g in magnitude "
+                            "(rescale the scan or move it nearer the origin)",
+                            reach, RANGE_MAX_COORDINATE);
     return SL_OK;
 }
 
@@ -181,6 +200,8 @@ int sl_range_points_from_mesh(const sl_range_config *cfg, sl_mesh *mesh, const c
     for (uint64_t p = 0; p < n; p++)
         memcpy(out->positions + 3 * p, mesh->positions + 3 * (uint64_t)clean.point_vertex[p], 12);
     bounding_box(out->positions, n, out->bbox_min, out->bbox_max);
+    if ((rc = check_extent(out->bbox_min, out->bbox_max, err)) != SL_OK)
+        goto done;
     if ((rc = sl_kdtree_build(&tree, out->positions, n, err)) != SL_OK)
         goto done;
     if (sl_progress_step(progress, "normals", 0.0)) {

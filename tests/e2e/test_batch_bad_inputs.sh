@@ -14,6 +14,9 @@ printf 'ply\nformat binary_little_endian 1.0\nelement vertex 4294967295\npropert
 printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n' >"$in/bad/index_out_of_range.ply"
 printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\nnan 0 0\ninf 0 0\nnan nan nan\n3 0 1 2\n' >"$in/bad/all_nan.ply"
 printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uint int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n4294967295 0 1 2\n' >"$in/bad/huge_list.ply"
+# Finite but astronomically far: it would pass every stage to the octree, whose readers
+# refuse a grid beyond 1e15 units (the next run would retry it forever).
+printf 'ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n3e16 0 0\n3e16 1 0\n3e16 0 1\n3 0 1 2\n' >"$in/bad/far_away.ply"
 head -c 60000 "$SCANS/cow.ply" >"$in/bad/truncated.ply"
 bad_count=$(find "$in/bad" -name '*.ply' | wc -l)
 
@@ -33,6 +36,7 @@ done
 check "empty file cause" grep -q "empty.ply: .*empty" <<<"$err"
 check "huge count cause names the count" grep -q "huge_count.ply: .*4294967295" <<<"$err"
 check "index cause names the index" grep -qi "index_out_of_range.ply: .*7" <<<"$err"
+check "far coordinates cause names the reach" grep -q "far_away.ply: coordinates reach 3e+16" <<<"$err"
 
 run_scanlod status "$TMP/c.ini"
 check "status: $bad_count quarantined, 2 done" grep -qE "^range +0 +0 +2 +0 +$bad_count\$" <<<"$out"

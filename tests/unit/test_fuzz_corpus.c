@@ -1,7 +1,10 @@
-/* Replays the PLY fuzz corpus (tests/fuzz/corpus/ply) through sl_ply_read_memory in every
- * normal build, so the CI ASan+UBSan build re-checks every input the fuzzer ever kept or
- * crashed on, without clang or libFuzzer. Each input sits in a buffer of exactly its size
- * (ASan sees any read past it) and must give a valid mesh or one bad-input/limit error.
+/* Replays the fuzz corpora in every normal build, so the CI ASan+UBSan build re-checks
+ * every input the fuzzers ever kept or crashed on, without clang or libFuzzer. Each input
+ * sits in a buffer of exactly its size (ASan sees any read past it).
+ * - tests/fuzz/corpus/ply through sl_ply_read_memory: a valid mesh or one bad-input/limit
+ *   error;
+ * - tests/fuzz/corpus/slod (.slod bodies) through sl_lod_model_parse and generation: the
+ *   promises of tests/fuzz/slod_promises.h.
  */
 #include <dirent.h>
 #include <stdint.h>
@@ -11,6 +14,7 @@
 
 #include "geometry/ply.h"
 #include "tests/check.h"
+#include "tests/fuzz/slod_promises.h"
 
 static unsigned char *slurp(const char *path, size_t *size)
 {
@@ -38,45 +42,74 @@ static int mesh_valid(const sl_mesh *m)
     return (m->vertex_count == 0 || m->positions) && (m->triangle_count == 0 || m->triangles);
 }
 
-static void replay(const char *path, const char *name, int *read_ok, int *rejected)
+/* counts[0]: inputs that loaded, counts[1]: refused, counts[2]: seeds among the loaded. */
+typedef void replay_fn(const unsigned char *data, size_t size, const char *name, int counts[3]);
+
+static void replay_ply(const unsigned char *data, size_t size, const char *name, int counts[3])
 {
-    size_t size = 0;
-    unsigned char *data = slurp(path, &size);
-    CHECK_MSG(data != NULL, "cannot read %s", path);
-    if (!data)
-        return;
     sl_mesh m;
     sl_error err;
     sl_error_init(&err);
     int rc = sl_ply_read_memory(data, size, name, NULL, &m, NULL, &err);
     if (rc == 0) {
         CHECK_MSG(mesh_valid(&m), "%s: invalid mesh", name);
-        (*read_ok)++;
+        counts[0]++;
     } else {
         CHECK_MSG((rc == SL_E_BADINPUT || rc == SL_E_LIMIT) && rc == err.code && err.message[0],
                   "%s: rc %d '%s'", name, rc, err.message);
-        (*rejected)++;
+        counts[1]++;
     }
     sl_mesh_release(&m);
-    free(data);
 }
 
-int main(void)
+static void replay_slod(const unsigned char *data, size_t size, const char *name, int counts[3])
 {
-    char dir[1024], path[1400];
-    check_source_path("tests/fuzz/corpus/ply", dir, sizeof dir);
+    const char *why = slod_body_broken(data, size);
+    CHECK_MSG(why == NULL, "%s: %s", name, why);
+    sl_lod_model m;
+    sl_error err;
+    sl_error_init(&err);
+    int loaded = sl_lod_model_parse(data, size, name, &m, &err) == 0;
+    if (loaded)
+        sl_lod_model_release(&m);
+    counts[loaded ? 0 : 1]++;
+    /* The seeds are models as built: they must load, or the replay tests refusals only. */
+    if (!strncmp(name, "tiny-", 5)) {
+        CHECK_MSG(loaded, "seed %s refused: %s", name, err.message);
+        counts[2]++;
+    }
+}
+
+/* Replays every file of tests/fuzz/corpus/SUB, each in a buffer of exactly its size. */
+static void replay_corpus(const char *sub, replay_fn *replay, int counts[3])
+{
+    char rel[64], dir[1024], path[1400];
+    snprintf(rel, sizeof rel, "tests/fuzz/corpus/%s", sub);
+    check_source_path(rel, dir, sizeof dir);
     DIR *d = opendir(dir);
     CHECK_MSG(d != NULL, "no corpus at %s", dir);
-    int read_ok = 0, rejected = 0;
     for (struct dirent *e; d && (e = readdir(d));) {
         if (e->d_name[0] == '.')
             continue;
         snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-        replay(path, e->d_name, &read_ok, &rejected);
+        size_t size = 0;
+        unsigned char *data = slurp(path, &size);
+        CHECK_MSG(data != NULL, "cannot read %s", path);
+        if (data)
+            replay(data, size, e->d_name, counts);
+        free(data);
     }
     if (d)
         closedir(d);
-    printf("corpus: %d read, %d rejected\n", read_ok, rejected);
-    CHECK(read_ok > 20 && rejected > 20);
+    printf("%s corpus: %d loaded, %d refused\n", sub, counts[0], counts[1]);
+}
+
+int main(void)
+{
+    int ply[3] = {0, 0, 0}, slod[3] = {0, 0, 0};
+    replay_corpus("ply", replay_ply, ply);
+    CHECK(ply[0] > 20 && ply[1] > 20);
+    replay_corpus("slod", replay_slod, slod);
+    CHECK_MSG(slod[2] == 3 && slod[1] >= 1, "slod corpus: %d seeds, %d refused", slod[2], slod[1]);
     return check_report();
 }

@@ -9,6 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "pipeline/artifact.h"
 #include "runtime/lod_io.h"
 #include "stages/merge/merge.h"
 #include "stages/priority/priority.h"
@@ -30,6 +31,23 @@ static double torus_sdf(const double p[3])
 {
     double q = sqrt(p[0] * p[0] + p[1] * p[1]) - 9.0;
     return sqrt(q * q + p[2] * p[2]) - 3.4;
+}
+
+/* Small shapes for the fuzz seeds: models of a few kilobytes. */
+static double sphere_sdf(const double p[3])
+{
+    return sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 3.3;
+}
+
+static double tiny_sphere_sdf(const double p[3])
+{
+    return sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1.7;
+}
+
+static double small_torus_sdf(const double p[3])
+{
+    double q = sqrt(p[0] * p[0] + p[1] * p[1]) - 4.0;
+    return sqrt(q * q + p[2] * p[2]) - 1.6;
 }
 
 static int build_model(sdf_fn sdf, int n, sl_priority_metric metric, sl_lod_model *m)
@@ -347,8 +365,46 @@ static void test_model(sdf_fn sdf, int n, sl_priority_metric metric, const char 
     sl_lod_model_release(&m);
 }
 
+/* With SCANLOD_SLOD_SEED_DIR=dir, writes the bodies (the .slod after its 32-byte
+ * envelope) of small models under every metric there: the seeds of the fuzz target
+ * (tests/fuzz/README.md). */
+static void write_fuzz_seeds(const char *dir)
+{
+    sdf_fn shapes[] = {tiny_sphere_sdf, sphere_sdf, small_torus_sdf};
+    const char *names[] = {"tiny", "sphere", "torus"};
+    int sizes[] = {3, 5, 7};
+    for (int s = 0; s < 3; s++)
+        for (int metric = SL_PRIORITY_ERROR; metric <= SL_PRIORITY_AREA; metric++) {
+            sl_lod_model m;
+            char path[1200], seed[1200];
+            snprintf(path, sizeof path, "%s/%s-%s.slod", dir, names[s],
+                     sl_priority_metric_name((sl_priority_metric)metric));
+            snprintf(seed, sizeof seed, "%s/%s-%s", dir, names[s],
+                     sl_priority_metric_name((sl_priority_metric)metric));
+            sl_error err;
+            sl_error_init(&err);
+            CHECK(build_model(shapes[s], sizes[s], (sl_priority_metric)metric, &m) == 0);
+            CHECK(sl_lod_model_write(path, &m, 1, &err) == 0);
+            sl_lod_model_release(&m);
+            FILE *in = fopen(path, "rb"), *out = fopen(seed, "wb");
+            CHECK(in && out && fseek(in, SL_ARTIFACT_HEADER_SIZE, SEEK_SET) == 0);
+            for (int c; in && out && (c = fgetc(in)) != EOF;)
+                fputc(c, out);
+            if (in)
+                fclose(in);
+            if (out)
+                fclose(out);
+            unlink(path);
+        }
+}
+
 int main(void)
 {
+    const char *seed_dir = getenv("SCANLOD_SLOD_SEED_DIR");
+    if (seed_dir && seed_dir[0]) {
+        write_fuzz_seeds(seed_dir);
+        return check_report();
+    }
     for (int metric = SL_PRIORITY_ERROR; metric <= SL_PRIORITY_AREA; metric++) {
         test_model(blob_sdf, 13, (sl_priority_metric)metric, "blob");
         test_model(torus_sdf, 14, (sl_priority_metric)metric, "torus");

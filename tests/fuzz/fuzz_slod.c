@@ -1,0 +1,189 @@
+/* libFuzzer target for the LOD model reader and generation (build: -DSCANLOD_FUZZ=ON with
+ * clang; see tests/fuzz/CMakeLists.txt). Inputs are .slod bodies, after the envelope, so
+ * mutations reach the structural checks instead of stopping at the checksum: a checksum
+ * proves a file intact, not that whoever wrote it meant well (a viewer opens files it is
+ * handed). Crashes, sanitizer reports, leaks, hangs and broken promises
+ * (slod_promises.h) are findings.
+ *
+ * Byte mutations alone rarely get past the reader's checks (a flipped parent link or
+ * child range is refused at once), so two mutations in three are made in the body's own
+ * terms (docs/formats.md): the LOD array reordered, table entries, transition record
+ * bits, neighbour masks and indices, crossing ids and positions, corner signs with their
+ * edge mask recomputed. They keep the counts the reader checks and change what it trusts.
+ */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pipeline/artifact.h"
+#include "runtime/mc_cube.h"
+#include "tests/fuzz/slod_promises.h"
+
+size_t LLVMFuzzerMutate(uint8_t *data, size_t size, size_t max_size);
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    const char *why = slod_body_broken(data, size);
+    if (why) {
+        fprintf(stderr, "broken promise: %s\n", why);
+        abort();
+    }
+    return 0;
+}
+
+/* Byte offsets of the body's sections (0 where the body is too short to hold them). */
+typedef struct body_layout {
+    uint64_t n, cc, e, nbc, tc;
+    size_t nodes, node_crossings, ncc, positions;
+    size_t lod_array, accumulation, error_after, nb_mask, nb_index, tr_base, tr_words;
+} body_layout;
+
+#define OCTREE_HEADER 272
+#define LOD_HEADER 24
+
+static int layout_of(const uint8_t *d, size_t size, body_layout *l)
+{
+    if (size < OCTREE_HEADER)
+        return -1;
+    l->n = sl_get_u32(d + 4);
+    l->cc = sl_get_u32(d + 8);
+    uint64_t colour = sl_get_u32(d + 12) ? 4 : 0;
+    l->ncc = sl_get_u64(d + 16);
+    if (l->ncc > size || l->n > size)
+        return -1;
+    l->nodes = OCTREE_HEADER;
+    l->node_crossings = l->nodes + 32 * l->n;
+    l->positions = l->node_crossings + 4 * l->ncc;
+    size_t lod = l->positions + (12 + colour) * l->cc;
+    if (lod + LOD_HEADER > size)
+        return -1;
+    l->e = sl_get_u32(d + lod);
+    l->nbc = sl_get_u64(d + lod + 8);
+    l->tc = sl_get_u64(d + lod + 16);
+    if (l->e > size || l->nbc > size || l->tc > size)
+        return -1;
+    l->lod_array = lod + LOD_HEADER;
+    l->accumulation = l->lod_array + 4 * l->e;
+    l->error_after = l->accumulation + 8 * (l->e + 1);
+    l->nb_mask = l->error_after + 4 * (l->e + 1);
+    l->nb_index = l->nb_mask + 8 * l->n;
+    l->tr_base = l->nb_index + 4 * l->nbc;
+    l->tr_words = l->tr_base + 4 * l->n;
+    return l->tr_words + 4 * l->tc == size && l->n && l->cc ? 0 : -1;
+}
+
+static uint64_t next(uint64_t *s)
+{
+    *s ^= *s << 13;
+    *s ^= *s >> 7;
+    *s ^= *s << 17;
+    return *s;
+}
+
+static uint32_t get32(const uint8_t *d, size_t at) { return sl_get_u32(d + at); }
+static void put32(uint8_t *d, size_t at, uint32_t v) { sl_put_u32(d + at, v); }
+
+/* A node with a transition record, or SL_OCTREE_NONE after a few misses. */
+static uint32_t node_with_record(const uint8_t *d, const body_layout *l, uint64_t *s)
+{
+    for (int tries = 0; tries < 32; tries++) {
+        uint32_t node = (uint32_t)(next(s) % l->n), base = get32(d, l->tr_base + 4 * node);
+        if (base != SL_OCTREE_NONE && (uint64_t)base + 3 <= l->tc)
+            return base;
+    }
+    return SL_OCTREE_NONE;
+}
+
+static void mutate_in_terms(uint8_t *d, const body_layout *l, uint64_t *s)
+{
+    uint64_t r = next(s);
+    switch (r % 10) {
+    case 0: /* two nearby LOD array entries swapped */
+        if (l->e >= 2) {
+            uint64_t i = next(s) % (l->e - 1), j = i + 1 + next(s) % 8;
+            j = j < l->e ? j : l->e - 1;
+            uint32_t a = get32(d, l->lod_array + 4 * i);
+            put32(d, l->lod_array + 4 * i, get32(d, l->lod_array + 4 * j));
+            put32(d, l->lod_array + 4 * j, a);
+        }
+        break;
+    case 1: { /* an accumulation entry anywhere within the reader's bound */
+        uint64_t i = next(s) % (l->e + 1);
+        sl_put_u64(d + l->accumulation + 8 * i, next(s) % (64 * (1 + 7 * i) + 1));
+        break;
+    }
+    case 2: { /* midpoint / centre sign and known bits of a transition record */
+        uint32_t w = node_with_record(d, l, s);
+        if (w != SL_OCTREE_NONE) {
+            size_t at = l->tr_words + 4 * (size_t)w;
+            put32(d, at, get32(d, at) ^ (uint32_t)(1u << (next(s) % 30)));
+            put32(d, at + 4, get32(d, at + 4) ^ (uint32_t)(next(s) % 64) << 24);
+        }
+        break;
+    }
+    case 3: { /* one half-edge (or spoke) crossing moved to another slot: same count */
+        uint32_t w = node_with_record(d, l, s);
+        if (w != SL_OCTREE_NONE) {
+            size_t at = l->tr_words + 4 * ((size_t)w + 1 + next(s) % 2);
+            uint32_t v = get32(d, at), mask = v & 0xffffff;
+            uint32_t on = (uint32_t)(next(s) % 24), off = (uint32_t)(next(s) % 24);
+            if ((mask >> on & 1) && !(mask >> off & 1))
+                put32(d, at, v ^ (1u << on) ^ (1u << off));
+        }
+        break;
+    }
+    case 4: /* a node's or a record's crossing id: another valid crossing */
+        if (l->ncc && next(s) % 2)
+            put32(d, l->node_crossings + 4 * (next(s) % l->ncc), (uint32_t)(next(s) % l->cc));
+        else if (l->tc)
+            put32(d, l->tr_words + 4 * (next(s) % l->tc), (uint32_t)(next(s) % l->cc));
+        break;
+    case 5: { /* a neighbour direction added or dropped (the reader checks only ranges) */
+        size_t at = l->nb_mask + 4 * (next(s) % l->n);
+        uint32_t bit = (uint32_t)(next(s) % 27);
+        if (bit != 13)
+            put32(d, at, get32(d, at) ^ (1u << bit));
+        break;
+    }
+    case 6: /* a neighbour: another node */
+        if (l->nbc)
+            put32(d, l->nb_index + 4 * (next(s) % l->nbc), (uint32_t)(next(s) % l->n));
+        break;
+    case 7: { /* a corner sign flipped, the edge mask kept consistent */
+        uint8_t *node = d + l->nodes + 32 * (next(s) % l->n);
+        node[13] ^= (uint8_t)(1u << (next(s) % 8));
+        uint16_t mask = 0;
+        for (int e = 0; e < 12; e++)
+            mask |= (uint16_t)(((node[13] >> sl_mc_edge_c0(e)) ^ (node[13] >> sl_mc_edge_c1(e))) & 1)
+                    << e;
+        node[28] = (uint8_t)mask;
+        node[29] = (uint8_t)(mask >> 8);
+        break;
+    }
+    case 8: { /* a crossing coordinate: extreme, tiny or another crossing's */
+        static const float values[] = {0.0f, 1e30f, -1e30f, 3.4e38f, 1e-40f, -1e-7f};
+        size_t at = l->positions + 4 * (next(s) % (3 * l->cc));
+        float v = values[next(s) % 6];
+        memcpy(d + at, &v, 4);
+        break;
+    }
+    default: { /* an error_after entry, negative or huge */
+        static const float values[] = {-1.0f, 0.0f, 1e30f, 3.4e38f};
+        float v = values[next(s) % 4];
+        memcpy(d + l->error_after + 4 * (next(s) % (l->e + 1)), &v, 4);
+        break;
+    }
+    }
+}
+
+size_t LLVMFuzzerCustomMutator(uint8_t *data, size_t size, size_t max_size, unsigned int seed)
+{
+    uint64_t s = (uint64_t)seed * 0x9e3779b97f4a7c15ull + 1;
+    body_layout l;
+    if (next(&s) % 3 == 0 || layout_of(data, size, &l) != 0)
+        return LLVMFuzzerMutate(data, size, max_size);
+    for (uint64_t i = 0, count = 1 + next(&s) % 3; i < count; i++)
+        mutate_in_terms(data, &l, &s);
+    return size;
+}

@@ -1,0 +1,103 @@
+/* What the LOD model reader promises for any body (docs/formats.md, model.slod), checked
+ * by the libFuzzer target (fuzz_slod.c) and by the corpus replay in every ctest run
+ * (tests/unit/test_fuzz_corpus.c): either one SL_E_CORRUPT/SL_E_NOMEM error with a message
+ * naming the file and nothing left allocated, or a model from which every lookup and every
+ * generation below stays in bounds: meshes whose indices name their own vertices and whose
+ * positions are finite, both through the allocating path and into buffers sized by the
+ * accumulation table (which a hostile table may make too small: that must fail, not
+ * overflow). Returns 0 if the promise held; `why` gets the broken one.
+ */
+#ifndef SCANLOD_TESTS_FUZZ_SLOD_PROMISES_H
+#define SCANLOD_TESTS_FUZZ_SLOD_PROMISES_H
+
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "runtime/lod_io.h"
+
+static const char *slod_mesh_broken(const sl_lod_mesh *mesh)
+{
+    if ((mesh->vertex_count && (!mesh->positions || !mesh->normals)) ||
+        (mesh->triangle_count && !mesh->indices))
+        return "mesh arrays missing";
+    for (uint64_t i = 0; i < 3 * mesh->triangle_count; i++)
+        if (mesh->indices[i] >= mesh->vertex_count)
+            return "index out of range";
+    for (uint64_t i = 0; i < 3 * mesh->vertex_count; i++)
+        if (!isfinite(mesh->positions[i]) || !isfinite(mesh->normals[i]))
+            return "non-finite vertex";
+    return NULL;
+}
+
+/* Generates level k both ways; returns the broken promise or NULL. */
+static const char *slod_level_broken(sl_lod_model *m, uint32_t k)
+{
+    sl_lod_mesh mesh;
+    uint64_t cracks = 0;
+    if (sl_lod_generate(m, k, &mesh, &cracks) != 0)
+        return NULL; /* out of memory is an allowed outcome */
+    const char *why = slod_mesh_broken(&mesh);
+    uint64_t triangles = mesh.triangle_count;
+    sl_lod_mesh_release(&mesh);
+    if (why)
+        return why;
+    /* Into buffers of the table's size, as scanlod_extract does: exactly the allocating
+     * path's mesh when the table is right, a clean failure when it is short. */
+    uint64_t cap_t = m->accumulation[k], cap_v = 3 * cap_t;
+    float *positions = malloc(cap_v * 12 + 1), *normals = malloc(cap_v * 12 + 1);
+    uint8_t *colors = malloc(cap_v * 4 + 1);
+    uint32_t *indices = malloc(cap_t * 12 + 1);
+    sl_lod_mesh into = {0, 0, positions, normals, colors, indices};
+    if (positions && normals && colors && indices) {
+        int rc = sl_lod_generate_into(m, k, &into, cap_v, cap_t, NULL);
+        if (rc == 0 && (into.triangle_count != triangles || triangles > cap_t))
+            why = "buffered generation differs from the allocating one";
+        else if (rc == 0)
+            why = slod_mesh_broken(&into);
+        else if (triangles <= cap_t)
+            why = "buffered generation failed although the table's size fits";
+    }
+    free(positions); /* the generation sets colors NULL for a model without colours */
+    free(normals);
+    free(colors);
+    free(indices);
+    return why;
+}
+
+static const char *slod_body_broken(const unsigned char *body, size_t size)
+{
+    sl_lod_model m;
+    sl_error err;
+    sl_error_init(&err);
+    int rc = sl_lod_model_parse(body, size, "fuzz.slod", &m, &err);
+    if (rc) {
+        if (rc != err.code || (rc != SL_E_CORRUPT && rc != SL_E_NOMEM) || !err.message[0] ||
+            strcmp(err.file, "fuzz.slod") != 0)
+            return "a refusal that is not one corrupt/out-of-memory error naming the file";
+        if (m.tree.nodes || m.lod_array || m.cells)
+            return "a refused model left arrays behind";
+        return NULL;
+    }
+    uint32_t e = m.expansion_count;
+    uint32_t ks[] = {0, 1, e / 3, e / 2, e > 0 ? e - 1 : 0, e,
+                     sl_lod_expansions_for_triangles(&m, m.accumulation[e] / 2 + 1),
+                     sl_lod_expansions_for_percent(&m, 40),
+                     sl_lod_expansions_for_error(&m, m.error_after[e / 2])};
+    const char *why = NULL;
+    for (size_t i = 0; i < sizeof ks / sizeof ks[0] && !why; i++)
+        why = ks[i] > e ? "a lookup past the last expansion" : slod_level_broken(&m, ks[i]);
+    /* The octree alone, as `extract --level` uses a merge stage's octree.slot. */
+    for (uint32_t level = 0; level <= m.tree.depth && !why; level++) {
+        sl_lod_mesh mesh;
+        if (sl_octree_level_mesh(&m.tree, level, &mesh) == 0) {
+            why = slod_mesh_broken(&mesh);
+            sl_lod_mesh_release(&mesh);
+        }
+    }
+    sl_lod_model_release(&m);
+    return why;
+}
+
+#endif
