@@ -2,6 +2,7 @@
 #include "runtime/octree_io.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -144,15 +145,22 @@ static int validate(const sl_octree *t, const char *name, sl_error *err)
     for (uint64_t i = 0; i < t->node_crossing_count; i++)
         if (t->node_crossings[i] >= t->crossing_count)
             return bad(err, name, "crossing id out of range");
-    /* Crossings lie on cube edges, so inside the root's cube (a leaf of slack for
-     * rounding). */
-    const double corner[3] = {t->nodes[0].x * root, t->nodes[0].y * root, t->nodes[0].z * root};
+    /* Crossings lie on cube edges, so inside the root's cube, give or take their rounding
+     * to float (a scan far from the origin with a fine grid rounds by more than a leaf). */
+    const int32_t corner[3] = {t->nodes[0].x, t->nodes[0].y, t->nodes[0].z};
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = t->origin[a] + corner[a] * root;
+        hi[a] = lo[a] + root;
+        double slack = t->leaf_size + 2 * FLT_EPSILON * fmax(fabs(lo[a]), fabs(hi[a]));
+        lo[a] -= slack;
+        hi[a] += slack;
+    }
     for (uint64_t i = 0; i < 3 * (uint64_t)t->crossing_count; i++) {
-        double v = t->crossing_position[i],
-               lo = t->origin[i % 3] + corner[i % 3] - t->leaf_size;
-        if (!isfinite(t->crossing_position[i]))
+        double v = t->crossing_position[i];
+        if (!isfinite(v))
             return bad(err, name, "non-finite crossing position");
-        if (!(v >= lo && v <= lo + root + 2 * t->leaf_size))
+        if (!(v >= lo[i % 3] && v <= hi[i % 3]))
             return bad(err, name, "crossing outside the octree's cube");
     }
     return 0;
