@@ -90,7 +90,8 @@ if git("status", "--porcelain", "--untracked-files=no"):
     commit += " (with uncommitted changes)"
 reruns = json.load(open(reruns_path)) if os.path.exists(reruns_path) else []
 reruns.append({"phases": phases.split(), "commit": commit, "date":
-               datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")})
+               datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+               "load": os.getloadavg()[0]})
 json.dump(reruns, open(reruns_path, "w"), indent=1)
 EOF2
   run_phases "$resume" rerun

@@ -9,7 +9,8 @@
  * child range is refused at once), so two mutations in three are made in the body's own
  * terms (docs/formats.md): the LOD array reordered, table entries, transition record
  * bits, neighbour masks and indices, crossing ids and positions, corner signs with their
- * edge mask recomputed. They keep the counts the reader checks and change what it trusts.
+ * edge mask recomputed, the grid's leaf size and origin. They keep the counts the reader
+ * checks and change what it trusts.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -98,7 +99,7 @@ static uint32_t node_with_record(const uint8_t *d, const body_layout *l, uint64_
 static void mutate_in_terms(uint8_t *d, const body_layout *l, uint64_t *s)
 {
     uint64_t r = next(s);
-    switch (r % 10) {
+    switch (r % 11) {
     case 0: /* two nearby LOD array entries swapped */
         if (l->e >= 2) {
             uint64_t i = next(s) % (l->e - 1), j = i + 1 + next(s) % 8;
@@ -153,10 +154,9 @@ static void mutate_in_terms(uint8_t *d, const body_layout *l, uint64_t *s)
     case 7: { /* a corner sign flipped, the edge mask kept consistent */
         uint8_t *node = d + l->nodes + 32 * (next(s) % l->n);
         node[13] ^= (uint8_t)(1u << (next(s) % 8));
-        uint16_t mask = 0;
+        unsigned inside = node[13], mask = 0;
         for (int e = 0; e < 12; e++)
-            mask |= (uint16_t)(((node[13] >> sl_mc_edge_c0(e)) ^ (node[13] >> sl_mc_edge_c1(e))) & 1)
-                    << e;
+            mask |= (((inside >> sl_mc_edge_c0(e)) ^ (inside >> sl_mc_edge_c1(e))) & 1u) << e;
         node[28] = (uint8_t)mask;
         node[29] = (uint8_t)(mask >> 8);
         break;
@@ -166,6 +166,12 @@ static void mutate_in_terms(uint8_t *d, const body_layout *l, uint64_t *s)
         size_t at = l->positions + 4 * (next(s) % (3 * l->cc));
         float v = values[next(s) % 6];
         memcpy(d + at, &v, 4);
+        break;
+    }
+    case 9: { /* the grid: leaf size or an origin coordinate, extreme or tiny */
+        static const double values[] = {1e-300, 1e-9, 1e14, 1e16, -1e16, 0.0};
+        double v = values[next(s) % 6];
+        memcpy(d + 24 + 8 * (next(s) % 4), &v, 8); /* leaf size, then origin x, y, z */
         break;
     }
     default: { /* an error_after entry, negative or huge */

@@ -72,8 +72,10 @@ def section_machine(out, mach, results):
         ["load average", "%.1f at the start, %s at the end (1 min; other jobs shared the "
                          "machine when this exceeds the thread count)"
          % (mach["load_start"][0], load_end(results))],
-    ] + [["rerun", "phases %s at commit %s, %s (`run.sh --resume`)"
-          % (", ".join(r["phases"]), r["commit"], r["date"])] for r in reruns(results)])
+    ] + [["rerun", "phases %s at commit %s, %s (`run.sh --resume`)%s"
+          % (", ".join(r["phases"]), r["commit"], r["date"],
+             "; load average %.2g at its start" % r["load"] if "load" in r else "")]
+         for r in reruns(results)])
 
 
 def section_inputs(out, models):
