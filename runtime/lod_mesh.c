@@ -237,15 +237,21 @@ void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
     b->mesh.triangle_count += tri->count;
 }
 
-static void compute_normals(sl_lod_mesh *m)
+/* Area-weighted vertex normals. The edges are scaled by the power of two nearest the root
+ * cube's size, which changes no bit of the result (every product and sum scales exactly)
+ * but keeps the sums finite however many triangles meet at a vertex and however large the
+ * model's coordinates (the octree readers bound them; a file can still make one crossing
+ * the corner of millions of triangles). */
+static void compute_normals(sl_lod_mesh *m, const sl_octree *tree)
 {
+    const float scale = ldexpf(1.0f, -ilogb(ldexp(tree->leaf_size, (int)tree->depth)));
     memset(m->normals, 0, (size_t)m->vertex_count * 3 * sizeof(float));
     for (uint64_t t = 0; t < m->triangle_count; t++) {
         const uint32_t *i = m->indices + 3 * t;
         const float *p0 = m->positions + 3 * (size_t)i[0], *p1 = m->positions + 3 * (size_t)i[1],
                     *p2 = m->positions + 3 * (size_t)i[2];
-        float u[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-        float v[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+        float u[3] = {(p1[0] - p0[0]) * scale, (p1[1] - p0[1]) * scale, (p1[2] - p0[2]) * scale};
+        float v[3] = {(p2[0] - p0[0]) * scale, (p2[1] - p0[1]) * scale, (p2[2] - p0[2]) * scale};
         float n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
         for (int k = 0; k < 3; k++)
             for (int a = 0; a < 3; a++)
@@ -253,7 +259,6 @@ static void compute_normals(sl_lod_mesh *m)
     }
     for (uint64_t v = 0; v < m->vertex_count; v++) {
         float *n = m->normals + 3 * v;
-        /* In double: the squares of a large model's area-weighted sums overflow a float. */
         double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] + (double)n[2] * n[2]);
         if (len > 0)
             for (int a = 0; a < 3; a++)
@@ -293,7 +298,7 @@ int sl_mesh_builder_finish(sl_mesh_builder *b, sl_lod_mesh *out)
             b->failed = 1;
     }
     if (!b->failed && m->normals)
-        compute_normals(m);
+        compute_normals(m, b->tree);
     builder_end(b, b->failed);
     if (b->failed) {
         memset(m, 0, sizeof *m);

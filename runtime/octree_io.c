@@ -82,18 +82,32 @@ static uint16_t sign_change_edges(uint8_t inside)
     return mask;
 }
 
+int sl_octree_grid_ok(const sl_octree *t)
+{
+    const double limit = SL_OCTREE_MAX_EXTENT;
+    if (!(t->leaf_size > 0) || !isfinite(t->leaf_size) || t->depth >= SL_OCTREE_MAX_LEVELS ||
+        t->node_count == 0)
+        return 0;
+    double root = ldexp(t->leaf_size, (int)t->depth);
+    const int32_t corner[3] = {t->nodes[0].x, t->nodes[0].y, t->nodes[0].z};
+    for (int a = 0; a < 3; a++) {
+        double lo = t->origin[a] + corner[a] * root;
+        if (!(fabs(t->origin[a]) <= limit) || !(root <= limit) || !(fabs(lo) <= 2 * limit) ||
+            !(fabs(lo + root) <= 2 * limit))
+            return 0;
+    }
+    return 1;
+}
+
 /* Every index in range, levels consistent, the tree a tree: nothing downstream
  * re-checks, so a file with a valid checksum but hostile contents stops here. */
 static int validate(const sl_octree *t, const char *name, sl_error *err)
 {
     if (t->depth >= SL_OCTREE_MAX_LEVELS || !(t->leaf_size > 0) || !isfinite(t->leaf_size))
         return bad(err, name, "depth or leaf size out of range");
-    /* Coordinates any scan has (a root cube of 1e15 units is a light-year in millimetres)
-     * keep every product generation forms finite: normals are cross products of edges. */
+    if (!sl_octree_grid_ok(t))
+        return bad(err, name, "grid origin or extent out of range");
     double root = ldexp(t->leaf_size, (int)t->depth);
-    for (int a = 0; a < 3; a++)
-        if (!(fabs(t->origin[a]) <= SL_OCTREE_MAX_EXTENT) || root > SL_OCTREE_MAX_EXTENT)
-            return bad(err, name, "grid origin or extent out of range");
     uint64_t sum = 0;
     for (uint32_t l = 0; l < SL_OCTREE_MAX_LEVELS; l++) {
         if (l > t->depth && t->level_count[l])

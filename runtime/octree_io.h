@@ -24,8 +24,14 @@
 #define SL_OCTREE_MAGIC "SLOCTREE"
 #define SL_OCTREE_FORMAT_VERSION 1u
 #define SL_OCTREE_PARTS 5
-/* Largest |origin| and root cube edge a file may declare (world units). */
+/* Largest |origin| and root cube edge a file may declare (world units); the root cube
+ * itself must lie within twice that of zero. Coordinates any scan has (1e15 units is a
+ * light-year in millimetres) keep every product generation forms finite. */
 #define SL_OCTREE_MAX_EXTENT 1e15
+/* Whether the octree's grid (leaf size, depth, origin, the root node's cube) is within
+ * those limits: the readers refuse a file whose grid is not, so the merge stage checks it
+ * before writing one. Needs the root node (nodes[0]). */
+int sl_octree_grid_ok(const sl_octree *t);
 
 /* Describes the octree as artifact parts (pointing into `t` and `header`, which must
  * outlive the write). Returns the number of parts used. */

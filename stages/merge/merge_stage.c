@@ -9,7 +9,10 @@
 #include "stages/merge/merge.h"
 #include "stages/samples/samples.h"
 
-#define MERGE_STAGE_VERSION 1u
+/* 2: refuses an octree whose grid its readers would refuse (SL_OCTREE_MAX_EXTENT), so a
+ * work folder holding such an octree from version 1 rebuilds it and quarantines the item
+ * instead of failing at the next stage on every run. */
+#define MERGE_STAGE_VERSION 2u
 
 typedef struct merge_config {
     int64_t max_samples;

@@ -24,6 +24,7 @@
 #include <string.h>
 
 #include "runtime/mc_cube.h"
+#include "runtime/octree_io.h"
 #include "stages/merge/key_table.h"
 #include "stages/merge/merge_internal.h"
 
@@ -485,6 +486,13 @@ int sl_octree_build(const sl_sample_grid *samples, sl_octree *out, sl_progress *
     }
     if (rc == 0)
         rc = assemble(&b, levels, depth, out);
+    if (rc == 0 && !sl_octree_grid_ok(out))
+        rc = sl_error_set(err, SL_E_BADINPUT, 0, NULL,
+                          "the octree's grid (leaf %g, %u levels, origin %g %g %g) reaches "
+                          "beyond %g units, which readers refuse: rescale the scan, move it "
+                          "nearer the origin or choose a smaller leaf",
+                          out->leaf_size, depth + 1, out->origin[0], out->origin[1],
+                          out->origin[2], SL_OCTREE_MAX_EXTENT);
     for (uint32_t l = 0; l < SL_OCTREE_MAX_LEVELS; l++)
         level_release(&levels[l]);
     free(b.crossings.position);

@@ -51,6 +51,18 @@ cp "$SCANS/cow.ply" "$in/bad/truncated.ply"
 run_scanlod run "$TMP/c.ini" -q
 check "repaired input is rebuilt and published" [ -f "$TMP/out/bad/truncated/report.json" ]
 
+# Within the range stage's limit, but a leaf this coarse makes an octree grid beyond what
+# the readers take: the merge stage quarantines it rather than write a file the next
+# stage would refuse on every run.
+mkdir -p "$TMP/far"
+printf 'ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\nelement face 8\nproperty list uchar int vertex_indices\nend_header\n6e13 0 0\n-6e13 0 0\n0 6e13 0\n0 -6e13 0\n0 0 6e13\n0 0 -6e13\n3 0 2 4\n3 2 1 4\n3 1 3 4\n3 3 0 4\n3 2 0 5\n3 1 2 5\n3 3 1 5\n3 0 3 5\n' >"$TMP/far/octahedron.ply"
+write_config "$TMP/far.ini" "$TMP/far" "$TMP/wfar" "$TMP/ofar" '[octree]' 'leaf_size = 4e13' '[samples]' 'band = 8'
+run_scanlod run "$TMP/far.ini"
+check "coarse grid beyond the readers' limit: exit 65 (got $rc)" [ "$rc" -eq 65 ]
+check "merge quarantines it with the cause (got: $err)" grep -q "\[merge\] octahedron: quarantined: .*reaches beyond" <<<"$err"
+run_scanlod run "$TMP/far.ini" -q
+check "and does not retry it (got $rc: $out)" grep -q "^nothing to do" <<<"$out"
+
 # Bad config: unknown key -> exit 78 with file:line.
 printf '[run]\ninput = %s\nwork = %s\noutput = %s\n[range]\nno_such_key = 1\n' "$in" "$TMP/w2" "$TMP/o2" >"$TMP/bad.ini"
 run_scanlod run "$TMP/bad.ini"

@@ -33,7 +33,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     return 0;
 }
 
-/* Byte offsets of the body's sections (0 where the body is too short to hold them). */
+/* Counts and byte offsets of the body's sections (layout_of fails when the body does not
+ * hold them exactly). */
 typedef struct body_layout {
     uint64_t n, cc, e, nbc, tc;
     size_t nodes, node_crossings, ncc, positions;
