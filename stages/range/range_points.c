@@ -71,9 +71,11 @@ static int check_usable(const sl_range_config *cfg, const sl_mesh *mesh,
     return SL_OK;
 }
 
-/* Refused here, not three stages later: the octree's grid (its origin and a root cube of
- * a power of two leaves around the padded box) must stay within SL_OCTREE_MAX_EXTENT,
- * which the octree readers enforce (docs/formats.md), and a sixteenth of it leaves room. */
+/* The octree's grid (its origin and a root cube of a power of two leaves around the padded
+ * box) must stay within SL_OCTREE_MAX_EXTENT, which the octree readers enforce
+ * (docs/formats.md). Coordinates beyond a sixteenth of it are refused here, at once and
+ * in the scan's own terms; the merge stage checks the grid it actually derives (a very
+ * coarse leaf can still take a scan within this beyond the limit). */
 #define RANGE_MAX_COORDINATE (SL_OCTREE_MAX_EXTENT / 16)
 
 static int check_extent(const float lo[3], const float hi[3], sl_error *err)
