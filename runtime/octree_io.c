@@ -82,20 +82,29 @@ static uint16_t sign_change_edges(uint8_t inside)
     return mask;
 }
 
+/* The root node's cube in world coordinates (needs a valid leaf size and depth). */
+static void root_cube(const sl_octree *t, double lo[3], double hi[3])
+{
+    double root = ldexp(t->leaf_size, (int)t->depth);
+    const int32_t corner[3] = {t->nodes[0].x, t->nodes[0].y, t->nodes[0].z};
+    for (int a = 0; a < 3; a++) {
+        lo[a] = t->origin[a] + corner[a] * root;
+        hi[a] = lo[a] + root;
+    }
+}
+
 int sl_octree_grid_ok(const sl_octree *t)
 {
     const double limit = SL_OCTREE_MAX_EXTENT;
     if (!(t->leaf_size > 0) || !isfinite(t->leaf_size) || t->depth >= SL_OCTREE_MAX_LEVELS ||
-        t->node_count == 0)
+        t->node_count == 0 || !(ldexp(t->leaf_size, (int)t->depth) <= limit))
         return 0;
-    double root = ldexp(t->leaf_size, (int)t->depth);
-    const int32_t corner[3] = {t->nodes[0].x, t->nodes[0].y, t->nodes[0].z};
-    for (int a = 0; a < 3; a++) {
-        double lo = t->origin[a] + corner[a] * root;
-        if (!(fabs(t->origin[a]) <= limit) || !(root <= limit) || !(fabs(lo) <= 2 * limit) ||
-            !(fabs(lo + root) <= 2 * limit))
+    double lo[3], hi[3];
+    root_cube(t, lo, hi);
+    for (int a = 0; a < 3; a++)
+        if (!(fabs(t->origin[a]) <= limit) || !(fabs(lo[a]) <= 2 * limit) ||
+            !(fabs(hi[a]) <= 2 * limit))
             return 0;
-    }
     return 1;
 }
 
@@ -107,7 +116,6 @@ static int validate(const sl_octree *t, const char *name, sl_error *err)
         return bad(err, name, "depth or leaf size out of range");
     if (!sl_octree_grid_ok(t))
         return bad(err, name, "grid origin or extent out of range");
-    double root = ldexp(t->leaf_size, (int)t->depth);
     uint64_t sum = 0;
     for (uint32_t l = 0; l < SL_OCTREE_MAX_LEVELS; l++) {
         if (l > t->depth && t->level_count[l])
@@ -161,11 +169,9 @@ static int validate(const sl_octree *t, const char *name, sl_error *err)
             return bad(err, name, "crossing id out of range");
     /* Crossings lie on cube edges, so inside the root's cube, give or take their rounding
      * to float (a scan far from the origin with a fine grid rounds by more than a leaf). */
-    const int32_t corner[3] = {t->nodes[0].x, t->nodes[0].y, t->nodes[0].z};
     double lo[3], hi[3];
+    root_cube(t, lo, hi);
     for (int a = 0; a < 3; a++) {
-        lo[a] = t->origin[a] + corner[a] * root;
-        hi[a] = lo[a] + root;
         double slack = t->leaf_size + 2 * FLT_EPSILON * fmax(fabs(lo[a]), fabs(hi[a]));
         lo[a] -= slack;
         hi[a] += slack;
