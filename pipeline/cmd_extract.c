@@ -20,7 +20,7 @@
 
 static const char usage[] =
     "usage: scanlod extract MODEL.slod (--expansions K | --triangles N | --lod-percent P |\n"
-    "                                   --max-error E) -o OUT.{ply,glb,obj} [--repeat R]\n"
+    "                                   --max-error E) -o OUT.{ply,glb,obj} [--repeat R [--hot]]\n"
     "       scanlod extract OCTREE.slot --level L -o OUT.{ply,glb,obj}\n"
     "Cuts one level of detail from a model built by `scanlod run` (published as\n"
     "OUTPUT/ITEM/model.slod): K expansions of the LOD array, the largest level within N\n"
@@ -30,13 +30,16 @@ static const char usage[] =
     "generation took (in a fresh process: the first extraction). --repeat R then times R\n"
     "more extractions of the same level into buffers allocated once, as a viewer using\n"
     "the runtime API does, each after flushing the CPU caches (a viewer renders between\n"
-    "two cuts), and prints their median and minimum (for benchmarks).\n";
+    "two cuts), and prints their median and minimum (for benchmarks). --hot times them\n"
+    "back to back instead, after one untimed extraction: the model as far into the caches\n"
+    "as its size lets it (the cost of the work itself, without a cold start).\n";
 
 typedef struct request {
     const char *input, *output;
     int kind; /* 'k' expansions, 't' triangles, 'p' percent, 'e' error, 'l' level */
     double value;
     long repeat; /* --repeat: warm extractions timed after the first */
+    int hot;     /* --hot: those back to back, caches not flushed */
 } request;
 
 /* 0; -1 when the command line is malformed (the caller prints the usage); -2 when a
@@ -79,13 +82,17 @@ static int parse(int argc, char **argv, request *r)
                         text);
                 return -2;
             }
-        }
-        else if (argv[i][0] != '-' && !r->input)
+        } else if (!strcmp(argv[i], "--hot")) {
+            r->hot = 1;
+        } else if (argv[i][0] != '-' && !r->input)
             r->input = argv[i];
         else
             return -1;
     }
-    return r->input && r->output && r->kind && !(r->repeat && r->kind == 'l') ? 0 : -1;
+    return r->input && r->output && r->kind && !(r->repeat && r->kind == 'l') &&
+                   !(r->hot && !r->repeat)
+               ? 0
+               : -1;
 }
 
 static int fail(const sl_error *err)
@@ -165,8 +172,9 @@ static size_t eviction_size(void)
 
 /* Times `repeat` extractions of level k into buffers sized once by the accumulation
  * table (sl_lod_generate_into: no allocation per extraction), each after the caches
- * were flushed. */
-static int time_warm(sl_lod_model *m, uint32_t k, long repeat, double *median, double *min)
+ * were flushed, or (`hot`) back to back after one untimed extraction. */
+static int time_warm(sl_lod_model *m, uint32_t k, long repeat, int hot, double *median,
+                     double *min)
 {
     uint64_t triangles = m->accumulation[k], vertices = 3 * triangles;
     size_t v = (size_t)(vertices ? vertices : 1), t = (size_t)(triangles ? triangles : 1);
@@ -174,12 +182,17 @@ static int time_warm(sl_lod_model *m, uint32_t k, long repeat, double *median, d
     uint8_t *colors = malloc(v * 4);
     uint32_t *indices = malloc(t * 3 * sizeof(uint32_t));
     double *times = malloc((size_t)repeat * sizeof *times);
-    size_t evict_size = eviction_size();
+    size_t evict_size = hot ? 1 : eviction_size();
     unsigned char *evict = calloc(evict_size, 1);
     int rc = positions && normals && colors && indices && times && evict ? 0 : -1;
+    if (rc == 0 && hot) {
+        sl_lod_mesh into = {0, 0, positions, normals, colors, indices};
+        rc = sl_lod_generate_into(m, k, &into, vertices, triangles, NULL);
+    }
     for (long i = 0; rc == 0 && i < repeat; i++) {
         sl_lod_mesh into = {0, 0, positions, normals, colors, indices};
-        evict_caches(evict, evict_size);
+        if (!hot)
+            evict_caches(evict, evict_size);
         struct timespec t0;
         clock_gettime(CLOCK_MONOTONIC, &t0);
         rc = sl_lod_generate_into(m, k, &into, vertices, triangles, NULL);
@@ -276,11 +289,11 @@ int sl_cmd_extract(int argc, char **argv)
              model.expansion_count, (double)model.error_after[k]);
     char warm[128] = "";
     double median = 0, min = 0;
-    if (r.repeat && time_warm(&model, k, r.repeat, &median, &min) != 0)
+    if (r.repeat && time_warm(&model, k, r.repeat, r.hot, &median, &min) != 0)
         sl_error_set(&err, SL_E_NOMEM, ENOMEM, r.input, "out of memory");
     else if (r.repeat)
-        snprintf(warm, sizeof warm, ", then %ld more in median %.7f s (min %.7f s)", r.repeat,
-                 median, min);
+        snprintf(warm, sizeof warm, ", then %ld more in median %.7f s (min %.7f s, %s)",
+                 r.repeat, median, min, r.hot ? "back to back" : "caches flushed");
     if (err.code == SL_OK && sl_export_write_mesh(r.output, &mesh, extras, &err) == 0)
         printf("expansions %u of %u: %llu triangles, %llu vertices, max error %.6g, "
                "generated in %.7f s%s -> %s\n",

@@ -69,6 +69,13 @@ check "compare reads the extracted mesh" [ "$rc" -eq 0 ]
 run_scanlod extract "$model" --triangles "$half" --repeat 3 -o "$TMP/half3.ply"
 check "extract --repeat times 3 more ($out)" contains "then 3 more in median" "$out"
 check "extract --repeat: the same mesh" cmp -s "$TMP/half.ply" "$TMP/half3.ply"
+run_scanlod extract "$model" --triangles "$half" --repeat 3 --hot -o "$TMP/half3h.ply"
+check "extract --repeat --hot times them back to back ($out)" \
+  contains "then 3 more in median" "$out"
+check "extract --hot says its regime" contains "back to back)" "$out"
+check "extract --hot: the same mesh" cmp -s "$TMP/half.ply" "$TMP/half3h.ply"
+run_scanlod extract "$model" --triangles "$half" --hot -o "$TMP/x.ply"
+check "--hot without --repeat: usage error (rc $rc)" [ "$rc" -eq 64 ]
 run_scanlod extract "$model" --triangles "$half" --repeat 0 -o "$TMP/x.ply"
 check "--repeat 0: usage error (rc $rc)" [ "$rc" -eq 64 ]
 run_scanlod extract "$model" --lod-percent 20 -o "$TMP/p20.glb"

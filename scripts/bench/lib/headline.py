@@ -109,16 +109,23 @@ def ladder(lod):
         rows, flat = stats.per_triangle([dict(x, seconds=med(x, key)) for x in r["ladder"]])
         cold, cold_flat = stats.per_triangle([dict(x, seconds=med(x, "seconds"))
                                               for x in r["ladder"]])
-        for x, orig, c in zip(rows, r["ladder"], cold):
+        hot_rows, hot_flat = stats.per_triangle([dict(x, seconds=med(x, "hot_seconds"))
+                                                 for x in r["ladder"]])
+        for x, orig, c, t in zip(rows, r["ladder"], cold, hot_rows):
             x["seconds_median"] = x["seconds"]
             x["seconds"] = orig[key]   # the summary again, for the table
             x["cold_seconds"] = orig["seconds"]
             x["cold_ns_per_triangle"] = c["ns_per_triangle"]
+            x["hot_seconds"] = orig.get("hot_seconds")
+            x["hot_ns_per_triangle"] = t["ns_per_triangle"]
             x["rate"] = 1e9 / x["ns_per_triangle"] if x["ns_per_triangle"] else None
         fit = stats.loglog_slope([x["triangles"] for x in rows],
                                  [x["seconds_median"] for x in rows])
+        hot = all(med(x, "hot_seconds") for x in r["ladder"])
         out[name] = {"rows": rows, "flatness": flat, "fit": fit, "warm": warm,
-                     "cold_flatness": cold_flat if warm else None}
+                     "cold_flatness": cold_flat if warm else None,
+                     "hot_flatness": hot_flat if hot else None,
+                     "empty_cut_seconds": med(r, "empty_cut_seconds")}
     return out
 
 
@@ -186,6 +193,17 @@ def derive(models, st, oc, lod, gr):
                                    h["ladder"].items() if v["rows"][-1]["rate"]),
                          "; the first extraction in a fresh process (cold): max/min " +
                          ", ".join(colds) if colds else ""))
+        hots = ["%s %.2f" % (n, v["hot_flatness"]) for n, v in h["ladder"].items()
+                if v.get("hot_flatness")]
+        if hots:
+            lines.append("the same cuts back to back (`--hot`: no cold start; small cuts then "
+                         "run from a core's cache, large ones from the shared cache): max/min "
+                         + ", ".join(hots) + ".")
+        empties = ["%s %.1f µs" % (n, 1e6 * v["empty_cut_seconds"])
+                   for n, v in h["ladder"].items() if v.get("empty_cut_seconds")]
+        if empties:
+            lines.append("the empty cut (no expansion, no triangle), caches flushed: the fixed "
+                         "cost of a cold start, " + ", ".join(empties) + ".")
         fits = ["%s %.2f" % (n, v["fit"]) for n, v in h["ladder"].items() if v["fit"]]
         if fits:
             lines.append("extraction time against output triangles m, fitted exponent b of "

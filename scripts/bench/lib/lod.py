@@ -14,7 +14,11 @@ Per input of ctx.lod_models, from the reference build:
   (no file writing) per call: "generated in", the first extraction in a fresh process
   (cold: lazy symbol binding, first-touch page faults of a new output), and the median of
   WARM_REPEAT more into buffers allocated once, each after a cache flush, as a viewer
-  holding a model extracts between frames (warm process, cold caches). Per repetition meshopt_simplify from the finest mesh (lod100.ply) to
+  holding a model extracts between frames (warm process, cold caches). A second call per
+  budget adds `--hot`: the same cuts back to back, the model as far into the caches as
+  its size lets it (the work itself, without a cold start). And per repetition the empty
+  cut (`--expansions 0 --repeat`, caches flushed): the fixed cost of a cold start. Per
+  repetition meshopt_simplify from the finest mesh (lod100.ply) to
   the same counts (one call per level in one process, as warm as ours), so each speed
   ratio is a pair from one repetition.
 Writes RESULTS/lod.json.
@@ -100,15 +104,20 @@ def ladder(ctx, name, m, work):
     budgets = [(p, max(1, int(round(p / 100.0 * finest)))) for p in ctx.budgets]
     runs = {p: [] for p, _ in budgets}
     warm = {p: [] for p, _ in budgets}
+    hot = {p: [] for p, _ in budgets}
     mo_runs = {p: [] for p, _ in budgets}
-    counts = {}
+    counts, empty = {}, []
+    out = os.path.join(work, "ladder.ply")
     for rep in range(ctx.extract_reps):
         for p, n in budgets:
-            e = extract(ctx, m["slod"], os.path.join(work, "ladder.ply"), "--triangles", n,
-                        "--repeat", WARM_REPEAT)
+            e = extract(ctx, m["slod"], out, "--triangles", n, "--repeat", WARM_REPEAT)
             runs[p].append(e["seconds"])
             warm[p].append(e["warm_seconds"])
             counts[p] = e["triangles"]
+            hot[p].append(extract(ctx, m["slod"], out, "--triangles", n, "--repeat",
+                                  WARM_REPEAT, "--hot")["warm_seconds"])
+        empty.append(extract(ctx, m["slod"], out, "--expansions", 0, "--repeat",
+                             WARM_REPEAT)["warm_seconds"])
         # meshopt from the finest mesh to each count below it (at the finest count it
         # would have nothing to do), paired with this repetition's extractions.
         simplify = [p for p, _ in budgets if p < 100 and counts[p] < finest]
@@ -122,11 +131,12 @@ def ladder(ctx, name, m, work):
         rows.append({"percent": p, "budget": n, "triangles": counts[p],
                      "seconds": stats.summary(runs[p]),
                      "warm_seconds": stats.summary(warm[p]),
+                     "hot_seconds": stats.summary(hot[p]),
                      "meshopt_seconds": stats.summary(mo_runs[p]),
                      "speedup": stats.summary(stats.pair_ratios(mo_runs[p], warm[p][:k])),
                      "speedup_cold": stats.summary(stats.pair_ratios(mo_runs[p], runs[p][:k]))})
     log("lod: %s extraction ladder done" % name)
-    return rows
+    return rows, stats.summary(empty)
 
 
 def main():
@@ -140,8 +150,9 @@ def main():
                                            "hausdorff", "watertight", "boundary_edges")}
                   for lv in m["levels"] if lv.get("lod_percent") is not None]
         rows, tried = equal_counts(ctx, name, m, work)
+        steps, empty = ladder(ctx, name, m, work)
         out[name] = {"table1": table1, "equal_counts": rows, "vdb_tries": tried,
-                     "ladder": ladder(ctx, name, m, work)}
+                     "ladder": steps, "empty_cut_seconds": empty}
         ctx.save("lod", out)
     ctx.save("lod", out)
 

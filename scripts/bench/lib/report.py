@@ -241,7 +241,12 @@ def section_lod(out, lod, h):
                "cache; the flatness and speed figures are judged on it). *First*: the first "
                "extraction in a fresh process (\"generated in\"), which adds lazy symbol "
                "binding and first-touch page faults of a new output: a fixed 10–30 µs that "
-               "dominates the smallest budgets. Median [min–max] over the repetitions (see "
+               "dominates the smallest budgets. *Hot*: the same 9 extractions with `--hot`, "
+               "back to back after one untimed: no cold start, the model as far into the "
+               "caches as its size lets it (a core's 2 MiB cache holds the small cuts of "
+               "every model, not the large cuts of the large ones). *Empty cut*: "
+               "`--expansions 0`, caches flushed: what a cold start costs before any "
+               "triangle. Median [min–max] over the repetitions (see "
                "the run settings above). meshopt: `meshopt_simplify` from the finest mesh "
                "(lod100.ply, already welded) to the same count, one call per level in one "
                "process, simplify time only (none at 100 %: nothing to simplify). Speed-up = "
@@ -251,16 +256,23 @@ def section_lod(out, lod, h):
                if r.get("fit") else "")
         first = ("; first extraction in a process: %s" % num(r["cold_flatness"], "%.2f")
                  if r.get("cold_flatness") else "")
+        if r.get("hot_flatness"):
+            first += "; hot: %s" % num(r["hot_flatness"], "%.2f")
+        if r.get("empty_cut_seconds"):
+            first += "; empty cut: %.1f µs" % (1e6 * r["empty_cut_seconds"])
         out.append("**%s** — max/min of the per-triangle cost%s: %s%s%s\n"
                    % (name, " (warm)" if r.get("warm") else "", num(r["flatness"], "%.2f"),
                       first, fit))
         below = lambda x, key: spread(x.get(key), "%.3g") if x["percent"] < 100 else "–"
         table(out, ["budget", "triangles", "warm (ms)" if r.get("warm") else "generated in (ms)",
                     "ns / triangle", "triangles/s", "first (ms)", "first: ns / triangle",
+                    "hot (ms)", "hot: ns / triangle",
                     "meshopt (ms)", "speed-up vs meshopt", "speed-up, first"],
               [["%g %%" % x["percent"], x["triangles"], spread(x["seconds"], "%.3g", 1e3),
                 num(x["ns_per_triangle"], "%.0f"), num(x["rate"], "%.3g"),
                 spread(x["cold_seconds"], "%.3g", 1e3), num(x["cold_ns_per_triangle"], "%.0f"),
+                spread(x.get("hot_seconds"), "%.3g", 1e3),
+                num(x.get("hot_ns_per_triangle"), "%.0f"),
                 spread(x["meshopt_seconds"], "%.3g", 1e3) if x["percent"] < 100 else "–",
                 below(x, "speedup"), below(x, "speedup_cold")]
                for x in r["rows"]])
