@@ -1,6 +1,7 @@
 /* Welding cells' triangles into an indexed mesh (see lod_mesh.h). */
 #include "runtime/lod_mesh.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -237,14 +238,40 @@ void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
     b->mesh.triangle_count += tri->count;
 }
 
-/* Area-weighted vertex normals. The edges are scaled by the power of two nearest the root
- * cube's size, which changes no bit of the result (every product and sum scales exactly)
- * but keeps the sums finite however many triangles meet at a vertex and however large the
- * model's coordinates (the octree readers bound them; a file can still make one crossing
- * the corner of millions of triangles). */
+/* The power of two that brings a cut's edges to about unit length, so the normal sums
+ * stay finite however many triangles meet at a vertex: 2^-e for a bound S on any edge in
+ * [2^e, 2^(e+1)). The readers keep every crossing inside the root cube give or take a leaf
+ * and float rounding (2 FLT_EPSILON of the coordinate), so S = 2 (root edge + 4
+ * FLT_EPSILON x largest coordinate); the rounding term matters only for a cube far smaller
+ * than its distance from zero, where the root edge alone would overflow the products.
+ * Computed from the bits: ldexp and ilogb are calls into libm, whose code a small cut
+ * from cold caches would fetch for this one number. */
+static float normal_scale(const sl_octree *tree)
+{
+    double root = tree->leaf_size * (double)(1u << tree->depth), far = 0;
+    for (int a = 0; a < 3; a++) {
+        double c = fabs(tree->origin[a]) + root;
+        far = c > far ? c : far;
+    }
+    double bound = 2 * (root + 4 * FLT_EPSILON * far);
+    uint64_t bits;
+    memcpy(&bits, &bound, sizeof bits);
+    int e = (int)(bits >> 52 & 0x7ff) - 1023; /* a subnormal bound reads as tiny: clamped */
+    e = e > 126 ? 126 : e < -126 ? -126 : e;
+    uint32_t fbits = (uint32_t)(127 - e) << 23;
+    float scale;
+    memcpy(&scale, &fbits, sizeof scale);
+    return scale;
+}
+
+/* Area-weighted vertex normals. The edges are scaled by normal_scale's power of two,
+ * which changes no bit of the result (every product and sum scales exactly) but keeps the
+ * sums finite however many triangles meet at a vertex and however large the model's
+ * coordinates (the octree readers bound them; a file can still make one crossing the
+ * corner of millions of triangles). */
 static void compute_normals(sl_lod_mesh *m, const sl_octree *tree)
 {
-    const float scale = ldexpf(1.0f, -ilogb(ldexp(tree->leaf_size, (int)tree->depth)));
+    const float scale = normal_scale(tree);
     memset(m->normals, 0, (size_t)m->vertex_count * 3 * sizeof(float));
     for (uint64_t t = 0; t < m->triangle_count; t++) {
         const uint32_t *i = m->indices + 3 * t;
