@@ -87,8 +87,9 @@ static int reserve_vertices(sl_mesh_builder *b, uint64_t need, int exact)
         if (need > b->vertex_capacity)
             return -1;
     } else {
-        uint64_t cap = b->vertex_capacity, c1 = cap, c3 = cap;
+        uint64_t cap = b->vertex_capacity, c1 = cap, c2 = cap, c3 = cap;
         if (grow((void **)&m->positions, &c1, need, 3 * sizeof(float), exact) ||
+            grow((void **)&m->normals, &c2, need, 3 * sizeof(float), exact) ||
             (b->tree->crossing_color && grow((void **)&m->colors, &c3, need, 4, exact)))
             return -1;
         b->vertex_capacity = c1;
@@ -112,6 +113,15 @@ void sl_mesh_builder_reserve(sl_mesh_builder *b, uint64_t triangles)
     reserve_vertices(b, vertices, 1);
 }
 
+/* A new vertex's normal sum starts at zero here rather than in a pass over the array
+ * before the normals: no second pass, and no call into libc's memset, whose code a small
+ * cut from cold caches would fetch. */
+static inline void zero_normal(sl_lod_mesh *m, uint64_t v)
+{
+    if (m->normals)
+        m->normals[3 * v] = m->normals[3 * v + 1] = m->normals[3 * v + 2] = 0.0f;
+}
+
 /* Vertex index of a crossing, mapping it on first use. */
 static inline uint32_t vertex_of(sl_mesh_builder *b, uint32_t crossing)
 {
@@ -129,6 +139,7 @@ static inline uint32_t vertex_of(sl_mesh_builder *b, uint32_t crossing)
     q[0] = p[0];
     q[1] = p[1];
     q[2] = p[2];
+    zero_normal(m, v);
     if (m->colors)
         memcpy(m->colors + 4 * (size_t)v, b->tree->crossing_color + 4 * (size_t)crossing, 4);
     b->scratch->used[v] = crossing;
@@ -158,6 +169,7 @@ static uint32_t centroid_vertex(sl_mesh_builder *b, const sl_mc_triangles *tri, 
     }
     for (int a = 0; a < 3; a++)
         m->positions[3 * (size_t)v + a] = (float)(sum[a] / n);
+    zero_normal(m, v);
     if (m->colors)
         for (int k = 0; k < 4; k++)
             m->colors[4 * (size_t)v + k] = (uint8_t)lround(col[k] / n);
@@ -271,8 +283,7 @@ static float normal_scale(const sl_octree *tree)
  * corner of millions of triangles). */
 static void compute_normals(sl_lod_mesh *m, const sl_octree *tree)
 {
-    const float scale = normal_scale(tree);
-    memset(m->normals, 0, (size_t)m->vertex_count * 3 * sizeof(float));
+    const float scale = normal_scale(tree); /* the sums start at zero: zero_normal */
     for (uint64_t t = 0; t < m->triangle_count; t++) {
         const uint32_t *i = m->indices + 3 * t;
         const float *p0 = m->positions + 3 * (size_t)i[0], *p1 = m->positions + 3 * (size_t)i[1],
@@ -319,8 +330,8 @@ static void builder_end(sl_mesh_builder *b, int mesh_too)
 int sl_mesh_builder_finish(sl_mesh_builder *b, sl_lod_mesh *out)
 {
     sl_lod_mesh *m = &b->mesh;
-    if (!b->failed && !b->caller_buffers) {
-        m->normals = malloc((m->vertex_count ? m->vertex_count : 1) * 3 * sizeof(float));
+    if (!b->failed && !b->caller_buffers && !m->normals) { /* no vertex was reserved */
+        m->normals = malloc(3 * sizeof(float));
         if (!m->normals)
             b->failed = 1;
     }

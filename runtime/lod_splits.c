@@ -2,6 +2,7 @@
 #include "runtime/lod_splits.h"
 
 #include <pthread.h>
+#include <stdatomic.h>
 
 static int face_direction(int f)
 {
@@ -25,6 +26,7 @@ static void edge_directions(int e, int dirs[3])
 
 static sl_lod_split_table splits;
 static pthread_once_t splits_once = PTHREAD_ONCE_INIT;
+static atomic_int splits_ready; /* set once the table is built: later calls skip libc */
 
 static void build_split_table(void)
 {
@@ -62,10 +64,14 @@ static void build_split_table(void)
         splits.slot_edges[slot] = splits.edges[d];
         slot++;
     }
+    atomic_store_explicit(&splits_ready, 1, memory_order_release);
 }
 
+/* Every cut asks for the table first; after the first, a flag says it is built, so a cut
+ * from cold caches does not also fetch pthread_once's code from another library. */
 const sl_lod_split_table *sl_lod_split_table_get(void)
 {
-    pthread_once(&splits_once, build_split_table);
+    if (!atomic_load_explicit(&splits_ready, memory_order_acquire))
+        pthread_once(&splits_once, build_split_table);
     return &splits;
 }
