@@ -9,9 +9,10 @@
  * child range is refused at once), so two mutations in three are made in the body's own
  * terms (docs/formats.md): the LOD array reordered, table entries, transition record
  * bits, neighbour masks and indices, crossing ids and positions, corner signs with their
- * edge mask recomputed, the grid's leaf size and origin. They keep the counts the reader
- * checks and change what it trusts.
+ * edge mask recomputed, the grid's leaf size and origin, the grid collapsed onto one
+ * point. They keep the counts the reader checks and change what it trusts.
  */
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -100,7 +101,7 @@ static uint32_t node_with_record(const uint8_t *d, const body_layout *l, uint64_
 static void mutate_in_terms(uint8_t *d, const body_layout *l, uint64_t *s)
 {
     uint64_t r = next(s);
-    switch (r % 11) {
+    switch (r % 12) {
     case 0: /* two nearby LOD array entries swapped */
         if (l->e >= 2) {
             uint64_t i = next(s) % (l->e - 1), j = i + 1 + next(s) % 8;
@@ -173,6 +174,23 @@ static void mutate_in_terms(uint8_t *d, const body_layout *l, uint64_t *s)
         static const double values[] = {1e-300, 1e-9, 1e14, 1e16, -1e16, 0.0};
         double v = values[next(s) % 6];
         memcpy(d + 24 + 8 * (next(s) % 4), &v, 8); /* leaf size, then origin x, y, z */
+        break;
+    }
+    case 10: { /* the grid collapsed: a tiny leaf at an origin away from zero, every
+                  crossing on the origin or the next float up, which the reader's rounding
+                  slack accepts (case 9 alone leaves the crossings outside the cube) */
+        static const double leaves[] = {1e-30, 1e-300, 1e-12};
+        static const double origins[] = {1.0, -3.0, 1e6};
+        double leaf = leaves[next(s) % 3], origin = origins[next(s) % 3];
+        memcpy(d + 24, &leaf, 8);
+        for (int a = 0; a < 3; a++)
+            memcpy(d + 32 + 8 * a, &origin, 8);
+        for (uint64_t i = 0; i < 3 * l->cc; i++) {
+            float v = (float)origin;
+            if (next(s) & 1)
+                v = nextafterf(v, INFINITY);
+            memcpy(d + l->positions + 4 * i, &v, 4);
+        }
         break;
     }
     default: { /* an error_after entry, negative or huge */
