@@ -250,19 +250,22 @@ void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
     b->mesh.triangle_count += tri->count;
 }
 
-/* The power of two that brings a cut's edges to about unit length, so the normal sums
- * stay finite however many triangles meet at a vertex: 2^-e for a bound S on any edge in
- * [2^e, 2^(e+1)). The readers keep every crossing inside the root cube give or take a leaf
- * and float rounding (2 FLT_EPSILON of the coordinate), so S = 2 (root edge + 4
- * FLT_EPSILON x largest coordinate); the rounding term matters only for a cube far smaller
- * than its distance from zero, where the root edge alone would overflow the products.
- * Computed from the bits: ldexp and ilogb are calls into libm, whose code a small cut
- * from cold caches would fetch for this one number. */
+/* The power of two that brings a cut's edges below a few units, so the normal sums stay
+ * finite however many triangles meet at a vertex: 2^-e for S = 2 (R + 4 FLT_EPSILON F) in
+ * [2^e, 2^(e+1)), with R the root cube's edge and F the largest coordinate of its corners.
+ * The readers keep every crossing within a leaf and float rounding (2 FLT_EPSILON of the
+ * coordinate) of that cube, so an edge spans at most 3 R + 4 FLT_EPSILON F <= 1.5 S: a
+ * scaled edge is under 3. The rounding term matters only for a cube far smaller than its
+ * distance from zero, where R alone would overflow the products. Computed from the bits:
+ * ldexp and ilogb are calls into libm, whose code a small cut from cold caches would fetch
+ * for this one number. */
 static float normal_scale(const sl_octree *tree)
 {
     double root = tree->leaf_size * (double)(1u << tree->depth), far = 0;
+    const int32_t corner[3] = {tree->nodes[0].x, tree->nodes[0].y, tree->nodes[0].z};
     for (int a = 0; a < 3; a++) {
-        double c = fabs(tree->origin[a]) + root;
+        double lo = tree->origin[a] + corner[a] * root, hi = lo + root;
+        double c = fabs(lo) > fabs(hi) ? fabs(lo) : fabs(hi);
         far = c > far ? c : far;
     }
     double bound = 2 * (root + 4 * FLT_EPSILON * far);
@@ -283,7 +286,9 @@ static float normal_scale(const sl_octree *tree)
  * corner of millions of triangles). */
 static void compute_normals(sl_lod_mesh *m, const sl_octree *tree)
 {
-    const float scale = normal_scale(tree); /* the sums start at zero: zero_normal */
+    if (m->triangle_count == 0) /* every normal stays zero (zero_normal) */
+        return;
+    const float scale = normal_scale(tree); /* triangles: the tree has its root, nodes[0] */
     for (uint64_t t = 0; t < m->triangle_count; t++) {
         const uint32_t *i = m->indices + 3 * t;
         const float *p0 = m->positions + 3 * (size_t)i[0], *p1 = m->positions + 3 * (size_t)i[1],
