@@ -125,7 +125,8 @@ def ladder(lod):
         out[name] = {"rows": rows, "flatness": flat, "fit": fit, "warm": warm,
                      "cold_flatness": cold_flat if warm else None,
                      "hot_flatness": hot_flat if hot else None,
-                     "empty_cut_seconds": med(r, "empty_cut_seconds")}
+                     "empty_cut_seconds": med(r, "empty_cut_seconds"),
+                     "root_cut_triangles": r.get("root_cut_triangles")}
     return out
 
 
@@ -197,13 +198,16 @@ def derive(models, st, oc, lod, gr):
                 if v.get("hot_flatness")]
         if hots:
             lines.append("the same cuts back to back (`--hot`: no cold start; small cuts then "
-                         "run from a core's cache, large ones from the shared cache): max/min "
+                         "run from a core's own cache, large ones from the shared cache): max/min "
                          + ", ".join(hots) + ".")
-        empties = ["%s %.1f µs" % (n, 1e6 * v["empty_cut_seconds"])
+        empties = ["%s %.1f µs%s" % (n, 1e6 * v["empty_cut_seconds"],
+                                      " (%d triangles)" % v["root_cut_triangles"]
+                                      if v.get("root_cut_triangles") else "")
                    for n, v in h["ladder"].items() if v.get("empty_cut_seconds")]
         if empties:
-            lines.append("the empty cut (no expansion, no triangle), caches flushed: the fixed "
-                         "cost of a cold start, " + ", ".join(empties) + ".")
+            lines.append("the empty cut (`--expansions 0`: the root cell alone, which draws "
+                         "nothing unless a count is given), caches flushed: the fixed cost of "
+                         "a cold start, " + ", ".join(empties) + ".")
         fits = ["%s %.2f" % (n, v["fit"]) for n, v in h["ladder"].items() if v["fit"]]
         if fits:
             lines.append("extraction time against output triangles m, fitted exponent b of "

@@ -17,7 +17,8 @@ Per input of ctx.lod_models, from the reference build:
   holding a model extracts between frames (warm process, cold caches). A second call per
   budget adds `--hot`: the same cuts back to back, the model as far into the caches as
   its size lets it (the work itself, without a cold start). And per repetition the empty
-  cut (`--expansions 0 --repeat`, caches flushed): the fixed cost of a cold start. Per
+  cut (`--expansions 0 --repeat`, caches flushed: the root cell alone, whose triangle
+  count is kept): the fixed cost of a cold start. Per
   repetition meshopt_simplify from the finest mesh (lod100.ply) to
   the same counts (one call per level in one process, as warm as ours), so each speed
   ratio is a pair from one repetition.
@@ -106,7 +107,7 @@ def ladder(ctx, name, m, work):
     warm = {p: [] for p, _ in budgets}
     hot = {p: [] for p, _ in budgets}
     mo_runs = {p: [] for p, _ in budgets}
-    counts, empty = {}, []
+    counts, empty, root_triangles = {}, [], 0
     out = os.path.join(work, "ladder.ply")
     for rep in range(ctx.extract_reps):
         for p, n in budgets:
@@ -116,8 +117,9 @@ def ladder(ctx, name, m, work):
             counts[p] = e["triangles"]
             hot[p].append(extract(ctx, m["slod"], out, "--triangles", n, "--repeat",
                                   WARM_REPEAT, "--hot")["warm_seconds"])
-        empty.append(extract(ctx, m["slod"], out, "--expansions", 0, "--repeat",
-                             WARM_REPEAT)["warm_seconds"])
+        root = extract(ctx, m["slod"], out, "--expansions", 0, "--repeat", WARM_REPEAT)
+        empty.append(root["warm_seconds"])
+        root_triangles = root["triangles"]
         # meshopt from the finest mesh to each count below it (at the finest count it
         # would have nothing to do), paired with this repetition's extractions.
         simplify = [p for p, _ in budgets if p < 100 and counts[p] < finest]
@@ -136,7 +138,7 @@ def ladder(ctx, name, m, work):
                      "speedup": stats.summary(stats.pair_ratios(mo_runs[p], warm[p][:k])),
                      "speedup_cold": stats.summary(stats.pair_ratios(mo_runs[p], runs[p][:k]))})
     log("lod: %s extraction ladder done" % name)
-    return rows, stats.summary(empty)
+    return rows, stats.summary(empty), root_triangles
 
 
 def main():
@@ -150,9 +152,10 @@ def main():
                                            "hausdorff", "watertight", "boundary_edges")}
                   for lv in m["levels"] if lv.get("lod_percent") is not None]
         rows, tried = equal_counts(ctx, name, m, work)
-        steps, empty = ladder(ctx, name, m, work)
+        steps, empty, root_triangles = ladder(ctx, name, m, work)
         out[name] = {"table1": table1, "equal_counts": rows, "vdb_tries": tried,
-                     "ladder": steps, "empty_cut_seconds": empty}
+                     "ladder": steps, "empty_cut_seconds": empty,
+                     "root_cut_triangles": root_triangles}
         ctx.save("lod", out)
     ctx.save("lod", out)
 

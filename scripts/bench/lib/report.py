@@ -243,10 +243,10 @@ def section_lod(out, lod, h):
                "binding and first-touch page faults of a new output: a fixed 10–30 µs that "
                "dominates the smallest budgets. *Hot*: the same 9 extractions with `--hot`, "
                "back to back after one untimed: no cold start, the model as far into the "
-               "caches as its size lets it (a core's 2 MiB cache holds the small cuts of "
-               "every model, not the large cuts of the large ones). *Empty cut*: "
-               "`--expansions 0`, caches flushed: what a cold start costs before any "
-               "triangle. Median [min–max] over the repetitions (see "
+               "caches as its size lets it (a core's own cache holds the small cuts, not "
+               "the large cuts of a large model). *Empty cut*: `--expansions 0` (the root "
+               "cell alone; its triangle count is given when it draws any), caches flushed: "
+               "what a cold start costs. Median [min–max] over the repetitions (see "
                "the run settings above). meshopt: `meshopt_simplify` from the finest mesh "
                "(lod100.ply, already welded) to the same count, one call per level in one "
                "process, simplify time only (none at 100 %: nothing to simplify). Speed-up = "
@@ -259,7 +259,8 @@ def section_lod(out, lod, h):
         if r.get("hot_flatness"):
             first += "; hot: %s" % num(r["hot_flatness"], "%.2f")
         if r.get("empty_cut_seconds"):
-            first += "; empty cut: %.1f µs" % (1e6 * r["empty_cut_seconds"])
+            first += "; empty cut: %.1f µs%s" % (1e6 * r["empty_cut_seconds"],
+                                                 root_triangles(r))
         out.append("**%s** — max/min of the per-triangle cost%s: %s%s%s\n"
                    % (name, " (warm)" if r.get("warm") else "", num(r["flatness"], "%.2f"),
                       first, fit))
@@ -276,6 +277,12 @@ def section_lod(out, lod, h):
                 spread(x["meshopt_seconds"], "%.3g", 1e3) if x["percent"] < 100 else "–",
                 below(x, "speedup"), below(x, "speedup_cold")]
                for x in r["rows"]])
+
+
+def root_triangles(r):
+    """" (N triangles)" when the root-only cut of a ladder draws any, else ""."""
+    n = r.get("root_cut_triangles")
+    return " (%d triangles)" % n if n else ""
 
 
 def section_growth(out, h):
