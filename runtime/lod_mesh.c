@@ -261,11 +261,11 @@ void sl_mesh_builder_add_cell(sl_mesh_builder *b, const sl_mc_triangles *tri,
  * for this one number. */
 static float normal_scale(const sl_octree *tree)
 {
-    double root = tree->leaf_size * (double)(1u << tree->depth), far = 0;
-    const int32_t corner[3] = {tree->nodes[0].x, tree->nodes[0].y, tree->nodes[0].z};
+    double root = tree->leaf_size * (double)(1u << tree->depth), far = 0, lo[3], hi[3];
+    sl_octree_corner_world(tree, &tree->nodes[0], 0, lo);
+    sl_octree_corner_world(tree, &tree->nodes[0], 7, hi);
     for (int a = 0; a < 3; a++) {
-        double lo = tree->origin[a] + corner[a] * root, hi = lo + root;
-        double c = fabs(lo) > fabs(hi) ? fabs(lo) : fabs(hi);
+        double c = fabs(lo[a]) > fabs(hi[a]) ? fabs(lo[a]) : fabs(hi[a]);
         far = c > far ? c : far;
     }
     double bound = 2 * (root + 4 * FLT_EPSILON * far);

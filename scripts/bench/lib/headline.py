@@ -95,6 +95,12 @@ def depth_rows(oc):
     return {"input": oc["depths"]["input"], "rows": rows}
 
 
+def root_triangles(r):
+    """" (N triangles)" when a model's root-only cut draws any, else ""."""
+    n = r.get("root_cut_triangles")
+    return " (%d triangles)" % n if n else ""
+
+
 def ladder(lod):
     """Per model: per-triangle extraction costs, warm (the median of repeated extractions
     in one process, the figure the aims are judged on) and cold (the first extraction in a
@@ -200,9 +206,7 @@ def derive(models, st, oc, lod, gr):
             lines.append("the same cuts back to back (`--hot`: no cold start; small cuts then "
                          "run from a core's own cache, large ones from the shared cache): max/min "
                          + ", ".join(hots) + ".")
-        empties = ["%s %.1f µs%s" % (n, 1e6 * v["empty_cut_seconds"],
-                                      " (%d triangles)" % v["root_cut_triangles"]
-                                      if v.get("root_cut_triangles") else "")
+        empties = ["%s %.1f µs%s" % (n, 1e6 * v["empty_cut_seconds"], root_triangles(v))
                    for n, v in h["ladder"].items() if v.get("empty_cut_seconds")]
         if empties:
             lines.append("the empty cut (`--expansions 0`: the root cell alone, which draws "

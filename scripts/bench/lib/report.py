@@ -260,7 +260,7 @@ def section_lod(out, lod, h):
             first += "; hot: %s" % num(r["hot_flatness"], "%.2f")
         if r.get("empty_cut_seconds"):
             first += "; empty cut: %.1f µs%s" % (1e6 * r["empty_cut_seconds"],
-                                                 root_triangles(r))
+                                                 headline.root_triangles(r))
         out.append("**%s** — max/min of the per-triangle cost%s: %s%s%s\n"
                    % (name, " (warm)" if r.get("warm") else "", num(r["flatness"], "%.2f"),
                       first, fit))
@@ -277,12 +277,6 @@ def section_lod(out, lod, h):
                 spread(x["meshopt_seconds"], "%.3g", 1e3) if x["percent"] < 100 else "–",
                 below(x, "speedup"), below(x, "speedup_cold")]
                for x in r["rows"]])
-
-
-def root_triangles(r):
-    """" (N triangles)" when the root-only cut of a ladder draws any, else ""."""
-    n = r.get("root_cut_triangles")
-    return " (%d triangles)" % n if n else ""
 
 
 def section_growth(out, h):
