@@ -2,7 +2,7 @@
  *
  * Both writers take the same borrowed view of a triangle mesh (sl_glb_mesh: nothing is
  * copied or freed) and write through the atomic-write helper, so nothing is visible at
- * `path` until the file is complete and durable (pipeline/atomicfile.h).
+ * `path` until the file is complete and durable (core/atomicfile.h).
  *
  * What a .glb holds (docs/glb.md): one scene, one node, one mesh with one TRIANGLES
  * primitive; POSITION (float VEC3 with exact min/max), NORMAL (float VEC3, written unit
@@ -29,8 +29,8 @@
 
 #include <stdint.h>
 
+#include "core/error.h"
 #include "geometry/mesh.h"
-#include "pipeline/error.h"
 
 typedef struct sl_glb_mesh {
     uint64_t vertex_count, triangle_count;

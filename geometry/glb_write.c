@@ -17,9 +17,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/atomicfile.h"
+#include "core/json.h"
 #include "geometry/glb.h"
-#include "pipeline/atomicfile.h"
-#include "pipeline/json.h"
 
 /* glTF enums (the OpenGL values the spec reuses). */
 enum {
@@ -96,7 +96,7 @@ int sl_glb_mesh_check(const sl_glb_mesh *m, const char *path, sl_error *err)
 }
 
 /* The cheap shape check that catches a caller passing a fragment or a string; the text
- * itself is the caller's (a report fragment written with pipeline/json.h). */
+ * itself is the caller's (a report fragment written with core/json.h). */
 static int is_object_text(const char *s)
 {
     const char *first = s + strspn(s, " \t\r\n");
@@ -127,7 +127,7 @@ static void json_accessor(sl_json *j, int view, int component, uint64_t count, c
 }
 
 /* min/max of POSITION, required by the spec and compared with the data by validators:
- * %.9g (pipeline/json.h) round-trips a float exactly. */
+ * %.9g (core/json.h) round-trips a float exactly. */
 static void json_position_bounds(sl_json *j, const sl_glb_mesh *m)
 {
     float lo[3], hi[3];

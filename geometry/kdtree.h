@@ -16,7 +16,7 @@
 
 #include <stdint.h>
 
-#include "pipeline/error.h"
+#include "core/error.h"
 
 #define SL_KDTREE_MAX_POINTS 0xfffffffeu
 

@@ -27,9 +27,9 @@
 
 #include <stdint.h>
 
+#include "core/error.h"
+#include "core/progress.h"
 #include "geometry/mesh.h"
-#include "pipeline/error.h"
-#include "pipeline/progress.h"
 
 #define SL_MESH_DISTANCE_DEFAULT_SAMPLES 1000000u
 

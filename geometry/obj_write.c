@@ -9,8 +9,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "core/atomicfile.h"
 #include "geometry/glb.h"
-#include "pipeline/atomicfile.h"
 
 /* Appends " %.*g" of each value to `line` at `*len`. */
 static void put_numbers(char *line, size_t *len, size_t cap, const float *v, int n, int digits)

@@ -26,9 +26,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "core/error.h"
+#include "core/progress.h"
 #include "geometry/mesh.h"
-#include "pipeline/error.h"
-#include "pipeline/progress.h"
 
 typedef struct sl_ply_limits {
     uint64_t max_header_bytes;  /* default 1 MiB */

@@ -9,8 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/atomicfile.h"
 #include "geometry/ply.h"
-#include "pipeline/atomicfile.h"
 
 #define WRITE_BUFFER (256u << 10)
 #define MAX_ROW 64 /* bytes of the largest vertex or face row */

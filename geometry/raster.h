@@ -18,8 +18,8 @@
 #ifndef SCANLOD_GEOMETRY_RASTER_H
 #define SCANLOD_GEOMETRY_RASTER_H
 
+#include "core/error.h"
 #include "geometry/glb.h"
-#include "pipeline/error.h"
 
 #define SL_THUMBNAIL_MAX_SIDE 4096
 

@@ -21,8 +21,8 @@
 
 #include <stdint.h>
 
+#include "core/error.h"
 #include "geometry/mesh.h"
-#include "pipeline/error.h"
 
 #define SL_BVH_LEAF_SIZE 4
 

@@ -32,7 +32,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
-#include "pipeline/error.h"
+#include "core/error.h"
 
 typedef enum sl_option_type {
     SL_OPT_BOOL,   /* true/false, yes/no, on/off, 1/0 */
@@ -88,8 +88,12 @@ const char *sl_config_path(const sl_config *cfg);
  * range and default, grouped by section in order of first appearance. Deterministic. */
 void sl_config_write_reference(FILE *out, const sl_option *const *tables);
 
-/* Every option table of the program ([run], [queue], then each registered stage's),
- * NULL-terminated. Defined by the engine (pipeline/engine_options.c). */
-const sl_option *const *sl_all_option_tables(void);
+/* Every option table of the program ([run], [queue], then each of `stages`' in order),
+ * NULL-terminated, in `tables` (room for SL_MAX_OPTION_TABLES + 1). Defined by the engine
+ * (pipeline/engine_options.c); `stages` is a NULL-terminated sl_stage list. */
+#define SL_MAX_OPTION_TABLES 34
+struct sl_stage;
+void sl_all_option_tables(const struct sl_stage *const *stages,
+                          const sl_option *tables[SL_MAX_OPTION_TABLES + 1]);
 
 #endif

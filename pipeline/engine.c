@@ -11,10 +11,10 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "pipeline/atomicfile.h"
-#include "pipeline/io.h"
-#include "pipeline/json.h"
-#include "pipeline/log.h"
+#include "core/atomicfile.h"
+#include "core/io.h"
+#include "core/json.h"
+#include "core/log.h"
 
 double sl_now_seconds(void)
 {
@@ -213,7 +213,9 @@ int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err
     if (!e)
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     sl_io_fault_init();
-    int rc = sl_config_load(&e->cfg, sl_all_option_tables(), opts->config_path,
+    const sl_option *tables[SL_MAX_OPTION_TABLES + 1];
+    sl_all_option_tables(opts->stages, tables);
+    int rc = sl_config_load(&e->cfg, tables, opts->config_path,
                             opts->overrides, opts->override_count, err);
     if (rc) {
         free(e);
@@ -228,7 +230,7 @@ int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err
     e->item_timeout_s = sl_config_int(e->cfg, "run", "item_timeout_s");
     e->lease_seconds = sl_config_int(e->cfg, "queue", "lease_seconds");
     e->max_crashes = (int)sl_config_int(e->cfg, "queue", "max_crashes");
-    for (const sl_stage *const *s = sl_stage_registry(); *s && e->stage_count < SL_MAX_STAGES;
+    for (const sl_stage *const *s = opts->stages; *s && e->stage_count < SL_MAX_STAGES;
          s++) {
         e->config_hash[e->stage_count] = stage_config_hash(e->cfg, *s);
         e->stages[e->stage_count++] = *s;

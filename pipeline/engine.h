@@ -12,10 +12,11 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "core/error.h"
 #include "pipeline/config.h"
-#include "pipeline/error.h"
 
 typedef struct sl_engine sl_engine;
+struct sl_stage;
 
 typedef struct sl_engine_options {
     const char *config_path;
@@ -25,6 +26,9 @@ typedef struct sl_engine_options {
     int quiet;                    /* stderr: errors only */
     int verbose;                  /* stderr: debug */
     int open_logs;                /* 0 for read-only commands (status) */
+    /* The stages, in pipeline order, NULL-terminated (the program's registry:
+     * stages/registry.h). */
+    const struct sl_stage *const *stages;
 } sl_engine_options;
 
 int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err);

@@ -30,11 +30,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "pipeline/atomicfile.h"
-#include "pipeline/io.h"
-#include "pipeline/json.h"
-#include "pipeline/log.h"
-#include "pipeline/progress.h"
+#include "core/atomicfile.h"
+#include "core/io.h"
+#include "core/json.h"
+#include "core/log.h"
+#include "core/progress.h"
 
 typedef struct child_result {
     sl_error err;
@@ -75,13 +75,14 @@ static int run_stage_in_child(sl_engine *e, int s, const char *item, const char 
     /* Every earlier stage's artifact directory, for stages that read more than the
      * previous one (the key chain covers them all). */
     static char dirs[SL_MAX_STAGES][PATH_MAX];
-    const char *upstream[SL_MAX_STAGES + 1] = {NULL};
+    struct sl_stage_dir_entry upstream[SL_MAX_STAGES + 1] = {{NULL, NULL}};
     char ticket[SL_TICKET_NAME_MAX + 1];
     if (sl_ticket_name(item, ticket, sizeof ticket, err))
         return err->code;
     for (int i = 0; i < s; i++) {
         sl_artifact_dir(e, i, ticket, dirs[i], sizeof dirs[i]);
-        upstream[i] = dirs[i];
+        upstream[i].stage = e->stages[i]->name;
+        upstream[i].dir = dirs[i];
     }
     const sl_stage *stage = e->stages[s];
     void *stage_config = NULL;

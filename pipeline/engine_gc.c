@@ -18,7 +18,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "pipeline/log.h"
+#include "core/log.h"
 
 #define FOREIGN_TEMP_MAX_AGE_S (24 * 3600)
 

@@ -5,9 +5,9 @@
 #include <limits.h>
 #include <stdint.h>
 
+#include "core/hash.h"
 #include "pipeline/config.h"
 #include "pipeline/engine.h"
-#include "pipeline/hash.h"
 #include "pipeline/queue.h"
 #include "pipeline/record.h"
 #include "pipeline/stage.h"

@@ -38,17 +38,14 @@ static const sl_option queue_options[] = {
     SL_OPTION_END,
 };
 
-const sl_option *const *sl_all_option_tables(void)
+void sl_all_option_tables(const sl_stage *const *stages,
+                          const sl_option *tables[SL_MAX_OPTION_TABLES + 1])
 {
-    static const sl_option *tables[2 + 32 + 1];
-    if (!tables[0]) {
-        int n = 0;
-        tables[n++] = run_options;
-        tables[n++] = queue_options;
-        for (const sl_stage *const *s = sl_stage_registry(); *s && n < 2 + 32; s++)
-            if ((*s)->options)
-                tables[n++] = (*s)->options;
-        tables[n] = NULL;
-    }
-    return tables;
+    int n = 0;
+    tables[n++] = run_options;
+    tables[n++] = queue_options;
+    for (const sl_stage *const *s = stages; *s && n < SL_MAX_OPTION_TABLES; s++)
+        if ((*s)->options)
+            tables[n++] = (*s)->options;
+    tables[n] = NULL;
 }

@@ -22,10 +22,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "pipeline/atomicfile.h"
-#include "pipeline/io.h"
-#include "pipeline/json.h"
-#include "pipeline/log.h"
+#include "core/atomicfile.h"
+#include "core/io.h"
+#include "core/json.h"
+#include "core/log.h"
 
 static int publish_key(sl_engine *e, const char *ticket, sl_hash *key, sl_error *err)
 {

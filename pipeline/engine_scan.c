@@ -17,8 +17,8 @@
 #include <strings.h>
 #include <sys/stat.h>
 
-#include "pipeline/log.h"
-#include "pipeline/progress.h"
+#include "core/log.h"
+#include "core/progress.h"
 
 #define MAX_TREE_DEPTH 64
 

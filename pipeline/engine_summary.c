@@ -8,11 +8,11 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "pipeline/atomicfile.h"
+#include "core/atomicfile.h"
+#include "core/json.h"
+#include "core/log.h"
+#include "core/markdown.h"
 #include "pipeline/engine_internal.h"
-#include "pipeline/json.h"
-#include "pipeline/log.h"
-#include "pipeline/markdown.h"
 
 static char *read_optional(const char *path)
 {

@@ -16,8 +16,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "pipeline/log.h"
-#include "pipeline/progress.h"
+#include "core/log.h"
+#include "core/progress.h"
 
 /* A claimed ticket still without a lease after this long is abandoned (seconds). */
 #define UNLEASED_CLAIM_S 10

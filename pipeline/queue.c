@@ -10,8 +10,8 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "pipeline/atomicfile.h"
-#include "pipeline/io.h"
+#include "core/atomicfile.h"
+#include "core/io.h"
 
 static const char *const state_names[SL_STATE_COUNT] = {"ready", "claimed", "done", "failed",
                                                         "quarantine"};

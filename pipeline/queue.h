@@ -13,7 +13,7 @@
 
 #include <stdint.h>
 
-#include "pipeline/error.h"
+#include "core/error.h"
 
 enum sl_queue_state {
     SL_STATE_READY = 0,

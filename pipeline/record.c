@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pipeline/atomicfile.h"
+#include "core/atomicfile.h"
 
 sl_hash sl_stage_key(const char *stage, uint32_t stage_version, uint64_t config_hash,
                      sl_hash upstream)

@@ -12,8 +12,8 @@
 
 #include <stdint.h>
 
-#include "pipeline/error.h"
-#include "pipeline/hash.h"
+#include "core/error.h"
+#include "core/hash.h"
 
 #define SL_RECORD_FILE "record"
 #define SL_RECORD_MAX_OUTPUTS 64

@@ -5,7 +5,7 @@
  * engine calls `run` in a child process per item (a crash or OOM costs one item), with
  * the OpenMP thread count already set. The stage:
  *   - reads the source file and/or the upstream stage's artifact directory `in_dir`;
- *   - writes its artifacts into `out_dir` through pipeline/atomicfile.h only (the engine
+ *   - writes its artifacts into `out_dir` through core/atomicfile.h only (the engine
  *     hashes every file in `out_dir` and writes the commit record last);
  *   - adds counts to `report` (an open JSON object: the stage's part of the item report);
  *   - polls `progress` and returns SL_E_INTERRUPTED at a safe point when asked to stop;
@@ -18,10 +18,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "core/error.h"
+#include "core/json.h"
+#include "core/progress.h"
 #include "pipeline/config.h"
-#include "pipeline/error.h"
-#include "pipeline/json.h"
-#include "pipeline/progress.h"
 
 typedef struct sl_stage_io {
     const char *item;        /* item id: input path relative to [run] input, no ".ply" */
@@ -31,9 +31,11 @@ typedef struct sl_stage_io {
     sl_json *report;         /* open object: this stage's section of the item report */
     sl_progress *progress;
     int threads;             /* OpenMP threads for this item (already set) */
-    /* Artifact directories of every earlier stage, in pipeline order (NULL-terminated);
+    /* Every earlier stage's artifact directory, in pipeline order, ended by {NULL, NULL};
      * the stage key chains over all of them. Find one by name with sl_stage_dir(). */
-    const char *const *upstream_dirs;
+    const struct sl_stage_dir_entry {
+        const char *stage, *dir;
+    } *upstream;
 } sl_stage_io;
 
 /* The artifact directory of the earlier stage `name` for this item, or NULL. */
@@ -56,8 +58,7 @@ typedef struct sl_stage {
     int publish;
 } sl_stage;
 
-/* The registered stages, in pipeline order, NULL-terminated (pipeline/registry.c). */
-const sl_stage *const *sl_stage_registry(void);
-const sl_stage *sl_stage_find(const char *name);
+/* The engine knows no stage by name: the program hands it the list of stages, in pipeline
+ * order (stages/registry.h), when it opens it. */
 
 #endif

@@ -5,9 +5,8 @@
 
 const char *sl_stage_dir(const sl_stage_io *io, const char *name)
 {
-    const sl_stage *const *registry = sl_stage_registry();
-    for (int i = 0; io->upstream_dirs && io->upstream_dirs[i] && registry[i]; i++)
-        if (strcmp(registry[i]->name, name) == 0)
-            return io->upstream_dirs[i];
+    for (const struct sl_stage_dir_entry *u = io->upstream; u && u->stage; u++)
+        if (strcmp(u->stage, name) == 0)
+            return u->dir;
     return NULL;
 }

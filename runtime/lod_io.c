@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pipeline/artifact.h"
+#include "core/artifact.h"
 #include "runtime/octree_io.h"
 
 #define LOD_HEADER_SIZE 24

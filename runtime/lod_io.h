@@ -14,7 +14,7 @@
 #ifndef SCANLOD_RUNTIME_LOD_IO_H
 #define SCANLOD_RUNTIME_LOD_IO_H
 
-#include "pipeline/error.h"
+#include "core/error.h"
 #include "runtime/lod_model.h"
 
 #define SL_LOD_MAGIC "SLODMODL"

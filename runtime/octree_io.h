@@ -17,8 +17,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "pipeline/artifact.h"
-#include "pipeline/error.h"
+#include "core/artifact.h"
+#include "core/error.h"
 #include "runtime/octree.h"
 
 #define SL_OCTREE_MAGIC "SLOCTREE"

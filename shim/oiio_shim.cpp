@@ -6,10 +6,10 @@
 // inside OpenMP regions (OIIO's imageio.h: applications with their own threads should set
 // "threads" to 1). Writes go to a temp name in the destination directory with the same
 // extension (OIIO picks the format from it), then fsync, rename, fsync of the directory.
-// pipeline/error.h has no extern "C" guard of its own: give its declarations C linkage
+// core/error.h has no extern "C" guard of its own: give its declarations C linkage
 // here, before oiio_shim.h includes it again (then a no-op behind its include guard).
 extern "C" {
-#include "pipeline/error.h"
+#include "core/error.h"
 }
 #include "shim/oiio_shim.h"
 

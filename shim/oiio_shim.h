@@ -8,7 +8,7 @@
 
 #include <stdint.h>
 
-#include "pipeline/error.h"
+#include "core/error.h"
 
 #ifdef __cplusplus
 extern "C" {

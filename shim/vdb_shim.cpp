@@ -14,9 +14,9 @@
 // pipeline headers have no extern "C" guards of their own: give them C linkage here,
 // before vdb_shim.h includes error.h again (a no-op behind its include guard).
 extern "C" {
-#include "pipeline/atomicfile.h"
-#include "pipeline/error.h"
-#include "pipeline/hash.h"
+#include "core/atomicfile.h"
+#include "core/error.h"
+#include "core/hash.h"
 }
 #include "shim/vdb_shim.h"
 

@@ -29,7 +29,7 @@
 
 #include <stdint.h>
 
-#include "pipeline/error.h"
+#include "core/error.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -53,7 +53,7 @@ typedef struct sl_vdb_samples {
 void sl_vdb_set_threads(int n);
 
 /* Writes `s` to `path` atomically (temp name in the same directory, fsync, rename, fsync
- * of the directory; through pipeline/atomicfile.h). Same samples give identical bytes.
+ * of the directory; through core/atomicfile.h). Same samples give identical bytes.
  * Refuses (SL_E_INTERNAL) coordinates that are not strictly increasing, a voxel size that
  * is not finite and positive, or non-finite distances/origin. */
 int sl_vdb_samples_write(const char *path, const sl_vdb_samples *s, sl_error *err);

@@ -2,12 +2,12 @@
  * Adding a stage: docs/adding-a-stage.md. */
 #include <string.h>
 
-#include "pipeline/stage.h"
 #include "stages/crack/crack.h"
 #include "stages/export/export.h"
 #include "stages/merge/merge.h"
 #include "stages/priority/priority.h"
 #include "stages/range/range.h"
+#include "stages/registry.h"
 #include "stages/samples/samples.h"
 
 static const sl_stage *const registry[] = {

@@ -11,7 +11,7 @@
 #ifndef SCANLOD_STAGES_EXPORT_H
 #define SCANLOD_STAGES_EXPORT_H
 
-#include "pipeline/error.h"
+#include "core/error.h"
 #include "pipeline/stage.h"
 #include "runtime/lod_mesh.h"
 

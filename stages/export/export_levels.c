@@ -6,9 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/atomicfile.h"
+#include "core/markdown.h"
 #include "geometry/mesh_distance.h"
-#include "pipeline/atomicfile.h"
-#include "pipeline/markdown.h"
 #include "stages/export/export_internal.h"
 
 /* A level's name becomes its file names (NAME.ply, NAME.png) in the item's folder: letters,

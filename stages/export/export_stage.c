@@ -7,9 +7,9 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "core/atomicfile.h"
 #include "geometry/mesh_distance.h"
 #include "geometry/ply.h"
-#include "pipeline/atomicfile.h"
 #include "runtime/lod_io.h"
 #include "stages/crack/crack.h"
 #include "stages/export/export_internal.h"

@@ -15,8 +15,8 @@
 
 #include <stdint.h>
 
-#include "pipeline/error.h"
-#include "pipeline/progress.h"
+#include "core/error.h"
+#include "core/progress.h"
 #include "pipeline/stage.h"
 #include "runtime/octree.h"
 

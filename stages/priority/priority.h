@@ -22,7 +22,7 @@
 
 #include <stdint.h>
 
-#include "pipeline/error.h"
+#include "core/error.h"
 #include "pipeline/stage.h"
 #include "runtime/lod_model.h"
 #include "runtime/octree.h"

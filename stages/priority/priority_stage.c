@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pipeline/artifact.h"
+#include "core/artifact.h"
 #include "runtime/octree_io.h"
 #include "stages/merge/merge.h"
 #include "stages/priority/priority.h"

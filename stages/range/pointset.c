@@ -1,5 +1,5 @@
 /* The oriented point set artifact `points.slpts` (format: docs/formats.md and
- * docs/range-stage.md), in the envelope of pipeline/artifact.h with magic "SLPOINTS".
+ * docs/range-stage.md), in the envelope of core/artifact.h with magic "SLPOINTS".
  *
  * Body, little-endian:
  *   0   u64  count
@@ -19,7 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pipeline/artifact.h"
+#include "core/artifact.h"
 #include "stages/range/range.h"
 
 #define POINTSET_MAGIC "SLPOINTS"

@@ -20,10 +20,10 @@
 
 #include <stdint.h>
 
+#include "core/error.h"
+#include "core/progress.h"
 #include "geometry/mesh.h"
 #include "geometry/ply.h"
-#include "pipeline/error.h"
-#include "pipeline/progress.h"
 #include "pipeline/stage.h"
 
 #define SL_POINTSET_FILE "points.slpts"

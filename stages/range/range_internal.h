@@ -15,10 +15,10 @@
 
 #include <stdint.h>
 
+#include "core/error.h"
+#include "core/progress.h"
 #include "geometry/kdtree.h"
 #include "geometry/mesh.h"
-#include "pipeline/error.h"
-#include "pipeline/progress.h"
 #include "stages/range/range.h"
 
 #define RANGE_NONE UINT32_MAX

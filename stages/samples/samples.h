@@ -37,9 +37,9 @@
 
 #include <stdint.h>
 
+#include "core/error.h"
+#include "core/progress.h"
 #include "geometry/mesh.h"
-#include "pipeline/error.h"
-#include "pipeline/progress.h"
 #include "pipeline/stage.h"
 #include "shim/vdb_shim.h"
 #include "stages/range/range.h"

@@ -11,8 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pipeline/atomicfile.h"
-#include "pipeline/log.h"
+#include "core/atomicfile.h"
+#include "core/log.h"
 #include "stages/samples/samples.h"
 
 static const sl_option samples_options[] = {

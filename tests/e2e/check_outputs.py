@@ -32,7 +32,7 @@ def check(ok, what):
 
 
 def md_text(s):
-    """pipeline/markdown.c sl_md_text."""
+    """core/markdown.c sl_md_text."""
     out = ""
     for c in s:
         if c in "\n\r":
@@ -43,7 +43,7 @@ def md_text(s):
 
 
 def md_link(s):
-    """pipeline/markdown.c sl_md_link."""
+    """core/markdown.c sl_md_link."""
     out = ""
     for c in s:
         if ord(c) < 0x20 or ord(c) == 0x7f:

@@ -18,7 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pipeline/artifact.h"
+#include "core/artifact.h"
 #include "runtime/mc_cube.h"
 #include "tests/fuzz/slod_promises.h"
 

@@ -15,6 +15,7 @@
 #include "pipeline/config.h"
 #include "shim/oiio_shim.h"
 #include "stages/range/range.h"
+#include "stages/registry.h"
 #include "tests/check.h"
 
 static char tmp_root[512];

@@ -17,12 +17,13 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "core/atomicfile.h"
+#include "core/hash.h"
 #include "geometry/mesh_distance.h"
 #include "geometry/ply.h"
-#include "pipeline/atomicfile.h"
 #include "pipeline/config.h"
-#include "pipeline/hash.h"
 #include "stages/merge/key_table.h"
+#include "stages/registry.h"
 #include "stages/samples/samples.h"
 #include "tests/check.h"
 

@@ -1,5 +1,5 @@
 /* A strict RFC 8259 validator for the tests (test_json, test_log): written apart from
- * pipeline/json.c so that a bug in the writer is not mirrored by the check. Accepts one
+ * core/json.c so that a bug in the writer is not mirrored by the check. Accepts one
  * value with optional surrounding whitespace; strings must hold valid UTF-8, no raw
  * control characters and only the escapes the RFC allows.
  */

@@ -14,10 +14,10 @@
 #include <unistd.h>
 
 #include "../check.h"
+#include "core/atomicfile.h"
 #include "geometry/glb.h"
 #include "glb_meshes.h"
 #include "json_validate.h"
-#include "pipeline/atomicfile.h"
 
 static char tmpdir[512];
 

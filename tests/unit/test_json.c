@@ -1,6 +1,6 @@
 /* JSON writer: exact bytes for compact and pretty output, escaping of control characters
  * and invalid UTF-8, deterministic numbers, and valid JSON whatever bytes go in. */
-#include "pipeline/json.h"
+#include "core/json.h"
 #include "tests/check.h"
 #include "tests/unit/json_validate.h"
 

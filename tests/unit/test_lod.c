@@ -9,7 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "pipeline/artifact.h"
+#include "core/artifact.h"
 #include "runtime/lod_io.h"
 #include "stages/merge/merge.h"
 #include "stages/priority/priority.h"

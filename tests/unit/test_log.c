@@ -1,8 +1,8 @@
 /* Logs: the human line format, JSON-lines events (checked by a strict validator), both
  * files shared by forked children without torn lines, the stderr cap, the progress bar
  * on a pseudo-terminal, and logging before sl_log_open. */
-#include "pipeline/log.h"
-#include "pipeline/progress.h"
+#include "core/log.h"
+#include "core/progress.h"
 #include "tests/check.h"
 #include "tests/unit/json_validate.h"
 

@@ -1,9 +1,9 @@
-/* Markdown escaping of user-chosen names in the summaries (pipeline/markdown.h): a name
+/* Markdown escaping of user-chosen names in the summaries (core/markdown.h): a name
  * with table, link, emphasis or line-break characters stays one literal cell or link. */
 #include <stdlib.h>
 #include <string.h>
 
-#include "pipeline/markdown.h"
+#include "core/markdown.h"
 #include "tests/check.h"
 
 static void expect(void (*write)(FILE *, const char *), const char *in, const char *want)

@@ -10,7 +10,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "pipeline/atomicfile.h"
+#include "core/atomicfile.h"
 #include "shim/vdb_shim.h"
 #include "tests/check.h"
 

@@ -26,8 +26,8 @@
 #include <sys/resource.h>
 #include <time.h>
 
+#include "core/json.h"
 #include "geometry/ply.h"
-#include "pipeline/json.h"
 
 #define MAX_LEVELS 64
 

@@ -41,8 +41,8 @@
 #include <tbb/info.h>
 
 extern "C" {
+#include "core/json.h"
 #include "geometry/ply.h"
-#include "pipeline/json.h"
 }
 
 namespace {

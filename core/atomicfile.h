@@ -8,16 +8,16 @@
  * signal path) removes them; a kill -9 leaves at most a `.tmp` that resume ignores and
  * the engine's garbage collection removes.
  *
- * Every system call goes through pipeline/io.h so tests can inject faults.
+ * Every system call goes through core/io.h so tests can inject faults.
  * Thread safety: one sl_atomic_file per thread; the registry is locked.
  */
-#ifndef SCANLOD_PIPELINE_ATOMICFILE_H
-#define SCANLOD_PIPELINE_ATOMICFILE_H
+#ifndef SCANLOD_CORE_ATOMICFILE_H
+#define SCANLOD_CORE_ATOMICFILE_H
 
 #include <stddef.h>
 #include <stdint.h>
 
-#include "pipeline/error.h"
+#include "core/error.h"
 
 typedef struct sl_atomic_file {
     int fd;                 /* -1 when closed */

@@ -1,5 +1,5 @@
 /* Content hashing and the stat-keyed hash cache (see hash.h). */
-#include "pipeline/hash.h"
+#include "core/hash.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -11,7 +11,7 @@
 #include <unistd.h>
 #include <xxhash.h>
 
-#include "pipeline/atomicfile.h"
+#include "core/atomicfile.h"
 
 void sl_hash_hex(sl_hash h, char out[SL_HASH_HEX_SIZE])
 {

@@ -9,7 +9,7 @@
  * it with spaces in the same write (git's progress.c does the same), and the next
  * sl_log_progress() call draws it again.
  */
-#include "pipeline/log.h"
+#include "core/log.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -23,7 +23,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "pipeline/json.h"
+#include "core/json.h"
 
 #define LINE_MAX_BYTES 4096 /* a longer message is cut, so a line stays one write */
 #define BAR_MAX_COLUMNS 400

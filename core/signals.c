@@ -1,10 +1,10 @@
 /* Interrupt flag plumbing (see signals.h). */
-#include "pipeline/signals.h"
+#include "core/signals.h"
 
 #include <signal.h>
 #include <string.h>
 
-#include "pipeline/progress.h"
+#include "core/progress.h"
 
 static volatile sig_atomic_t received;
 

@@ -1,7 +1,7 @@
 /* System calls for durable writes, with fault injection for the crash and disk-full
  * tests (see io.h). The counters are per process: the engine forks one child per item,
  * so a fault index addresses the N-th call inside one process. */
-#include "pipeline/io.h"
+#include "core/io.h"
 
 #include <errno.h>
 #include <fcntl.h>

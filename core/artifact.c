@@ -1,5 +1,5 @@
 /* Binary artifact envelope: magic, versions, size, checksum (see artifact.h). */
-#include "pipeline/artifact.h"
+#include "core/artifact.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -9,7 +9,7 @@
 #include <unistd.h>
 #include <xxhash.h>
 
-#include "pipeline/atomicfile.h"
+#include "core/atomicfile.h"
 
 int sl_artifact_write(const char *path, const char magic[8], uint32_t format_version,
                       uint32_t stage_version, const sl_artifact_part *parts, int part_count,

@@ -3,11 +3,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "pipeline/commands.h"
+#include "cli/commands.h"
+#include "core/error.h"
+#include "core/log.h"
+#include "core/signals.h"
 #include "pipeline/engine.h"
-#include "pipeline/error.h"
-#include "pipeline/log.h"
-#include "pipeline/signals.h"
+#include "stages/registry.h"
 
 #define MAX_OVERRIDES 128
 
@@ -99,7 +100,7 @@ static int open_engine(const char *command, int argc, char **argv, int open_logs
         return -1;
     }
     sl_engine_options opts = {a.config, a.overrides, a.override_count, command,
-                              a.quiet, a.verbose, open_logs};
+                              a.quiet, a.verbose, open_logs, sl_stage_registry()};
     sl_error err;
     sl_error_init(&err);
     if (sl_engine_open(e, &opts, &err) != 0) {

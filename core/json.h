@@ -13,8 +13,8 @@
  * Misuse (nesting deeper than SL_JSON_MAX_DEPTH, closing what is not open) sets
  * `failed` too.
  */
-#ifndef SCANLOD_PIPELINE_JSON_H
-#define SCANLOD_PIPELINE_JSON_H
+#ifndef SCANLOD_CORE_JSON_H
+#define SCANLOD_CORE_JSON_H
 
 #include <stddef.h>
 #include <stdint.h>

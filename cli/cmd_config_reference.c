@@ -4,9 +4,10 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "pipeline/commands.h"
+#include "cli/commands.h"
+#include "core/error.h"
 #include "pipeline/config.h"
-#include "pipeline/error.h"
+#include "stages/registry.h"
 
 static const char usage[] =
     "usage: scanlod config-reference\n"
@@ -24,7 +25,9 @@ int sl_cmd_config_reference(int argc, char **argv)
         fprintf(stderr, "scanlod config-reference: unexpected argument '%s'\n%s", argv[1], usage);
         return SL_EXIT_USAGE;
     }
-    sl_config_write_reference(stdout, sl_all_option_tables());
+    const sl_option *tables[SL_MAX_OPTION_TABLES + 1];
+    sl_all_option_tables(sl_stage_registry(), tables);
+    sl_config_write_reference(stdout, tables);
     if (fflush(stdout) != 0 || ferror(stdout)) { /* e.g. a full disk behind `> file` */
         fprintf(stderr, "scanlod config-reference: writing stdout: %s\n", strerror(errno));
         return SL_EXIT_IOERR;

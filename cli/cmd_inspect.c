@@ -8,9 +8,9 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "cli/commands.h"
+#include "core/error.h"
 #include "geometry/ply.h"
-#include "pipeline/commands.h"
-#include "pipeline/error.h"
 
 static void usage(FILE *f)
 {

@@ -1,13 +1,13 @@
 /* Content hashes (XXH3-128) for inputs, outputs and stage keys, and the input-hash cache
  * keyed by (device, inode, size, mtime, ctime) so `touch` or a copy costs a re-hash but
  * never a recompute (ARCHITECTURE section 3). */
-#ifndef SCANLOD_PIPELINE_HASH_H
-#define SCANLOD_PIPELINE_HASH_H
+#ifndef SCANLOD_CORE_HASH_H
+#define SCANLOD_CORE_HASH_H
 
 #include <stddef.h>
 #include <stdint.h>
 
-#include "pipeline/error.h"
+#include "core/error.h"
 
 typedef struct sl_hash {
     uint64_t hi, lo;

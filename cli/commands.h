@@ -1,8 +1,8 @@
-/* The scanlod subcommands (pipeline/main.c dispatches; each lives in cmd_<name>.c).
+/* The scanlod subcommands (cli/main.c dispatches; each lives in cmd_<name>.c).
  * Each takes argv after the subcommand name (argv[0] is the subcommand) and returns a
  * process exit code (enum sl_exit). */
-#ifndef SCANLOD_PIPELINE_COMMANDS_H
-#define SCANLOD_PIPELINE_COMMANDS_H
+#ifndef SCANLOD_CLI_COMMANDS_H
+#define SCANLOD_CLI_COMMANDS_H
 
 int sl_cmd_run(int argc, char **argv);     /* whole collection, resumable */
 int sl_cmd_worker(int argc, char **argv);  /* one worker on the shared queues */

@@ -12,8 +12,8 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "pipeline/commands.h"
-#include "pipeline/error.h"
+#include "cli/commands.h"
+#include "core/error.h"
 #include "runtime/lod_io.h"
 #include "runtime/octree_io.h"
 #include "stages/export/export.h"

@@ -10,10 +10,10 @@
 #include <string.h>
 #include <time.h>
 
+#include "cli/commands.h"
+#include "core/json.h"
 #include "geometry/mesh_distance.h"
 #include "geometry/ply.h"
-#include "pipeline/commands.h"
-#include "pipeline/json.h"
 
 static const char compare_usage[] =
     "usage: scanlod compare A.ply B.ply [--samples N] [--seed S] [--json]\n"

@@ -1,7 +1,7 @@
 /* The JSON writer (see json.h): an append-only buffer plus one "has this container a
  * value yet" bit per open level, which is all it takes to place commas and indentation.
  */
-#include "pipeline/json.h"
+#include "core/json.h"
 
 #include <inttypes.h>
 #include <math.h>

@@ -10,8 +10,8 @@
  * Thread safety: an sl_error is owned by one thread; parallel code gives each thread its
  * own and merges them with sl_error_merge() in a fixed order (deterministic messages).
  */
-#ifndef SCANLOD_PIPELINE_ERROR_H
-#define SCANLOD_PIPELINE_ERROR_H
+#ifndef SCANLOD_CORE_ERROR_H
+#define SCANLOD_CORE_ERROR_H
 
 #include <stdarg.h>
 #include <stddef.h>

@@ -1,5 +1,5 @@
 /* The error table and the first-failure-wins recorder (see error.h). */
-#include "pipeline/error.h"
+#include "core/error.h"
 
 #include <errno.h>
 #include <stdio.h>

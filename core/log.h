@@ -6,12 +6,12 @@
  * is a terminal, and is cleared before any log line. Child processes (one per item) keep
  * writing to the same files: each line is a single O_APPEND write.
  */
-#ifndef SCANLOD_PIPELINE_LOG_H
-#define SCANLOD_PIPELINE_LOG_H
+#ifndef SCANLOD_CORE_LOG_H
+#define SCANLOD_CORE_LOG_H
 
 #include <stdint.h>
 
-#include "pipeline/error.h"
+#include "core/error.h"
 
 enum sl_log_level { SL_LOG_ERROR = 0, SL_LOG_WARN, SL_LOG_INFO, SL_LOG_DEBUG };
 

@@ -9,8 +9,8 @@
  * from the thread that owns the object (omp master / the calling thread), others just
  * poll the flag. A NULL sl_progress* is valid and means "no progress, never interrupted".
  */
-#ifndef SCANLOD_PIPELINE_PROGRESS_H
-#define SCANLOD_PIPELINE_PROGRESS_H
+#ifndef SCANLOD_CORE_PROGRESS_H
+#define SCANLOD_CORE_PROGRESS_H
 
 #include <signal.h>
 
@@ -34,7 +34,7 @@ static inline int sl_progress_interrupted(const sl_progress *p)
     return p && p->interrupt_flag && *p->interrupt_flag;
 }
 
-/* The process-wide flag the signal handlers set (see pipeline/signals.h). */
+/* The process-wide flag the signal handlers set (see core/signals.h). */
 volatile sig_atomic_t *sl_interrupt_flag(void);
 
 #endif

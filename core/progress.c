@@ -7,7 +7,7 @@
  * The throttle state lives in thread-local storage of the reporting thread, keyed by the
  * object, so sl_progress stays the three-field struct stages initialise by position.
  */
-#include "pipeline/progress.h"
+#include "core/progress.h"
 
 #include <string.h>
 

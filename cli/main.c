@@ -1,9 +1,9 @@
-/* scanlod: scan archives to level-of-detail models. Dispatches to pipeline/cmd_*.c. */
+/* scanlod: scan archives to level-of-detail models. Dispatches to cli/cmd_*.c. */
 #include <stdio.h>
 #include <string.h>
 
-#include "pipeline/commands.h"
-#include "pipeline/error.h"
+#include "cli/commands.h"
+#include "core/error.h"
 
 typedef struct command {
     const char *name;

@@ -5,8 +5,8 @@
  * kind fail with ERRNO, or `_exit(99)` for "crash" -- SQLite's test6.c idea: sweep N
  * over every durability point and check that resume recovers. Counting is per process.
  */
-#ifndef SCANLOD_PIPELINE_IO_H
-#define SCANLOD_PIPELINE_IO_H
+#ifndef SCANLOD_CORE_IO_H
+#define SCANLOD_CORE_IO_H
 
 #include <stddef.h>
 #include <sys/types.h>

@@ -1,5 +1,5 @@
 /* Durable, atomic file publication (see atomicfile.h for the protocol). */
-#include "pipeline/atomicfile.h"
+#include "core/atomicfile.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -13,7 +13,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "pipeline/io.h"
+#include "core/io.h"
 
 #define WRITE_BUFFER_SIZE (1u << 20)
 #define MAX_LIVE_TEMPS 256

@@ -1,5 +1,5 @@
 /* Markdown escaping for the summaries (see markdown.h). */
-#include "pipeline/markdown.h"
+#include "core/markdown.h"
 
 #include <string.h>
 

@@ -12,13 +12,13 @@
  * with the file size, or a checksum mismatch, with an error naming the file (SL_E_CORRUPT
  * for our own artifacts: the engine then reruns the producing stage).
  */
-#ifndef SCANLOD_PIPELINE_ARTIFACT_H
-#define SCANLOD_PIPELINE_ARTIFACT_H
+#ifndef SCANLOD_CORE_ARTIFACT_H
+#define SCANLOD_CORE_ARTIFACT_H
 
 #include <stddef.h>
 #include <stdint.h>
 
-#include "pipeline/error.h"
+#include "core/error.h"
 
 #define SL_ARTIFACT_HEADER_SIZE 32u
 

@@ -1,8 +1,8 @@
 /* Writing text from names the user chose (item ids from file paths, level names from the
  * config) into the Markdown summaries, so a `|`, `]`, `<` or newline in a name cannot
  * break a table, an image or the page. */
-#ifndef SCANLOD_PIPELINE_MARKDOWN_H
-#define SCANLOD_PIPELINE_MARKDOWN_H
+#ifndef SCANLOD_CORE_MARKDOWN_H
+#define SCANLOD_CORE_MARKDOWN_H
 
 #include <stdio.h>
 
