@@ -18,6 +18,8 @@ typedef struct cli_args {
     int override_count;
     char threads_override[64];
     int quiet, verbose, help;
+    const char *after_scan; /* worker: the Slurm job whose scan to wait for */
+    long wait_seconds;      /* worker: how long to wait for a scan */
 } cli_args;
 
 static const char *const usage_text[] = {
@@ -27,8 +29,12 @@ static const char *const usage_text[] = {
            "0 all done, 65 done except quarantined inputs, 75 incomplete (rerun),\n"
            "74 storage needs a human, 70 internal error, 64 usage, 78 bad config.\n",
     "worker", "usage: scanlod worker CONFIG [-s section.key=value]... [--threads N] [-q|-v]\n"
+              "                      [--after-scan JOB] [--wait SECONDS]\n"
               "One worker on the queues of CONFIG's work dir (which `scanlod run` fills):\n"
-              "claims ready items until none is left. Many may run at once, on many hosts.\n",
+              "claims ready items until none is left. Many may run at once, on many hosts.\n"
+              "Before any scan has run in the work dir it waits for one (--wait, default\n"
+              "600 s; none came: exit 75). --after-scan JOB waits for the scan of that Slurm\n"
+              "job (array job id) instead: the workers of an array start with its run.\n",
     "verify", "usage: scanlod verify CONFIG [-s section.key=value]...\n"
               "Checks that every commit record in the work dir still matches its files\n"
               "(sizes and content hashes). Exit 0 when all do, 65 otherwise.\n",
@@ -47,6 +53,7 @@ static const char *usage_of(const char *command)
 static int parse_args(int argc, char **argv, cli_args *a)
 {
     memset(a, 0, sizeof *a);
+    a->wait_seconds = 600;
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];
         if (!strcmp(arg, "-h") || !strcmp(arg, "--help")) {
@@ -64,6 +71,17 @@ static int parse_args(int argc, char **argv, cli_args *a)
             if (a->override_count == MAX_OVERRIDES)
                 return -1;
             a->overrides[a->override_count++] = a->threads_override;
+        } else if (!strcmp(argv[0], "worker") && !strcmp(arg, "--after-scan") && i + 1 < argc) {
+            a->after_scan = argv[++i];
+        } else if (!strcmp(argv[0], "worker") && !strcmp(arg, "--wait") && i + 1 < argc) {
+            char *end;
+            const char *v = argv[++i];
+            a->wait_seconds = strtol(v, &end, 10);
+            if (*v < '0' || *v > '9' || *end || a->wait_seconds > 7 * 86400) {
+                fprintf(stderr, "scanlod worker: --wait takes seconds from 0 to 604800, not '%s'\n",
+                        v);
+                return -1;
+            }
         } else if (arg[0] == '-') {
             fprintf(stderr, "scanlod %s: unknown option '%s'\n", argv[0], arg);
             return -1;
@@ -114,13 +132,23 @@ static int run_or_work(int argc, char **argv, int scan)
 {
     sl_engine *e;
     int exit_code;
+    cli_args a;
     if (open_engine(argv[0], argc, argv, 1, &e, &exit_code) != 0)
         return exit_code;
+    parse_args(argc, argv, &a); /* parsed once already by open_engine */
     sl_signals_install();
     sl_error err;
     sl_error_init(&err);
-    if (scan)
+    if (scan) {
         sl_engine_scan(e, &err);
+    } else if (sl_engine_wait_for_scan(e, a.after_scan ? a.after_scan : "", a.wait_seconds,
+                                       &err) != 0) {
+        char line[1600];
+        SL_LOG(SL_LOG_ERROR, "worker", NULL, "%s", sl_error_format(&err, line, sizeof line));
+        sl_log_close();
+        sl_engine_close(e);
+        return SL_EXIT_TEMPFAIL;
+    }
     sl_error_init(&err);
     if (sl_engine_work(e, &err) != 0) {
         char line[1600];

@@ -10,6 +10,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <linux/fs.h>
+#include <sys/ioctl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -127,7 +129,7 @@ int sl_atomic_open(sl_atomic_file *f, const char *final_path, sl_error *err)
     if (snprintf(f->final_path, sizeof f->final_path, "%s", final_path) >=
         (int)sizeof f->final_path)
         return sl_error_set(err, SL_E_STORAGE, ENAMETOOLONG, final_path, "path too long");
-    char dir[1024];
+    char dir[PATH_MAX];
     const char *base;
     split_path(final_path, dir, sizeof dir, &base);
     char host[64] = "host";
@@ -230,7 +232,7 @@ int sl_atomic_commit(sl_atomic_file *f, sl_error *err)
     live_remove(f->tmp_path);
     free(f->buf);
     f->buf = NULL;
-    char dir[1024];
+    char dir[PATH_MAX];
     const char *base;
     split_path(f->final_path, dir, sizeof dir, &base);
     return sl_fsync_dir(dir, err);
@@ -311,16 +313,65 @@ int sl_read_file(const char *path, uint64_t max_size, char **data, size_t *size,
     return 0;
 }
 
+/* Copies the open file `in` into the open temp of `f`: a reflink when the filesystem
+ * shares extents (btrfs, XFS: instant, no space), else copy_file_range, else read/write. */
+static int copy_contents(int in, const char *from, sl_atomic_file *f, sl_error *err)
+{
+    if (!sl_io_faults_armed() && ioctl(f->fd, FICLONE, in) == 0)
+        return 0;
+    while (!sl_io_faults_armed()) {
+        ssize_t n = copy_file_range(in, NULL, f->fd, NULL, 1 << 30, 0);
+        if (n == 0)
+            return 0;
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0)
+            break; /* not supported here (or cross-device on old kernels): plain copy */
+    }
+    if (lseek(in, 0, SEEK_SET) != 0 || ftruncate(f->fd, 0) != 0 || lseek(f->fd, 0, SEEK_SET) != 0)
+        return sl_error_errno(err, errno, from, "seek");
+    for (;;) {
+        ssize_t n = read(in, f->buf, f->buf_cap);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0)
+            return sl_error_errno(err, errno, from, "read");
+        if (n == 0)
+            return 0;
+        if (sl_io_write(f->fd, f->buf, (size_t)n) < 0) {
+            f->failed = 1;
+            return sl_error_errno(err, errno, f->final_path, "write");
+        }
+    }
+}
+
+int sl_copy_file(const char *from, const char *to, sl_error *err)
+{
+    int in = open(from, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+    struct stat st;
+    if (in < 0)
+        return sl_error_errno(err, errno, from, "open");
+    if (fstat(in, &st) != 0 || !S_ISREG(st.st_mode)) {
+        int saved = errno;
+        close(in);
+        return S_ISREG(st.st_mode) ? sl_error_errno(err, saved, from, "stat")
+                                   : sl_error_set(err, SL_E_INTERNAL, 0, from, "not a regular file");
+    }
+    sl_atomic_file f;
+    int rc = sl_atomic_open(&f, to, err);
+    if (rc == 0)
+        rc = copy_contents(in, from, &f, err);
+    close(in);
+    if (rc == 0)
+        return sl_atomic_commit(&f, err);
+    sl_atomic_abort(&f);
+    return rc;
+}
+
 int sl_link_or_copy(const char *from, const char *to, sl_error *err)
 {
     unlink(to);
     if (link(from, to) == 0)
         return 0;
-    char *data = NULL;
-    size_t size = 0;
-    int rc = sl_read_file(from, (uint64_t)1 << 40, &data, &size, err);
-    if (rc == 0)
-        rc = sl_write_file_atomic(to, data, size, err);
-    free(data);
-    return rc;
+    return sl_copy_file(from, to, err);
 }

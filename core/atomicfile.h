@@ -14,6 +14,7 @@
 #ifndef SCANLOD_CORE_ATOMICFILE_H
 #define SCANLOD_CORE_ATOMICFILE_H
 
+#include <limits.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -21,8 +22,8 @@
 
 typedef struct sl_atomic_file {
     int fd;                 /* -1 when closed */
-    char final_path[1024];
-    char tmp_path[1400];
+    char final_path[PATH_MAX];
+    char tmp_path[PATH_MAX + 320];
     uint64_t bytes_written;
     /* buffered writes: */
     unsigned char *buf;
@@ -52,8 +53,12 @@ int sl_fsync_dir(const char *dir, sl_error *err);
 /* mkdir -p with an fsync of each parent that gained an entry. */
 int sl_mkdirs(const char *path, sl_error *err);
 
-/* Hard-links `from` as `to` (replacing it), or copies it durably when linking fails
- * (another filesystem). */
+/* Copies `from` to `to` durably (as sl_write_file_atomic does), as a reflink where the
+ * filesystem can share extents, else byte by byte in bounded memory. `to` is a file of
+ * its own: changing one never changes the other (publication uses this). */
+int sl_copy_file(const char *from, const char *to, sl_error *err);
+/* Hard-links `from` as `to` (replacing it), or copies it (sl_copy_file) when linking fails
+ * (another filesystem). For immutable artifacts inside the work folder only. */
 int sl_link_or_copy(const char *from, const char *to, sl_error *err);
 
 /* Reads a whole file (capped at max_size bytes; SL_E_LIMIT beyond). *data is malloc'd,

@@ -73,6 +73,12 @@ void sl_io_fault_init(void)
     fault.armed = (fault.scope & SCOPE_PARENT) != 0;
 }
 
+int sl_io_faults_armed(void)
+{
+    sl_io_fault_init();
+    return fault.armed && fault.op >= 0;
+}
+
 void sl_io_fault_enter_child(void)
 {
     sl_io_fault_init();

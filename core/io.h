@@ -22,6 +22,9 @@ int sl_io_mkdir(const char *path, mode_t mode);
  * SCANLOD_FAULT_SCOPE = all (default) | parent | child picks the processes that inject:
  * the engine's own process, or each per-item stage process. */
 void sl_io_fault_init(void);
+/* Nonzero when this process injects a fault: copies then take the write path (no reflink
+ * or copy_file_range), so every byte written is a call the fault can hit. */
+int sl_io_faults_armed(void);
 /* Called first thing in a per-item child: restarts the counts for this process. */
 void sl_io_fault_enter_child(void);
 

@@ -643,6 +643,19 @@ const char *sl_config_path(const sl_config *cfg)
     return cfg->path;
 }
 
+void sl_config_where(const sl_config *cfg, const char *section, const char *name, char *buf,
+                     size_t size)
+{
+    const slot *s = must_find(cfg, section, name, -1);
+    const char *file = cfg->path && cfg->path[0] ? cfg->path : "(no config file)";
+    if (s->origin == FROM_FILE)
+        snprintf(buf, size, "%s:%d", file, s->line);
+    else if (s->origin == FROM_OVERRIDE)
+        snprintf(buf, size, "-s %s.%s", section, name);
+    else
+        snprintf(buf, size, "%s", file);
+}
+
 uint64_t sl_config_section_hash(const sl_config *cfg, const char *section)
 {
     XXH3_state_t state;

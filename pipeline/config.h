@@ -83,6 +83,10 @@ int sl_config_bool(const sl_config *cfg, const char *section, const char *name);
 uint64_t sl_config_section_hash(const sl_config *cfg, const char *section);
 /* The config file it came from ("" if none). */
 const char *sl_config_path(const sl_config *cfg);
+/* Where an option's value was set, for an error about that value: "FILE:LINE", "-s
+ * section.name", or the config file (a default). */
+void sl_config_where(const sl_config *cfg, const char *section, const char *name, char *buf,
+                     size_t size);
 
 /* Writes the commented reference file for `tables`: every option with its help, type,
  * range and default, grouped by section in order of first appearance. Deterministic. */

@@ -156,14 +156,6 @@ int sl_upstream_chain(sl_engine *e, const char *ticket, const char *source_rel, 
     return rc;
 }
 
-static int check_directory(const char *path, const char *what, sl_error *err)
-{
-    struct stat st;
-    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode))
-        return sl_error_set(err, SL_E_CONFIG, errno, path, "%s is not a directory", what);
-    return 0;
-}
-
 static int make_work_layout(sl_engine *e, sl_error *err)
 {
     char path[PATH_MAX];
@@ -248,7 +240,9 @@ int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err
             e->stages[i]->release_config(stage_config);
     }
     if (rc == 0)
-        rc = check_directory(e->input, "[run] input", err);
+        rc = sl_engine_check_input(e, err);
+    if (rc == 0)
+        rc = sl_engine_check_trees(e, err);
     if (rc == 0 && opts->open_logs) {
         char run_id[160];
         make_run_id(&e->self, opts->command, run_id, sizeof run_id);
@@ -264,6 +258,8 @@ int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err
     }
     if (rc == 0 && opts->open_logs)
         rc = make_work_layout(e, err);
+    if (rc == 0 && opts->open_logs)
+        rc = sl_engine_check_writable(e, err);
     if (rc) {
         sl_engine_close(e);
         return rc;
@@ -321,6 +317,11 @@ int sl_engine_finish(sl_engine *e)
             pending += c.n[s][SL_STATE_READY] + c.n[s][SL_STATE_CLAIMED] + c.n[s][SL_STATE_FAILED];
             quarantined += c.n[s][SL_STATE_QUARANTINE];
         }
+        /* What failed transiently in this run without leaving a ticket behind (a
+         * publication that found the output disk full, an input that could not be
+         * hashed) is pending too: the next run retries it, and until then the collection
+         * is not done. Exit 0 means every item is published. */
+        pending += e->counts.untracked;
         if (e->stop)
             exit_code = sl_error_exit_code(e->storage_error.code);
         else if (pending || *sl_interrupt_flag())
@@ -340,26 +341,31 @@ int sl_engine_finish(sl_engine *e)
                sl_error_format(&serr, line, sizeof line));
     }
     const sl_engine_counts *k = &e->counts;
+    char skipped[64] = "";
+    if (k->skipped)
+        snprintf(skipped, sizeof skipped, ", %llu input entries skipped (see the log)",
+                 (unsigned long long)k->skipped);
     if (k->ran == 0 && k->published == 0 && pending == 0 && !e->stop)
-        printf("nothing to do: %llu items up to date (%llu quarantined)\n",
-               (unsigned long long)k->items, (unsigned long long)quarantined);
+        printf("nothing to do: %llu items up to date (%llu quarantined)%s\n",
+               (unsigned long long)k->items, (unsigned long long)quarantined, skipped);
     else
         printf("%llu items: %llu stage runs, %llu reused, %llu published, %llu newly "
-               "quarantined, %llu failed transiently, %llu pending; exit %d\n",
+               "quarantined, %llu failed transiently, %llu pending%s; exit %d\n",
                (unsigned long long)k->items, (unsigned long long)k->ran,
                (unsigned long long)k->reused, (unsigned long long)k->published,
                (unsigned long long)k->quarantined, (unsigned long long)k->transient,
-               (unsigned long long)pending, exit_code);
+               (unsigned long long)pending, skipped, exit_code);
     fflush(stdout);
     char extra[512];
     snprintf(extra, sizeof extra,
              "\"items\":%llu,\"ran\":%llu,\"reused\":%llu,\"published\":%llu,"
              "\"quarantined_new\":%llu,\"quarantined_total\":%llu,\"transient\":%llu,"
-             "\"pending\":%llu,\"exit\":%d",
+             "\"pending\":%llu,\"skipped\":%llu,\"exit\":%d",
              (unsigned long long)k->items, (unsigned long long)k->ran,
              (unsigned long long)k->reused, (unsigned long long)k->published,
              (unsigned long long)k->quarantined, (unsigned long long)quarantined,
-             (unsigned long long)k->transient, (unsigned long long)pending, exit_code);
+             (unsigned long long)k->transient, (unsigned long long)pending,
+             (unsigned long long)k->skipped, exit_code);
     sl_log_event("run_end", NULL, NULL, 0, e->stop ? &e->storage_error : NULL, extra);
     return exit_code;
 }
@@ -379,6 +385,7 @@ int sl_engine_status(sl_engine *e, FILE *out, sl_error *err)
                 (unsigned long long)c.n[s][SL_STATE_DONE],
                 (unsigned long long)c.n[s][SL_STATE_FAILED],
                 (unsigned long long)c.n[s][SL_STATE_QUARANTINE]);
+    sl_engine_unpublished(e, out);
     static const int listed[] = {SL_STATE_QUARANTINE, SL_STATE_FAILED, SL_STATE_CLAIMED};
     for (int s = 0; s < e->stage_count; s++)
         for (int l = 0; l < 3; l++) {

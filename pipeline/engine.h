@@ -37,6 +37,12 @@ void sl_engine_close(sl_engine *e);
 /* Walks [run] input and makes every item's queue state match its current keys. */
 int sl_engine_scan(sl_engine *e, sl_error *err);
 
+/* A worker started with (or before) the run that scans: waits until a scan of Slurm job
+ * `job` ("" = any scan at all) is under way or has finished in this work folder, for at
+ * most `seconds`; SL_E_BUSY when none came (the worker then exits 75, not 0: it did
+ * nothing, and nothing says the collection is done). */
+int sl_engine_wait_for_scan(sl_engine *e, const char *job, int64_t seconds, sl_error *err);
+
 /* Claims and runs ready work until none is left (or an interrupt / storage failure). */
 int sl_engine_work(sl_engine *e, sl_error *err);
 

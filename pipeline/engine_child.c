@@ -250,13 +250,15 @@ static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, s
  * unfinished item always has a ready or claimed ticket somewhere, so a run that finds
  * none can call the collection finished (docs/engine.md, "When a run is finished"). */
 static int release_done(sl_engine *e, int s, const char *name, const sl_ticket *t,
-                        sl_error *err)
+                        int *released, sl_error *err)
 {
     int rc = advance(e, s + 1, t, err);
     sl_error merr;
     sl_error_init(&merr);
     int moved = sl_queue_move(e->work, e->stages[s]->name, name, SL_STATE_CLAIMED,
                               SL_STATE_DONE, &merr);
+    if (released)
+        *released = moved == 0;
     if (rc)
         return rc;
     if (moved == SL_E_BUSY)
@@ -351,8 +353,9 @@ static int advance(sl_engine *e, int from, const sl_ticket *t, sl_error *err)
         return rc;
     }
     e->counts.transient++;
+    e->counts.untracked++;
     /* Leave the item retryable: the next run's scan finds the last stage done and
-     * publishes again. */
+     * publishes again (and this run's exit code says it is not done). */
     return 0;
 }
 
@@ -398,7 +401,7 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         e->counts.reused++; /* someone finished it meanwhile */
         sl_hash_hex(key, t->key);
         sl_queue_put(e->work, stage->name, SL_STATE_CLAIMED, name, t, err);
-        return release_done(e, s, name, t, err);
+        return release_done(e, s, name, t, NULL, err);
     }
     rc = sl_mkdirs(out_dir, err);
     if (rc == 0)
@@ -449,13 +452,23 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         rc = commit_success(e, s, name, t, key, out_dir, &outcome, &item_err);
         if (rc == 0) {
             e->counts.ran++;
-            char extra[160];
-            snprintf(extra, sizeof extra, "\"cpu_seconds\":%.3f,\"peak_rss_kb\":%ld",
-                     outcome.result.cpu_seconds, outcome.result.max_rss_kb);
-            sl_log_event("stage_done", stage->name, t->item, outcome.seconds, NULL, extra);
-            SL_LOG(SL_LOG_INFO, stage->name, t->item, "done in %.2f s, peak RSS %ld MiB",
-                   outcome.seconds, outcome.result.max_rss_kb / 1024);
-            return release_done(e, s, name, t, err);
+            int released = 0;
+            rc = release_done(e, s, name, t, &released, err);
+            /* Said only by the owner that moved the claim to done: an owner that lost
+             * its lease after the commit (the record is the same either way) is silent,
+             * so the log shows each stage done once. */
+            if (released) {
+                char extra[160];
+                snprintf(extra, sizeof extra, "\"cpu_seconds\":%.3f,\"peak_rss_kb\":%ld",
+                         outcome.result.cpu_seconds, outcome.result.max_rss_kb);
+                sl_log_event("stage_done", stage->name, t->item, outcome.seconds, NULL, extra);
+                SL_LOG(SL_LOG_INFO, stage->name, t->item, "done in %.2f s, peak RSS %ld MiB",
+                       outcome.seconds, outcome.result.max_rss_kb / 1024);
+            } else {
+                SL_LOG(SL_LOG_WARN, stage->name, t->item,
+                       "committed, but the claim was taken over meanwhile");
+            }
+            return rc;
         }
         if (rc == SL_E_LEASE_LOST)
             outcome.lease_lost = 1;

@@ -30,6 +30,9 @@ typedef struct sl_engine_counts {
     uint64_t quarantined; /* newly quarantined in this run */
     uint64_t bugs;        /* quarantined as a crash in our code, this run */
     uint64_t transient;   /* failed transiently in this run */
+    uint64_t untracked;   /* of those, failures no ticket shows (a publication, a scan
+                             error): pending for the exit code all the same */
+    uint64_t skipped;     /* input entries the scan did not take (hidden, links, ...) */
 } sl_engine_counts;
 
 struct sl_engine {
@@ -69,6 +72,17 @@ sl_hash sl_chain_hash(sl_hash chain, sl_hash digest);
 int sl_remove_dir_contents(const char *dir, sl_error *err);
 double sl_now_seconds(void);
 
+/* engine_gc.c: items whose last stage is done but that have no publication (each named
+ * on `out`); their number. */
+uint64_t sl_engine_unpublished(sl_engine *e, FILE *out);
+
+/* engine_trees.c: the run's folders. [run] input must be a folder; input, work, output
+ * and logs must not contain one another (SL_E_CONFIG naming FILE:LINE); work and output
+ * must take a new file (SL_E_STORAGE if they cannot: read-only, permissions). */
+int sl_engine_check_input(sl_engine *e, sl_error *err);
+int sl_engine_check_trees(sl_engine *e, sl_error *err);
+int sl_engine_check_writable(sl_engine *e, sl_error *err);
+
 /* engine_scan.c: bring one item's tickets in line with its keys from stage `from` on. */
 int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
                         sl_error *err);
@@ -85,6 +99,9 @@ int sl_engine_lease_check(sl_engine *e, const char *stage, const char *name,
  * lease): it may still enqueue work, so others do not call the collection finished while
  * it lasts. mark: 1 = announce or renew (when half the lease is gone), 0 = withdraw. */
 void sl_engine_scan_mark(sl_engine *e, int mark);
+/* A finished scan leaves its stamp (WORK/queue/_scan/done/last: host, pid, job, end time),
+ * so a worker started before any scan can tell it has to wait (sl_engine_wait_for_scan). */
+void sl_engine_scan_stamp(sl_engine *e);
 
 /* engine_summary.c: OUTPUT/summary.json and summary.md over the scanned items. */
 int sl_engine_write_summary(sl_engine *e, sl_error *err);

@@ -5,12 +5,14 @@
 static const sl_option run_options[] = {
     {"run", "input", SL_OPT_PATH, NULL, 0, 0, NULL,
      "Folder tree of .ply files to convert, searched recursively; one file is one item, "
-     "its id the path relative to this folder without \".ply\". Never written to."},
+     "its id the file's path relative to this folder (published at OUTPUT/ID/). Links to "
+     "folders are not followed. Never written to."},
     {"run", "work", SL_OPT_PATH, NULL, 0, 0, NULL,
      "Work directory: queues, intermediate artifacts and their commit records. Share it "
      "between hosts to run workers on a cluster."},
     {"run", "output", SL_OPT_PATH, NULL, 0, 0, NULL,
-     "Published results: one folder per item, replaced atomically."},
+     "Published results: one folder per item, replaced atomically. Input, work, output "
+     "and logs must be four folders none of which contains another."},
     {"run", "logs", SL_OPT_PATH, "logs", 0, 0, NULL,
      "Folder for the human log and the JSON-lines event log of each run (relative to the "
      "current directory when left at the default)."},

@@ -7,7 +7,8 @@
  * publication on every stage's key, so unchanged items are not rewritten.
  *
  * Published: report.json (deterministic: counts from every stage), the output files of
- * stages marked `publish` (hard links into the work dir when possible), and timings.json
+ * stages marked `publish` (copies, or reflinks where the filesystem shares extents: never
+ * hard links, so a file edited in the output cannot change an artifact), and timings.json
  * (wall/CPU time and peak RSS per stage: differs between runs, so it is not in the
  * record).
  */
@@ -160,7 +161,7 @@ static int publish_stage_files(sl_engine *e, const char *ticket, const char *sta
             char from[PATH_MAX], to[PATH_MAX];
             sl_engine_path(from, sizeof from, "%s/%s", dir, name);
             sl_engine_path(to, sizeof to, "%s/%s", staged, name);
-            rc = sl_link_or_copy(from, to, err);
+            rc = sl_copy_file(from, to, err);
             snprintf(storage[*count], 128, "%s", name);
             names[*count] = storage[*count];
             (*count)++;
@@ -196,7 +197,9 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
     const char *base = slash ? slash + 1 : parent;
     if (slash)
         *slash = '\0';
-    if (sl_engine_path(staged, sizeof staged, "%s/.%s.publish.%s.%ld", parent, base,
+    /* The name is bounded (a scan may be named with 250 bytes: NAME_MAX is 255); one
+     * process stages one item at a time, so HOST.PID keeps it unique. */
+    if (sl_engine_path(staged, sizeof staged, "%s/.%.100s.publish.%s.%ld", parent, base,
                        e->self.host, e->self.pid))
         return sl_error_set(err, SL_E_LIMIT, 0, item, "path too long");
     sl_hash key;

@@ -1,10 +1,13 @@
 /* The worker loop: claim ready tickets by rename, hold a lease while the item runs,
  * reclaim tickets whose owner is gone (ARCHITECTURE section 3, leases and epochs).
  *
- * Liveness: on the same host (and boot) a claim whose pid is gone -- or belongs to a
- * newer process -- is reclaimed at once; across hosts only an expired lease is, never a
- * pid. Each claim bumps the ticket's epoch (the fencing token) and draws a fresh nonce;
- * the committing worker checks both before it publishes anything.
+ * Liveness: a claim whose lease expired is reclaimed, on any host: a live pid is not a
+ * live owner once it stopped renewing (SIGSTOP, a Slurm suspend, a process stuck in
+ * NFS D-state). On the same host (and boot) a claim whose pid is gone -- or belongs to a
+ * newer process -- is also reclaimed at once, without waiting for its lease; across
+ * hosts a pid is never judged. Each claim bumps the ticket's epoch (the fencing token)
+ * and draws a fresh nonce; the committing worker checks both before it publishes
+ * anything, so an owner that wakes up after its lease was taken commits nothing.
  */
 #include "pipeline/engine_internal.h"
 
@@ -79,12 +82,11 @@ int sl_engine_lease_check(sl_engine *e, const char *stage, const char *name,
     return 0;
 }
 
-/* The owner of a leased ticket is gone: on this host its pid died (or was reused), on
- * another its lease expired. One rule for claims and scan marks. */
+/* The owner of a leased ticket is gone: its lease expired (wherever it runs), or, on
+ * this host, its pid died (or was reused). One rule for claims and scan marks. */
 static int lease_owner_gone(const sl_engine *e, const sl_ticket *t, int64_t now)
 {
-    int alive = sl_identity_alive(&e->self, t);
-    return alive == 0 || (alive < 0 && t->expires < now);
+    return t->expires < now || sl_identity_alive(&e->self, t) == 0;
 }
 
 /* A claimed ticket nobody can be working on any more goes back to ready. */
@@ -210,6 +212,74 @@ void sl_engine_scan_mark(sl_engine *e, int mark)
     if (sl_queue_create(e->work, SCAN_QUEUE, &err) == 0 &&
         sl_queue_put(e->work, SCAN_QUEUE, SL_STATE_CLAIMED, name, &t, &err) == 0)
         e->scan_mark_expires = t.expires;
+}
+
+void sl_engine_scan_stamp(sl_engine *e)
+{
+    sl_ticket t;
+    sl_ticket_init(&t);
+    snprintf(t.item, sizeof t.item, "%s", "(last scan)");
+    stamp_lease(e, &t);
+    t.expires = (int64_t)sl_now_seconds(); /* when it ended */
+    sl_error err;
+    sl_error_init(&err);
+    if (sl_queue_put(e->work, SCAN_QUEUE, SL_STATE_DONE, "last", &t, &err) != 0)
+        SL_LOG(SL_LOG_WARN, "scan", NULL, "scan stamp not written: %s", err.message);
+}
+
+/* Does a scan mark or stamp `t` come from job `job` ("" = any job)? Slurm array tasks
+ * carry "ARRAYJOB_TASK[+rRESTART]" (sl_identity_self), so a job's array id names all of
+ * its tasks. */
+static int from_job(const sl_ticket *t, const char *job)
+{
+    size_t n = strlen(job);
+    return !job[0] || (strncmp(t->job, job, n) == 0 &&
+                       (t->job[n] == '\0' || t->job[n] == '_' || t->job[n] == '+'));
+}
+
+/* A live scan mark of `job` (other than ours), or the stamp of a finished one. */
+static int scan_seen(const sl_engine *e, const char *job, int64_t now)
+{
+    char path[PATH_MAX];
+    sl_ticket t;
+    sl_error err;
+    sl_error_init(&err);
+    sl_queue_path(path, sizeof path, e->work, SCAN_QUEUE, SL_STATE_DONE, "last");
+    if (sl_ticket_read(path, &t, &err) == 0 && from_job(&t, job))
+        return 1;
+    char **names;
+    int count = 0, seen = 0;
+    if (sl_queue_list(e->work, SCAN_QUEUE, SL_STATE_CLAIMED, &names, &count, &err) != 0)
+        return 0;
+    for (int i = 0; i < count && !seen; i++) {
+        sl_error terr;
+        sl_error_init(&terr);
+        sl_queue_path(path, sizeof path, e->work, SCAN_QUEUE, SL_STATE_CLAIMED, names[i]);
+        seen = sl_ticket_read(path, &t, &terr) == 0 && t.expires >= now && from_job(&t, job);
+    }
+    free(names);
+    return seen;
+}
+
+int sl_engine_wait_for_scan(sl_engine *e, const char *job, int64_t seconds, sl_error *err)
+{
+    double start = sl_now_seconds();
+    int said = 0;
+    while (!scan_seen(e, job, (int64_t)sl_now_seconds())) {
+        if (*sl_interrupt_flag())
+            return sl_error_set(err, SL_E_INTERRUPTED, 0, e->work, "interrupted");
+        if (sl_now_seconds() - start >= (double)seconds)
+            return sl_error_set(err, SL_E_BUSY, 0, e->work,
+                                "no scan %s%s%s within %lld s: nothing to work on yet",
+                                job[0] ? "of job " : "has run in this work folder",
+                                job[0] ? job : "", job[0] ? " began" : "", (long long)seconds);
+        if (!said++)
+            SL_LOG(SL_LOG_INFO, "worker", NULL, "waiting for a scan%s%s (up to %lld s)",
+                   job[0] ? " of job " : "", job, (long long)seconds);
+        struct timespec pause = {0, 500 * 1000 * 1000};
+        nanosleep(&pause, NULL);
+    }
+    return 0;
 }
 
 /* Scans announced by other live processes (their announcements when dead are removed). */

@@ -11,6 +11,8 @@
 #include <sys/stat.h>
 
 #include "core/atomicfile.h"
+#include "core/escape.h"
+#include "core/hash.h"
 #include "core/io.h"
 
 static const char *const state_names[SL_STATE_COUNT] = {"ready", "claimed", "done", "failed",
@@ -28,25 +30,22 @@ void sl_ticket_init(sl_ticket *t)
 
 int sl_ticket_name(const char *item, char *name, size_t size, sl_error *err)
 {
-    size_t n = 0;
-    for (const char *p = item; *p; p++) {
-        const char *esc = NULL;
-        if (*p == '%')
-            esc = "%25";
-        else if (*p == '/')
-            esc = "%2F";
-        else if (*p == '.' && p == item)
-            esc = "%2E";
-        size_t add = esc ? 3 : 1;
-        if (n + add >= size || n + add > SL_TICKET_NAME_MAX)
-            return sl_error_set(err, SL_E_LIMIT, 0, item, "item id too long for a ticket name");
-        if (esc)
-            memcpy(name + n, esc, 3);
-        else
-            name[n] = *p;
-        n += add;
+    if (!item[0])
+        return sl_error_set(err, SL_E_INTERNAL, 0, NULL, "empty item id");
+    char escaped[4 * sizeof ((sl_ticket *)0)->item];
+    long n = sl_escape(item, '/', '.', escaped, sizeof escaped);
+    if (n < 0)
+        return sl_error_set(err, SL_E_LIMIT, 0, item, "item id too long");
+    if (n > SL_TICKET_NAME_MAX) {
+        /* Too long for one file name: a prefix to read, then the hash of the whole id,
+         * so every item still gets its own ticket. */
+        char hex[SL_HASH_HEX_SIZE];
+        sl_hash_hex(sl_hash_bytes(item, strlen(item)), hex);
+        snprintf(escaped + SL_TICKET_NAME_MAX - 33, 34, "~%s", hex);
     }
-    name[n] = '\0';
+    if (strlen(escaped) >= size)
+        return sl_error_set(err, SL_E_INTERNAL, 0, item, "ticket name buffer too small");
+    memcpy(name, escaped, strlen(escaped) + 1);
     return 0;
 }
 
@@ -203,8 +202,8 @@ int sl_ticket_read(const char *path, sl_ticket *t, sl_error *err)
             continue;
         *eq = '\0';
         const char *k = line, *v = eq + 1;
-        if (!strcmp(k, "item")) field(t->item, sizeof t->item, v);
-        else if (!strcmp(k, "source")) field(t->source, sizeof t->source, v);
+        if (!strcmp(k, "item")) field(t->item, sizeof t->item, v), sl_unescape(t->item);
+        else if (!strcmp(k, "source")) field(t->source, sizeof t->source, v), sl_unescape(t->source);
         else if (!strcmp(k, "key")) field(t->key, sizeof t->key, v);
         else if (!strcmp(k, "attempt")) t->attempt = atoi(v);
         else if (!strcmp(k, "crashes")) t->crashes = atoi(v);
@@ -237,12 +236,16 @@ int sl_ticket_write(const char *path, const sl_ticket *t, sl_error *err)
 {
     char reason[sizeof t->reason];
     one_line(t->reason, reason, sizeof reason);
-    char text[4096 + sizeof t->item + sizeof t->source];
+    char item[3 * sizeof t->item], source[3 * sizeof t->source];
+    if (sl_escape(t->item, 0, 0, item, sizeof item) < 0 ||
+        sl_escape(t->source, 0, 0, source, sizeof source) < 0)
+        return sl_error_set(err, SL_E_INTERNAL, 0, path, "ticket too large");
+    char text[4096 + sizeof item + sizeof source];
     int n = snprintf(text, sizeof text,
                      "item=%s\nsource=%s\nkey=%s\nattempt=%d\ncrashes=%d\nepoch=%" PRIu64
                      "\nhost=%s\nboot=%s\npid=%ld\npid_start=%llu\njob=%s\nnonce=%s\n"
                      "expires=%" PRId64 "\nclass=%s\nreason=%s\nend\n",
-                     t->item, t->source, t->key, t->attempt, t->crashes, t->epoch, t->host,
+                     item, source, t->key, t->attempt, t->crashes, t->epoch, t->host,
                      t->boot, t->pid, t->pid_start, t->job, t->nonce, t->expires, t->cls,
                      reason);
     if (n < 0 || (size_t)n >= sizeof text)

@@ -5,12 +5,16 @@
  * item carries the lease (host, boot id, pid + its start time, job id, epoch, expiry,
  * nonce), rewritten atomically on renewal.
  *
- * Ticket names are the item id with '%', '/' and a leading '.' escaped (%25, %2F, %2E),
- * so `bunny/bun000` is `bunny%2Fbun000`; the item id itself is also inside the ticket.
+ * Ticket names are the item id percent-escaped: '%', '/', control characters and a
+ * leading '.' (%25, %2F, %0A, %2E), so `bunny/bun000.ply` is `bunny%2Fbun000.ply`; a name
+ * longer than SL_TICKET_NAME_MAX keeps a prefix and ends in "~" and the 128-bit hash of
+ * the whole id. Every item id has a ticket. The item id itself is also inside the ticket
+ * (its '%' and control characters escaped the same way, so it stays one line).
  */
 #ifndef SCANLOD_PIPELINE_QUEUE_H
 #define SCANLOD_PIPELINE_QUEUE_H
 
+#include <limits.h>
 #include <stdint.h>
 
 #include "core/error.h"
@@ -30,8 +34,8 @@ const char *sl_queue_state_name(int state); /* "ready", ... */
 #define SL_TICKET_NAME_MAX 240
 
 typedef struct sl_ticket {
-    char item[1024];      /* item id */
-    char source[1024];    /* input path relative to [run] input */
+    char item[PATH_MAX];  /* item id: input path relative to [run] input */
+    char source[PATH_MAX]; /* the same (kept apart: the item id names, the source is read) */
     char key[33];         /* stage key (hex) the ticket belongs to */
     int attempt;          /* claims so far */
     int crashes;          /* crashes in our own code so far */
@@ -51,7 +55,7 @@ void sl_ticket_init(sl_ticket *t);
 int sl_ticket_read(const char *path, sl_ticket *t, sl_error *err);
 int sl_ticket_write(const char *path, const sl_ticket *t, sl_error *err); /* atomic */
 
-/* Escapes an item id to a ticket name; SL_E_LIMIT if it does not fit. */
+/* The ticket name of an item id (`name`: SL_TICKET_NAME_MAX + 1 bytes). */
 int sl_ticket_name(const char *item, char *name, size_t size, sl_error *err);
 
 /* WORK/queue/<stage>/<state>[/<name>] */

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "core/atomicfile.h"
+#include "core/escape.h"
 
 sl_hash sl_stage_key(const char *stage, uint32_t stage_version, uint64_t config_hash,
                      sl_hash upstream)
@@ -115,9 +116,13 @@ int sl_record_commit(const char *record_path, const char *dir, const char *const
         char key_hex[SL_HASH_HEX_SIZE], digest_hex[SL_HASH_HEX_SIZE];
         sl_hash_hex(r->key, key_hex);
         sl_hash_hex(r->outputs_digest, digest_hex);
-        rc = sl_atomic_printf(&f, err, "format=scanlod-record 1\nstage=%s\nstage_version=%u\n"
-                              "item=%s\nkey=%s\n",
-                              r->stage, r->stage_version, r->item, key_hex);
+        char item_line[3 * sizeof r->item]; /* one line, whatever the name holds */
+        if (sl_escape(r->item, 0, 0, item_line, sizeof item_line) < 0)
+            rc = sl_error_set(err, SL_E_INTERNAL, 0, record_path, "item id too long");
+        if (rc == 0)
+            rc = sl_atomic_printf(&f, err, "format=scanlod-record 1\nstage=%s\nstage_version=%u\n"
+                                  "item=%s\nkey=%s\n",
+                                  r->stage, r->stage_version, item_line, key_hex);
         for (int i = 0; rc == 0 && i < r->output_count; i++) {
             char hex[SL_HASH_HEX_SIZE];
             sl_hash_hex(r->outputs[i].hash, hex);
@@ -154,7 +159,7 @@ static int parse_record(char *text, sl_record *r)
         else if (!strcmp(k, "stage_version"))
             r->stage_version = (uint32_t)strtoul(v, NULL, 10);
         else if (!strcmp(k, "item"))
-            snprintf(r->item, sizeof r->item, "%s", v);
+            snprintf(r->item, sizeof r->item, "%s", v), sl_unescape(r->item);
         else if (!strcmp(k, "key"))
             have_key = sl_hash_parse(v, &r->key) == 0;
         else if (!strcmp(k, "outputs_digest"))

@@ -10,6 +10,7 @@
 #ifndef SCANLOD_PIPELINE_RECORD_H
 #define SCANLOD_PIPELINE_RECORD_H
 
+#include <limits.h>
 #include <stdint.h>
 
 #include "core/error.h"
@@ -27,7 +28,7 @@ typedef struct sl_record_output {
 typedef struct sl_record {
     char stage[32];
     uint32_t stage_version;
-    char item[1024];
+    char item[PATH_MAX]; /* escaped in the file (core/escape.h) */
     sl_hash key;
     sl_hash outputs_digest;
     int output_count;

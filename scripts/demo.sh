@@ -6,8 +6,8 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 "$root/scripts/build.sh" "$root/build"
 cd "$root"
 status=0
-build/pipeline/scanlod run config/demo.ini || status=$?
-build/pipeline/scanlod status config/demo.ini
-echo "--- build/demo/output/cow/report.json"
-cat build/demo/output/cow/report.json
+build/cli/scanlod run config/demo.ini || status=$?
+build/cli/scanlod status config/demo.ini
+echo "--- build/demo/output/cow.ply/report.json"
+cat build/demo/output/cow.ply/report.json
 exit $status

@@ -24,7 +24,7 @@
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 build=${1:-$root/build}
-scanlod=$build/pipeline/scanlod
+scanlod=$build/cli/scanlod
 data=${SCANLOD_SHARED_DATA:-$root/../shared/data}
 reps=${REPS:-3}
 inputs=${INPUTS:-bun_zipper dragon_100kf igea}

@@ -25,7 +25,7 @@ start=$(date +%s)
 run_scanlod run "$TMP/c.ini"
 elapsed=$(( $(date +%s) - start ))
 check "batch exits 65 (got $rc)" [ "$rc" -eq 65 ]
-check "good items published" [ -f "$TMP/out/cow/report.json" -a -f "$TMP/out/bun_zipper_res4/report.json" ]
+check "good items published" [ -f "$TMP/out/cow.ply/report.json" -a -f "$TMP/out/bun_zipper_res4.ply/report.json" ]
 check "no bad item published" [ ! -e "$TMP/out/bad" ]
 check "batch took < 60 s ($elapsed)" [ "$elapsed" -lt 60 ]
 for f in "$in"/bad/*.ply; do
@@ -49,7 +49,7 @@ check "rerun does no work (got: $out)" grep -q "^nothing to do" <<<"$out"
 # A fixed input leaves quarantine on the next run.
 cp "$SCANS/cow.ply" "$in/bad/truncated.ply"
 run_scanlod run "$TMP/c.ini" -q
-check "repaired input is rebuilt and published" [ -f "$TMP/out/bad/truncated/report.json" ]
+check "repaired input is rebuilt and published" [ -f "$TMP/out/bad/truncated.ply/report.json" ]
 
 # Within the range stage's limit, but a leaf this coarse makes an octree grid beyond what
 # the readers take: the merge stage quarantines it rather than write a file the next
@@ -59,7 +59,7 @@ printf 'ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty floa
 write_config "$TMP/far.ini" "$TMP/far" "$TMP/wfar" "$TMP/ofar" '[octree]' 'leaf_size = 4e13' '[samples]' 'band = 8'
 run_scanlod run "$TMP/far.ini"
 check "coarse grid beyond the readers' limit: exit 65 (got $rc)" [ "$rc" -eq 65 ]
-check "merge quarantines it with the cause (got: $err)" grep -q "\[merge\] octahedron: quarantined: .*reaches beyond" <<<"$err"
+check "merge quarantines it with the cause (got: $err)" grep -q "\[merge\] octahedron.ply: quarantined: .*reaches beyond" <<<"$err"
 run_scanlod run "$TMP/far.ini" -q
 check "and does not retry it (got $rc: $out)" grep -q "^nothing to do" <<<"$out"
 

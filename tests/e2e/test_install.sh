@@ -33,7 +33,7 @@ write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out"
 SCANLOD="$prefix/bin/scanlod" # from here on, the installed binary
 run_scanlod run "$TMP/c.ini" -q
 check "the installed binary's pipeline ran (rc $rc: $err)" [ "$rc" -eq 0 ]
-model="$TMP/out/fandisk/model.slod"
+model="$TMP/out/fandisk.ply/model.slod"
 set +e
 cut=$(LD_LIBRARY_PATH="$libdir" "$TMP/cut_level" "$model" 3000 2>&1)
 crc=$?

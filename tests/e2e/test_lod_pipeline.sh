@@ -12,7 +12,7 @@ run_scanlod run "$TMP/c.ini" -q
 check "run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
 
 report_value() { # report_value ITEM PYTHON-EXPRESSION-ON-r
-  python3 -c "import json,sys; r=json.load(open('$TMP/out/$1/report.json')); print($2)"
+  python3 -c "import json,sys; r=json.load(open('$TMP/out/$1.ply/report.json')); print($2)"
 }
 for item in fandisk rocker_arm cow; do
   levels=$(report_value "$item" "len(r['stages']['export']['levels'])")
@@ -23,10 +23,10 @@ for item in fandisk rocker_arm cow; do
   check "$item (closed): every level watertight ($tight of $levels)" [ "$tight" -eq "$levels" ]
   # The report's count is compare's count.
   reported=$(report_value "$item" "[l for l in r['stages']['export']['levels'] if l['name']=='lod100'][0]['boundary_edges']")
-  counted=$("$SCANLOD" compare "$TMP/out/$item/lod100.ply" "$TMP/out/$item/lod100.ply" | sed -n 's/.*edges: \([0-9]*\) boundary.*/\1/p')
+  counted=$("$SCANLOD" compare "$TMP/out/$item.ply/lod100.ply" "$TMP/out/$item.ply/lod100.ply" | sed -n 's/.*edges: \([0-9]*\) boundary.*/\1/p')
   check "$item: reported boundary edges ($reported) = compare's count ($counted)" [ "$reported" = "$counted" ]
   for name in lod20 lod60 lod100 thumb big; do
-    check "$item: $name.ply, .glb and .png published" [ -s "$TMP/out/$item/$name.ply" -a -s "$TMP/out/$item/$name.glb" -a -s "$TMP/out/$item/$name.png" ]
+    check "$item: $name.ply, .glb and .png published" [ -s "$TMP/out/$item.ply/$name.ply" -a -s "$TMP/out/$item.ply/$name.glb" -a -s "$TMP/out/$item.ply/$name.png" ]
   done
   clamped=$(report_value "$item" "[l for l in r['stages']['export']['levels'] if l['name']=='big'][0]['clamped']")
   check "$item: a budget above the finest is clamped" [ "$clamped" = "True" ]
@@ -36,14 +36,14 @@ done
 # Every published file as the report says (counts in PLY headers, thumbnails, timings,
 # summary.json and summary.md: tests/e2e/check_outputs.py).
 check "published outputs agree with the reports" python3 "$SCANLOD_SOURCE_DIR/tests/e2e/check_outputs.py" \
-  "$TMP/out" fandisk rocker_arm cow bun_zipper_res3 --formats=ply,glb --thumbnails --fidelity
+  "$TMP/out" fandisk.ply rocker_arm.ply cow.ply bun_zipper_res3.ply --formats=ply,glb --thumbnails --fidelity
 
 # Every GLB the export stage published passes the Khronos validator with 0 errors and 0
 # warnings (the GLB writer's own samples: tests/export/test_gltf_validator.sh).
 gltf="$SCANLOD_SOURCE_DIR/scripts/gltf"
 if gltf_validator_ready; then
   mapfile -t glbs < <(find "$TMP/out" -name '*.glb' | sort)
-  levels_drawn=$(python3 -c "import json; print(sum(1 for i in ['fandisk','rocker_arm','cow','bun_zipper_res3'] for l in json.load(open('$TMP/out/'+i+'/report.json'))['stages']['export']['levels'] if l['triangles'] > 0))")
+  levels_drawn=$(python3 -c "import json; print(sum(1 for i in ['fandisk','rocker_arm','cow','bun_zipper_res3'] for l in json.load(open('$TMP/out/'+i+'.ply/report.json'))['stages']['export']['levels'] if l['triangles'] > 0))")
   set +e
   node "$gltf/validate.mjs" "${glbs[@]}" >"$TMP/glb.jsonl" 2>"$TMP/glb.err"
   vrc=$?
@@ -57,7 +57,7 @@ else
   check "node and the glTF validator are installed (scripts/install-deps.sh)" false
 fi
 
-model="$TMP/out/fandisk/model.slod"
+model="$TMP/out/fandisk.ply/model.slod"
 finest=$(report_value fandisk "r['stages']['export']['triangles_finest']")
 half=$((finest / 2))
 run_scanlod extract "$model" --triangles "$half" -o "$TMP/half.ply"
@@ -85,16 +85,16 @@ if gltf_validator_ready; then
 fi
 run_scanlod extract "$model" --max-error 0.01 -o "$TMP/e.obj"
 check "extract --max-error to OBJ" [ "$rc" -eq 0 -a -s "$TMP/e.obj" ]
-run_scanlod extract "$TMP/work/artifacts/merge/fandisk/octree.slot" --level 1 -o "$TMP/l1.ply"
+run_scanlod extract "$TMP/work/artifacts/merge/fandisk.ply/octree.slot" --level 1 -o "$TMP/l1.ply"
 check "extract --level from the octree" [ "$rc" -eq 0 -a -s "$TMP/l1.ply" ]
 
 # Every uniform level of the closed inputs that has a surface is watertight (issue 4).
 for item in fandisk rocker_arm cow; do
-  depth=$(python3 -c "import json; print(json.load(open('$TMP/work/artifacts/samples/$item/report.json'))['depth'])")
+  depth=$(python3 -c "import json; print(json.load(open('$TMP/work/artifacts/samples/$item.ply/report.json'))['depth'])")
   open_levels=""
   for level in $(seq 0 "$depth"); do
     rm -f "$TMP/u.ply"
-    run_scanlod extract "$TMP/work/artifacts/merge/$item/octree.slot" --level "$level" -o "$TMP/u.ply"
+    run_scanlod extract "$TMP/work/artifacts/merge/$item.ply/octree.slot" --level "$level" -o "$TMP/u.ply"
     [ "$rc" -eq 0 ] || { open_levels="$open_levels L$level(extract rc $rc)"; continue; }
     contains ": 0 triangles" "$out" && continue
     counts=$("$SCANLOD" compare "$TMP/u.ply" "$TMP/u.ply" | sed -n 's/B edges: \([0-9]*\) boundary, \([0-9]*\) non-manifold.*/\1 \2/p')
@@ -153,8 +153,8 @@ check "formats = ply,stl: names file, line and the word ($err)" contains "bad.in
 # The models of the real scans at every K (fandisk: small) or 200-300 spread K:
 # level rule, accumulation = generated, watertight (all three are closed).
 lod_check="${SCANLOD_BUILD_DIR}/tests/lod_check"
-check "fandisk: every K" "$lod_check" "$TMP/out/fandisk/model.slod" 0 --closed
-check "cow: 300 spread K" "$lod_check" "$TMP/out/cow/model.slod" 300 --closed
-check "rocker_arm: 200 spread K" "$lod_check" "$TMP/out/rocker_arm/model.slod" 200 --closed
-check "bun_zipper_res3 (open): 200 spread K, level rule and accumulation" "$lod_check" "$TMP/out/bun_zipper_res3/model.slod" 200
+check "fandisk: every K" "$lod_check" "$TMP/out/fandisk.ply/model.slod" 0 --closed
+check "cow: 300 spread K" "$lod_check" "$TMP/out/cow.ply/model.slod" 300 --closed
+check "rocker_arm: 200 spread K" "$lod_check" "$TMP/out/rocker_arm.ply/model.slod" 200 --closed
+check "bun_zipper_res3 (open): 200 spread K, level rule and accumulation" "$lod_check" "$TMP/out/bun_zipper_res3.ply/model.slod" 200
 finish

@@ -20,6 +20,6 @@ run_scanlod run "$TMP/c.ini" -q
 check "run exits 0 (rc $rc: $err)" [ "$rc" -eq 0 ]
 for s in "${scans[@]}"; do
   check "$s: $samples spread K: level rule, accumulation = generated, watertight" \
-    "${SCANLOD_BUILD_DIR:?}/tests/lod_check" "$TMP/out/$s/model.slod" "$samples" --closed
+    "${SCANLOD_BUILD_DIR:?}/tests/lod_check" "$TMP/out/$s.ply/model.slod" "$samples" --closed
 done
 finish

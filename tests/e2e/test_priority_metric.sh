@@ -14,8 +14,8 @@ check "default run exits 0 ($err)" [ "$rc" -eq 0 ]
 run_scanlod run "$TMP/c.ini" -q -s run.threads=1 -s run.work="$TMP/work1" -s run.output="$TMP/out1"
 check "1-thread run exits 0 ($err)" [ "$rc" -eq 0 ]
 for item in cow rocker_arm; do
-  a=$(sha256sum <"$TMP/work/artifacts/priority/$item/priority.slpri")
-  b=$(sha256sum <"$TMP/work1/artifacts/priority/$item/priority.slpri")
+  a=$(sha256sum <"$TMP/work/artifacts/priority/$item.ply/priority.slpri")
+  b=$(sha256sum <"$TMP/work1/artifacts/priority/$item.ply/priority.slpri")
   check "$item: priority.slpri identical on 1 and 2 threads" [ "$a" = "$b" ]
 done
 # The area order reuses the upstream artifacts (and replaces the priority ones).
@@ -26,7 +26,7 @@ check "an unknown metric is a config error (rc $rc)" [ "$rc" -eq 78 ]
 check "an unknown metric: the error names the key ($err)" contains "metric" "$err"
 
 report_value() { # report_value OUTPUT ITEM PYTHON-EXPRESSION-ON-r
-  python3 -c "import json; r=json.load(open('$1/$2/report.json')); print($3)"
+  python3 -c "import json; r=json.load(open('$1/$2.ply/report.json')); print($3)"
 }
 compare_value() { # compare_value INPUT LOD KEY: one figure of `scanlod compare --json`
   "$SCANLOD" compare "$1" "$2" --samples 50000 --json |
@@ -43,7 +43,7 @@ for item in cow rocker_arm; do
   for percent in 10 20; do
     budget=$((finest * percent / 100))
     for order in out out-area; do
-      run_scanlod extract "$TMP/$order/$item/model.slod" --triangles "$budget" -o "$TMP/$order-$item.ply"
+      run_scanlod extract "$TMP/$order/$item.ply/model.slod" --triangles "$budget" -o "$TMP/$order-$item.ply"
       check "$item $order: extract --triangles $budget ($err)" [ "$rc" -eq 0 ]
     done
     for key in rms hausdorff; do

@@ -14,8 +14,8 @@ write_config "$cfg" "$TMP/in" "$TMP/work" "$TMP/out"
 
 run_scanlod run "$cfg" -q
 check "first run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
-check "three items published" [ -f "$TMP/out/a/report.json" -a -f "$TMP/out/sub/b/report.json" -a -f "$TMP/out/c/report.json" ]
-check "item id keeps the folder" grep -q '"item": "sub/b"' "$TMP/out/sub/b/report.json"
+check "three items published" [ -f "$TMP/out/a.ply/report.json" -a -f "$TMP/out/sub/b.ply/report.json" -a -f "$TMP/out/c.ply/report.json" ]
+check "item id is the input path" grep -q '"item": "sub/b.ply"' "$TMP/out/sub/b.ply/report.json"
 ref=$(tree_digest "$TMP/work" "$TMP/out")
 run_scanlod status "$cfg"
 stages=$(( $(wc -l <<<"$out") - 1 ))
@@ -57,9 +57,9 @@ check "[run] keys are not stage keys: nothing to do (got: $out)" grep -q "^nothi
 run_scanlod run "$cfg" -q -s range.knn=13 -s range.range_images=true
 check "range output change reruns every stage of every item (got: $out)" grep -q "^3 items: $((3 * stages)) stage runs, .* 3 published" <<<"$out"
 
-rm -rf "$TMP/out/sub"
+rm -rf "$TMP/out/sub/b.ply"
 run_scanlod run "$cfg" -q
-check "deleted publication republished (rc $rc)" [ -f "$TMP/out/sub/b/report.json" ]
+check "deleted publication republished (rc $rc)" [ -f "$TMP/out/sub/b.ply/report.json" ]
 
 run_scanlod status "$cfg"
 check "status shows 3 done in every stage" [ "$(grep -cE '^[a-z]+ +0 +0 +3 +0 +0$' <<<"$out")" -eq "$stages" ]

@@ -20,7 +20,7 @@ class Ctx:
         with open(path) as f:
             c = json.load(f)
         self.__dict__.update(c)
-        self.scanlod = os.path.join(self.build, "pipeline", "scanlod")
+        self.scanlod = os.path.join(self.build, "cli", "scanlod")
         self.bench = os.path.join(self.build, "scripts", "bench")
 
     def tool(self, name):
@@ -73,8 +73,9 @@ class Collection:
 
     def __init__(self, root, item, source=None):
         self.root, self.item = root, item
+        self.item_id = item + ".ply"  # the engine's item id: the input's path in the tree
         os.makedirs(os.path.join(root, "in"), exist_ok=True)
-        self.ply = os.path.join(root, "in", item + ".ply")
+        self.ply = os.path.join(root, "in", self.item_id)
         if source and not os.path.exists(self.ply):
             shutil.copyfile(source, self.ply)
         self.config = os.path.join(root, "run.ini")
@@ -89,7 +90,7 @@ class Collection:
             shutil.rmtree(self.path(d), ignore_errors=True)
 
     def artifact(self, stage, name):
-        return self.path("work", "artifacts", stage, self.item, name)
+        return self.path("work", "artifacts", stage, self.item_id, name)
 
     def run(self, ctx, threads, overrides=(), fresh=True):
         """`scanlod run` on the collection; returns the published timings per stage."""
@@ -99,7 +100,7 @@ class Collection:
         for o in overrides:
             cmd += ["-s", o]
         run(cmd)
-        return stats.load_timings(self.path("out", self.item, "timings.json"))
+        return stats.load_timings(self.path("out", self.item_id, "timings.json"))
 
     def run_until(self, ctx, stage, threads, overrides=()):
         """Run until STAGE has committed, then stop the run (SIGTERM to its process
@@ -129,7 +130,7 @@ class Collection:
         return out
 
     def report(self):
-        with open(self.path("out", self.item, "report.json")) as f:
+        with open(self.path("out", self.item_id, "report.json")) as f:
             return json.load(f)
 
 

@@ -36,8 +36,8 @@ def main():
             "finest_triangles": st["export"]["triangles_finest"],
             "levels": st["export"]["levels"],
             "timings": timings,
-            "slod": c.path("out", name, "model.slod"),
-            "finest_ply": c.path("out", name, "lod100.ply"),
+            "slod": c.path("out", c.item_id, "model.slod"),
+            "finest_ply": c.path("out", c.item_id, "lod100.ply"),
             "octree": c.artifact("merge", "octree.slot"),
         }
         for key in ("slod", "finest_ply", "octree"):

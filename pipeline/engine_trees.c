@@ -1,0 +1,116 @@
+/* The four trees a run touches ([run] input, work, output, logs): each must be a folder
+ * of its own, none inside another (docs/engine.md, "The trees of a run").
+ *
+ * An output inside the input would be scanned as new items by the next run (and the
+ * next, each adding one more level: in/out/out/out/...); a work folder inside the input
+ * likewise; an input inside the output would be swapped away by a publication. The check
+ * runs before any work and names the option and where it was set (FILE:LINE), so a
+ * mistake costs one line and exit 78, not a night.
+ */
+#include "pipeline/engine_internal.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "core/io.h"
+
+/* `path` with every existing leading part resolved through symlinks (realpath), the
+ * rest appended as it is: a folder that does not exist yet is compared where it will be. */
+static void resolve_existing(const char *path, char *out, size_t size)
+{
+    char head[PATH_MAX];
+    snprintf(head, sizeof head, "%s", path);
+    size_t n = strlen(head);
+    while (n > 1) {
+        char real[PATH_MAX];
+        if (realpath(head, real)) {
+            snprintf(out, size, "%s%s", strcmp(real, "/") ? real : "", path + n);
+            return;
+        }
+        char *slash = strrchr(head, '/');
+        if (!slash || slash == head)
+            break;
+        *slash = '\0';
+        n = (size_t)(slash - head);
+    }
+    snprintf(out, size, "%s", path);
+}
+
+/* Is `inner` the folder `outer` or inside it? Whole path components only. */
+static int inside(const char *inner, const char *outer)
+{
+    size_t n = strlen(outer);
+    return strncmp(inner, outer, n) == 0 && (inner[n] == '\0' || inner[n] == '/');
+}
+
+int sl_engine_check_trees(sl_engine *e, sl_error *err)
+{
+    static const char *const keys[] = {"input", "work", "output", "logs"};
+    const char *paths[] = {e->input, e->work, e->output, e->logs};
+    char real[4][PATH_MAX];
+    for (int i = 0; i < 4; i++)
+        resolve_existing(paths[i], real[i], sizeof real[i]);
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++) {
+            if (i == j || !inside(real[i], real[j]) || (strcmp(real[i], real[j]) == 0 && i > j))
+                continue;
+            char where[PATH_MAX];
+            sl_config_where(e->cfg, "run", keys[i], where, sizeof where);
+            return sl_error_set(err, SL_E_CONFIG, 0, where,
+                                "[run] %s (%s) %s [run] %s (%s): the four folders of a run "
+                                "(input, work, output, logs) must not contain one another",
+                                keys[i], real[i], strcmp(real[i], real[j]) ? "is inside" : "is",
+                                keys[j], real[j]);
+        }
+    return 0;
+}
+
+int sl_engine_check_input(sl_engine *e, sl_error *err)
+{
+    struct stat st;
+    if (stat(e->input, &st) == 0 && S_ISDIR(st.st_mode))
+        return 0;
+    int saved = errno;
+    char where[PATH_MAX];
+    sl_config_where(e->cfg, "run", "input", where, sizeof where);
+    return sl_error_set(err, SL_E_CONFIG, saved, where, "[run] input %s: %s", e->input,
+                        stat(e->input, &st) == 0 ? "not a folder" : strerror(saved));
+}
+
+/* Creates and removes one empty file in `dir`: a read-only or foreign folder is found
+ * before the first item runs, not after all its stages. */
+static int probe_writable(const sl_engine *e, const char *key, const char *dir, sl_error *err)
+{
+    char path[PATH_MAX];
+    if (sl_engine_path(path, sizeof path, "%s/.scanlod-probe.%s.%ld.tmp", dir, e->self.host,
+                       e->self.pid))
+        return sl_error_set(err, SL_E_STORAGE, ENAMETOOLONG, dir, "path too long");
+    int fd = sl_io_open(path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd < 0) {
+        char what[64];
+        snprintf(what, sizeof what, "[run] %s: creating a file", key);
+        sl_error probe;
+        sl_error_init(&probe);
+        int rc = sl_error_errno(&probe, errno, dir, what);
+        if (sl_error_class_of(rc) != SL_CLASS_STORAGE)
+            return 0; /* a full disk may clear up; the items will say so */
+        sl_error_merge(err, &probe);
+        return rc;
+    }
+    close(fd);
+    sl_io_unlink(path);
+    return 0;
+}
+
+int sl_engine_check_writable(sl_engine *e, sl_error *err)
+{
+    int rc = probe_writable(e, "work", e->work, err);
+    if (rc == 0)
+        rc = probe_writable(e, "output", e->output, err);
+    return rc;
+}
