@@ -75,6 +75,13 @@ void sl_identity_self(sl_identity *id)
     id->pid_start = process_start_time(id->pid);
     const char *job = getenv("SLURM_JOB_ID"), *task = getenv("SLURM_ARRAY_TASK_ID"),
                *restart = getenv("SLURM_RESTART_COUNT");
+    /* In an array, the task's own SLURM_JOB_ID is not what scontrol/scancel take with
+       "_TASK": name it ARRAYJOB_TASK, the id Slurm shows and accepts. */
+    const char *array = getenv("SLURM_ARRAY_JOB_ID");
+    if (task && array)
+        job = array;
+    else
+        task = NULL;
     if (job)
         snprintf(id->job, sizeof id->job, "%s%s%s%s%s", job, task ? "_" : "", task ? task : "",
                  restart ? "+r" : "", restart ? restart : "");

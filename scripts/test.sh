@@ -28,4 +28,5 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 export SCANLOD_LOD_CHECK_SAMPLES=20
 "$root/scripts/build.sh" "$root/build-asan" -DSCANLOD_SANITIZE=ON -DSCANLOD_BENCH=OFF \
   -DCMAKE_BUILD_TYPE=Debug
-(cd "$root/build-asan" && ctest --output-on-failure --timeout 1800 -j "$jobs")
+# Tests labelled release-only (a Slurm cluster of their own) run in the first pass only.
+(cd "$root/build-asan" && ctest --output-on-failure --timeout 1800 -j "$jobs" -LE release-only)
