@@ -71,18 +71,12 @@ task_restarted() { [ "$(job_field "${array}_$1" Restarts)" -ge 1 ] 2>/dev/null; 
 array_running() { [ -n "$(timeout 10 squeue -h -j "$array" -t CF,R,CG -o %i 2>/dev/null)" ]; }
 log_of() { cat "$TMP/slurm-${array}_$1.out" 2>/dev/null; }
 
-# submit: a held 3-task array, task 0 (`scanlod run`) released first and the workers once
-# its scan is over (it claims, or it has already finished). Workers do not yet wait for the
-# scan (a worker started before it finds 0 items and exits 0: issue 16): until the engine
-# does, the test orders them; then this can be a plain `sbatch --array=0-2`.
+# submit: a 3-task array, all tasks at once: the workers (tasks 1, 2) may start before
+# task 0's `scanlod run` has scanned, and wait for its scan (--after-scan in the script).
 submit() {
-  array=$(slurm_sbatch --array=0-2 --hold --cpus-per-task=1 --mem=100M --time=10 \
+  array=$(slurm_sbatch --array=0-2 --cpus-per-task=1 --mem=100M --time=10 \
     --chdir="$TMP" --output="$TMP/slurm-%A_%a.out" --open-mode=append "$script" "$TMP/c.ini")
   array=${array%%;*}
-  timeout 10 scontrol release "${array}_0"
-  wait_for 60 "array $array: task 0 has scanned" eval 'has_claim 0 || task_ended 0'
-  timeout 10 scontrol release "${array}_1"
-  timeout 10 scontrol release "${array}_2"
 }
 
 # --- First array: one task cancelled mid-item, one pre-timeout signal (exit 75) ----------
