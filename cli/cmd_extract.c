@@ -95,13 +95,13 @@ static int parse(int argc, char **argv, request *r)
                : -1;
 }
 
-static int fail(const sl_error *err)
+/* One line "scanlod: FILE: cause". The model is the user's file: failing to read it is
+ * a data error (sl_error_input_exit_code); failing to write the output keeps its class. */
+static int fail(const sl_error *err, int reading)
 {
     char line[1600];
     fprintf(stderr, "scanlod: %s\n", sl_error_format(err, line, sizeof line));
-    /* For the engine a corrupt artifact is transient (it rebuilds it); a model handed to
-     * extract is the user's input: a data error. */
-    return err->code == SL_E_CORRUPT ? SL_EXIT_DATAERR : sl_error_exit_code(err->code);
+    return reading ? sl_error_input_exit_code(err->code) : sl_error_exit_code(err->code);
 }
 
 static int bad_request(const char *fmt, double value)
@@ -125,7 +125,7 @@ static int extract_level(const request *r)
     sl_error_init(&err);
     sl_octree tree;
     if (sl_octree_read(r->input, &tree, &err))
-        return fail(&err);
+        return fail(&err, 1);
     if (r->value < 0 || r->value > tree.depth || r->value != floor(r->value)) {
         sl_octree_release(&tree);
         return bad_request("--level must be an integer in [0, depth] (depth is %g)", tree.depth);
@@ -140,7 +140,7 @@ static int extract_level(const request *r)
         sl_error_set(&err, SL_E_NOMEM, ENOMEM, r->input, "out of memory");
     sl_lod_mesh_release(&mesh);
     sl_octree_release(&tree);
-    return err.code ? fail(&err) : SL_EXIT_OK;
+    return err.code ? fail(&err, 0) : SL_EXIT_OK;
 }
 
 static int compare_doubles(const void *a, const void *b)
@@ -267,7 +267,7 @@ int sl_cmd_extract(int argc, char **argv)
     sl_error_init(&err);
     sl_lod_model model;
     if (sl_lod_model_read(r.input, &model, &err))
-        return fail(&err);
+        return fail(&err, 1);
     uint32_t k = 0;
     int rc = choose_k(&r, &model, &k);
     if (rc) {
@@ -281,7 +281,7 @@ int sl_cmd_extract(int argc, char **argv)
     if (sl_lod_generate(&model, k, &mesh, &cracks)) {
         sl_lod_model_release(&model);
         sl_error_set(&err, SL_E_NOMEM, ENOMEM, r.input, "out of memory");
-        return fail(&err);
+        return fail(&err, 0);
     }
     double generate_s = seconds_since(&t0);
     char extras[256];
@@ -302,5 +302,5 @@ int sl_cmd_extract(int argc, char **argv)
                warm, r.output);
     sl_lod_mesh_release(&mesh);
     sl_lod_model_release(&model);
-    return err.code ? fail(&err) : SL_EXIT_OK;
+    return err.code ? fail(&err, 0) : SL_EXIT_OK;
 }
