@@ -84,15 +84,13 @@ static int parse_args(int argc, char **argv, compare_args *args)
 }
 
 /* One line `scanlod: FILE: cause`. A file that cannot be read at all (missing,
- * unreadable) is bad input for this one-shot command, like a malformed one: exit 65;
- * other failures (out of memory) keep their class's exit code. */
+ * unreadable, not a regular file) is bad input for this one-shot command, like a
+ * malformed one: exit 65; other failures (out of memory) keep their class's exit code. */
 static int report_error(const sl_error *err, int reading)
 {
     char line[1600];
     fprintf(stderr, "scanlod: %s\n", sl_error_format(err, line, sizeof line));
-    if (reading && (err->code == SL_E_IO || err->code == SL_E_STORAGE))
-        return SL_EXIT_DATAERR;
-    return sl_error_exit_code(err->code);
+    return reading ? sl_error_input_exit_code(err->code) : sl_error_exit_code(err->code);
 }
 
 static double seconds_now(void)

@@ -6,6 +6,8 @@
  */
 #include <errno.h>
 #include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,14 +38,104 @@ static const char usage[] =
 
 typedef struct request {
     const char *input, *output;
-    int kind; /* 'k' expansions, 't' triangles, 'p' percent, 'e' error, 'l' level */
-    double value;
-    long repeat; /* --repeat: warm extractions timed after the first */
-    int hot;     /* --hot: those back to back, caches not flushed */
+    int kind;       /* 'k' expansions, 't' triangles, 'p' percent, 'e' error, 'l' level */
+    uint64_t count; /* k, t, l: the whole number given */
+    double value;   /* p, e: the number given */
+    long repeat;    /* --repeat: warm extractions timed after the first */
+    int hot;        /* --hot: those back to back, caches not flushed */
 } request;
 
-/* 0; -1 when the command line is malformed (the caller prints the usage); -2 when a
- * value is not a number (said here, in one line naming the flag). */
+static int bad_request(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
+
+/* One line "scanlod extract: ..." on stderr; returns the usage exit code. */
+static int bad_request(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fputs("scanlod extract: ", stderr);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    va_end(ap);
+    return SL_EXIT_USAGE;
+}
+
+static const char digits[] = "0123456789";
+
+/* A count: decimal digits and nothing else -- no sign, space, base prefix (strtoull
+ * would read "0x10" as 16 and "-1" as 2^64 - 1) or exponent -- that fits 64 bits. */
+static int parse_count(const char *flag, const char *text, uint64_t *out)
+{
+    size_t n = strspn(text, digits);
+    if (n == 0 || text[n])
+        return bad_request("%s: '%s' is not a whole number in decimal digits", flag, text);
+    uint64_t v = 0;
+    for (size_t i = 0; i < n; i++) {
+        unsigned d = (unsigned)(text[i] - '0');
+        if (v > (UINT64_MAX - d) / 10)
+            return bad_request("%s: '%s' is too large", flag, text);
+        v = 10 * v + d;
+    }
+    *out = v;
+    return 0;
+}
+
+/* [+-]digits[.digits][(e|E)[+-]digits] with a digit before the exponent: what a user
+ * writes for a percent or a distance; not strtod's hex, inf, nan or leading spaces. */
+static int is_decimal(const char *s)
+{
+    s += *s == '+' || *s == '-';
+    size_t whole = strspn(s, digits), fraction = 0;
+    s += whole;
+    if (*s == '.') {
+        fraction = strspn(++s, digits);
+        s += fraction;
+    }
+    if (whole + fraction == 0)
+        return 0;
+    if (*s == 'e' || *s == 'E') {
+        s += 1 + (s[1] == '+' || s[1] == '-');
+        size_t exponent = strspn(s, digits);
+        if (exponent == 0)
+            return 0;
+        s += exponent;
+    }
+    return *s == 0;
+}
+
+static int parse_number(const char *flag, const char *text, double *out)
+{
+    *out = is_decimal(text) ? strtod(text, NULL) : NAN;
+    if (!isfinite(*out))
+        return bad_request("%s: '%s' is not a finite number", flag, text);
+    return 0;
+}
+
+/* The checks that need no model, so that a bad request is refused before the model is
+ * read and before any output exists. */
+static int check_value(const request *r)
+{
+    switch (r->kind) {
+    case 't':
+        if (r->count < 1)
+            return bad_request("--triangles must be a whole number >= 1 (got %llu)",
+                               (unsigned long long)r->count);
+        return 0;
+    case 'p':
+        if (!(r->value > 0 && r->value <= 100))
+            return bad_request("--lod-percent must be in (0, 100] (got %g; the coarsest level "
+                               "is --expansions 0)", r->value);
+        return 0;
+    case 'e':
+        if (r->value < 0)
+            return bad_request("--max-error must be >= 0 (got %g)", r->value);
+        return 0;
+    default:
+        return 0;
+    }
+}
+
+/* 0; -1 when the command line is malformed (the caller prints the usage); the usage exit
+ * code when a value is bad (said here, in one line naming the flag). */
 static int parse(int argc, char **argv, request *r)
 {
     memset(r, 0, sizeof *r);
@@ -56,17 +148,15 @@ static int parse(int argc, char **argv, request *r)
         for (size_t f = 0; f < sizeof flags / sizeof flags[0]; f++) {
             if (strcmp(argv[i], flags[f].flag) != 0)
                 continue;
-            char *end;
             if (i + 1 >= argc || r->kind)
                 return -1;
             r->kind = flags[f].kind;
             const char *text = argv[++i];
-            r->value = strtod(text, &end);
-            if (!text[0] || *end || !isfinite(r->value)) {
-                fprintf(stderr, "scanlod extract: %s: '%s' is not a finite number\n",
-                        flags[f].flag, text);
-                return -2;
-            }
+            int rc = r->kind == 'p' || r->kind == 'e'
+                         ? parse_number(flags[f].flag, text, &r->value)
+                         : parse_count(flags[f].flag, text, &r->count);
+            if (rc)
+                return rc;
             matched = 1;
         }
         if (matched)
@@ -74,14 +164,13 @@ static int parse(int argc, char **argv, request *r)
         if (!strcmp(argv[i], "-o") && i + 1 < argc) {
             r->output = argv[++i];
         } else if (!strcmp(argv[i], "--repeat") && i + 1 < argc) {
-            char *end;
+            uint64_t repeat = 0;
             const char *text = argv[++i];
-            r->repeat = strtol(text, &end, 10);
-            if (!text[0] || *end || r->repeat < 1 || r->repeat > 100000) {
-                fprintf(stderr, "scanlod extract: --repeat: '%s' is not a count in [1, 100000]\n",
-                        text);
-                return -2;
-            }
+            if (parse_count("--repeat", text, &repeat))
+                return SL_EXIT_USAGE;
+            if (repeat < 1 || repeat > 100000)
+                return bad_request("--repeat: '%s' is not a count in [1, 100000]", text);
+            r->repeat = (long)repeat;
         } else if (!strcmp(argv[i], "--hot")) {
             r->hot = 1;
         } else if (argv[i][0] != '-' && !r->input)
@@ -89,27 +178,19 @@ static int parse(int argc, char **argv, request *r)
         else
             return -1;
     }
-    return r->input && r->output && r->kind && !(r->repeat && r->kind == 'l') &&
-                   !(r->hot && !r->repeat)
-               ? 0
-               : -1;
+    if (!(r->input && r->output && r->kind && !(r->repeat && r->kind == 'l') &&
+          !(r->hot && !r->repeat)))
+        return -1;
+    return check_value(r);
 }
 
-static int fail(const sl_error *err)
+/* One line "scanlod: FILE: cause". The model is the user's file: failing to read it is
+ * a data error (sl_error_input_exit_code); failing to write the output keeps its class. */
+static int fail(const sl_error *err, int reading)
 {
     char line[1600];
     fprintf(stderr, "scanlod: %s\n", sl_error_format(err, line, sizeof line));
-    /* For the engine a corrupt artifact is transient (it rebuilds it); a model handed to
-     * extract is the user's input: a data error. */
-    return err->code == SL_E_CORRUPT ? SL_EXIT_DATAERR : sl_error_exit_code(err->code);
-}
-
-static int bad_request(const char *fmt, double value)
-{
-    fprintf(stderr, "scanlod extract: ");
-    fprintf(stderr, fmt, value);
-    fputc('\n', stderr);
-    return SL_EXIT_USAGE;
+    return reading ? sl_error_input_exit_code(err->code) : sl_error_exit_code(err->code);
 }
 
 static double seconds_since(const struct timespec *t0)
@@ -125,22 +206,24 @@ static int extract_level(const request *r)
     sl_error_init(&err);
     sl_octree tree;
     if (sl_octree_read(r->input, &tree, &err))
-        return fail(&err);
-    if (r->value < 0 || r->value > tree.depth || r->value != floor(r->value)) {
+        return fail(&err, 1);
+    if (r->count > tree.depth) {
+        uint32_t depth = tree.depth;
         sl_octree_release(&tree);
-        return bad_request("--level must be an integer in [0, depth] (depth is %g)", tree.depth);
+        return bad_request("--level %llu exceeds the octree's depth %u (levels 0 to %u)",
+                           (unsigned long long)r->count, depth, depth);
     }
     sl_lod_mesh mesh;
-    int rc = sl_octree_level_mesh(&tree, (uint32_t)r->value, &mesh);
+    int rc = sl_octree_level_mesh(&tree, (uint32_t)r->count, &mesh);
     if (rc == 0 && sl_export_write_mesh(r->output, &mesh, NULL, &err) == 0)
-        printf("level %g: %llu triangles, %llu vertices -> %s\n", r->value,
+        printf("level %llu: %llu triangles, %llu vertices -> %s\n", (unsigned long long)r->count,
                (unsigned long long)mesh.triangle_count, (unsigned long long)mesh.vertex_count,
                r->output);
     else if (rc)
         sl_error_set(&err, SL_E_NOMEM, ENOMEM, r->input, "out of memory");
     sl_lod_mesh_release(&mesh);
     sl_octree_release(&tree);
-    return err.code ? fail(&err) : SL_EXIT_OK;
+    return err.code ? fail(&err, 0) : SL_EXIT_OK;
 }
 
 static int compare_doubles(const void *a, const void *b)
@@ -219,32 +302,25 @@ static int choose_k(const request *r, const sl_lod_model *m, uint32_t *k)
     uint64_t finest = m->accumulation[m->expansion_count];
     switch (r->kind) {
     case 'k':
-        if (r->value < 0 || r->value > m->expansion_count || r->value != floor(r->value))
-            return bad_request("--expansions must be an integer in [0, %g]", m->expansion_count);
-        *k = (uint32_t)r->value;
+        if (r->count > m->expansion_count)
+            return bad_request("--expansions must be an integer in [0, %u] (got %llu)",
+                               m->expansion_count, (unsigned long long)r->count);
+        *k = (uint32_t)r->count;
         return 0;
     case 't':
-        if (r->value < 1 || r->value != floor(r->value))
-            return bad_request("--triangles must be a whole number >= 1 (got %g)", r->value);
-        if (r->value > (double)finest) {
-            fprintf(stderr, "scanlod extract: --triangles %.15g exceeds the finest level (%llu "
-                            "triangles)\n", r->value, (unsigned long long)finest);
-            return SL_EXIT_USAGE;
-        }
-        *k = sl_lod_expansions_for_triangles(m, (uint64_t)r->value);
+        if (r->count > finest)
+            return bad_request("--triangles %llu exceeds the finest level (%llu triangles)",
+                               (unsigned long long)r->count, (unsigned long long)finest);
+        *k = sl_lod_expansions_for_triangles(m, r->count);
         return 0;
     case 'p':
-        if (r->value < 0 || r->value > 100)
-            return bad_request("--lod-percent must be in [0, 100] (got %g)", r->value);
         *k = sl_lod_expansions_for_percent(m, r->value);
         return 0;
     case 'e':
-        if (r->value < 0)
-            return bad_request("--max-error must be >= 0 (got %g)", r->value);
         *k = sl_lod_expansions_for_error(m, r->value);
         return 0;
     default:
-        return bad_request("--level applies to an octree (.slot), not a model%s", 0);
+        return bad_request("--level applies to an octree (.slot), not a model");
     }
 }
 
@@ -257,7 +333,7 @@ int sl_cmd_extract(int argc, char **argv)
     }
     int parsed = parse(argc, argv, &r);
     if (parsed != 0) {
-        if (parsed == -1) /* -2: a bad value, said in one line already */
+        if (parsed == -1) /* else a bad value, said in one line already */
             fputs(usage, stderr);
         return SL_EXIT_USAGE;
     }
@@ -267,7 +343,7 @@ int sl_cmd_extract(int argc, char **argv)
     sl_error_init(&err);
     sl_lod_model model;
     if (sl_lod_model_read(r.input, &model, &err))
-        return fail(&err);
+        return fail(&err, 1);
     uint32_t k = 0;
     int rc = choose_k(&r, &model, &k);
     if (rc) {
@@ -281,7 +357,7 @@ int sl_cmd_extract(int argc, char **argv)
     if (sl_lod_generate(&model, k, &mesh, &cracks)) {
         sl_lod_model_release(&model);
         sl_error_set(&err, SL_E_NOMEM, ENOMEM, r.input, "out of memory");
-        return fail(&err);
+        return fail(&err, 0);
     }
     double generate_s = seconds_since(&t0);
     char extras[256];
@@ -302,5 +378,5 @@ int sl_cmd_extract(int argc, char **argv)
                warm, r.output);
     sl_lod_mesh_release(&mesh);
     sl_lod_model_release(&model);
-    return err.code ? fail(&err) : SL_EXIT_OK;
+    return err.code ? fail(&err, 0) : SL_EXIT_OK;
 }

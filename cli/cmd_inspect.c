@@ -143,5 +143,5 @@ int sl_cmd_inspect(int argc, char **argv)
     char line[1600];
     fprintf(stderr, "scanlod: %s\n", sl_error_format(&err, line, sizeof line));
     fflush(stdout);
-    return rc == SL_E_NOMEM || rc == SL_E_INTERRUPTED ? SL_EXIT_TEMPFAIL : SL_EXIT_DATAERR;
+    return sl_error_input_exit_code(rc);
 }

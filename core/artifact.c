@@ -2,7 +2,6 @@
 #include "core/artifact.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -10,6 +9,7 @@
 #include <xxhash.h>
 
 #include "core/atomicfile.h"
+#include "core/io.h"
 
 int sl_artifact_write(const char *path, const char magic[8], uint32_t format_version,
                       uint32_t stage_version, const sl_artifact_part *parts, int part_count,
@@ -71,17 +71,13 @@ int sl_artifact_read(const char *path, const char magic[8], uint32_t format_vers
 {
     *body = NULL;
     *body_size = 0;
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    struct stat st;
+    int fd = sl_io_open_regular(path, &st, err);
     if (fd < 0)
-        return sl_error_errno(err, errno, path, "open");
+        return fd;
     int rc = 0;
     unsigned char header[SL_ARTIFACT_HEADER_SIZE];
-    struct stat st;
     void *data = NULL;
-    if (fstat(fd, &st) != 0) {
-        rc = sl_error_errno(err, errno, path, "stat");
-        goto done;
-    }
     if ((uint64_t)st.st_size < SL_ARTIFACT_HEADER_SIZE || read_all(fd, header, sizeof header)) {
         rc = sl_error_set(err, SL_E_CORRUPT, 0, path, "truncated artifact header");
         goto done;

@@ -271,15 +271,10 @@ int sl_read_file(const char *path, uint64_t max_size, char **data, size_t *size,
 {
     *data = NULL;
     *size = 0;
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
-    if (fd < 0)
-        return sl_error_errno(err, errno, path, "open");
     struct stat st;
-    if (fstat(fd, &st) != 0) {
-        int saved = errno;
-        close(fd);
-        return sl_error_errno(err, saved, path, "stat");
-    }
+    int fd = sl_io_open_regular(path, &st, err);
+    if (fd < 0)
+        return fd;
     if ((uint64_t)st.st_size > max_size) {
         close(fd);
         return sl_error_set(err, SL_E_LIMIT, 0, path, "file is %llu bytes, limit %llu",
@@ -347,16 +342,9 @@ static int copy_contents(int in, const char *from, sl_atomic_file *f, sl_error *
 
 int sl_copy_file(const char *from, const char *to, sl_error *err)
 {
-    int in = open(from, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
-    struct stat st;
+    int in = sl_io_open_regular(from, NULL, err);
     if (in < 0)
-        return sl_error_errno(err, errno, from, "open");
-    if (fstat(in, &st) != 0 || !S_ISREG(st.st_mode)) {
-        int saved = errno;
-        close(in);
-        return S_ISREG(st.st_mode) ? sl_error_errno(err, saved, from, "stat")
-                                   : sl_error_set(err, SL_E_INTERNAL, 0, from, "not a regular file");
-    }
+        return in;
     sl_atomic_file f;
     int rc = sl_atomic_open(&f, to, err);
     if (rc == 0)

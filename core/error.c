@@ -58,22 +58,26 @@ int sl_error_set(sl_error *err, int code, int sys_errno, const char *file, const
     return code;
 }
 
-int sl_error_errno(sl_error *err, int sys_errno, const char *file, const char *what)
+int sl_error_code_of_errno(int sys_errno)
 {
-    int code;
     switch (sys_errno) {
     case ENOSPC:
-    case EDQUOT: code = SL_E_NOSPACE; break;
-    case ENOMEM: code = SL_E_NOMEM; break;
+    case EDQUOT: return SL_E_NOSPACE;
+    case ENOMEM: return SL_E_NOMEM;
     case EROFS:
     case EACCES:
     case EPERM:
     case ENOTDIR:
-    case ENAMETOOLONG: code = SL_E_STORAGE; break;
-    case EINTR: code = SL_E_INTERRUPTED; break;
-    default: code = SL_E_IO; break;
+    case ENAMETOOLONG: return SL_E_STORAGE;
+    case EINTR: return SL_E_INTERRUPTED;
+    default: return SL_E_IO;
     }
-    return sl_error_set(err, code, sys_errno, file, "%s failed: %s", what, strerror(sys_errno));
+}
+
+int sl_error_errno(sl_error *err, int sys_errno, const char *file, const char *what)
+{
+    return sl_error_set(err, sl_error_code_of_errno(sys_errno), sys_errno, file,
+                        "%s failed: %s", what, strerror(sys_errno));
 }
 
 void sl_error_merge(sl_error *dst, const sl_error *src)
@@ -122,6 +126,15 @@ enum sl_error_class sl_error_class_of(int code)
 {
     const struct error_info *info = info_of(code);
     return code == SL_OK ? SL_CLASS_OK : info ? info->cls : SL_CLASS_INTERNAL;
+}
+
+int sl_error_input_exit_code(int code)
+{
+    if (code == SL_E_NOMEM || code == SL_E_INTERRUPTED)
+        return SL_EXIT_TEMPFAIL;
+    if (code == SL_OK || sl_error_class_of(code) == SL_CLASS_INTERNAL)
+        return sl_error_exit_code(code);
+    return SL_EXIT_DATAERR;
 }
 
 int sl_error_exit_code(int code)

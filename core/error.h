@@ -88,6 +88,7 @@ int sl_error_setv(sl_error *err, int code, int sys_errno, const char *file, cons
  * ENOSPC/EDQUOT -> NOSPACE, EIO -> IO, ENOMEM -> NOMEM, EROFS/EACCES/EPERM -> STORAGE,
  * EINTR -> INTERRUPTED, others -> IO. `what` names the operation ("write", "fsync"). */
 int sl_error_errno(sl_error *err, int sys_errno, const char *file, const char *what);
+int sl_error_code_of_errno(int sys_errno); /* that mapping alone */
 
 /* Copies `src` into `dst` if `dst` holds no failure yet. */
 void sl_error_merge(sl_error *dst, const sl_error *src);
@@ -102,5 +103,11 @@ const char *sl_error_name(int code);    /* "BADINPUT" */
 const char *sl_strerror(int code);      /* "malformed input" */
 enum sl_error_class sl_error_class_of(int code);
 int sl_error_exit_code(int code);       /* class -> sl_exit */
+/* Exit code of a one-shot command (inspect, compare, extract) that failed to read the
+ * file it was given: missing, unreadable, not a regular file, malformed or corrupt is
+ * the user's data, 65 (docs/exit-codes.md); out of memory and interrupts stay 75 (try
+ * again), internal errors 70. The engine keeps sl_error_exit_code: for it a missing or
+ * unreadable artifact is transient. */
+int sl_error_input_exit_code(int code);
 
 #endif

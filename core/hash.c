@@ -12,6 +12,7 @@
 #include <xxhash.h>
 
 #include "core/atomicfile.h"
+#include "core/io.h"
 
 void sl_hash_hex(sl_hash h, char out[SL_HASH_HEX_SIZE])
 {
@@ -56,9 +57,9 @@ sl_hash sl_hash_bytes(const void *data, size_t size)
 
 int sl_hash_file(const char *path, sl_hash *out, uint64_t *size, sl_error *err)
 {
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    int fd = sl_io_open_regular(path, NULL, err); /* a FIFO must not block a scan */
     if (fd < 0)
-        return sl_error_errno(err, errno, path, "open");
+        return fd;
     enum { CHUNK = 1 << 20 };
     unsigned char *buf = malloc(CHUNK);
     XXH3_state_t *state = XXH3_createState();

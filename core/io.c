@@ -1,6 +1,7 @@
 /* System calls for durable writes, with fault injection for the crash and disk-full
- * tests (see io.h). The counters are per process: the engine forks one child per item,
- * so a fault index addresses the N-th call inside one process. */
+ * tests (see io.h), and the one open of files read whole. The counters are per process:
+ * the engine forks one child per item, so a fault index addresses the N-th call inside
+ * one process. */
 #include "core/io.h"
 
 #include <errno.h>
@@ -169,4 +170,48 @@ int sl_io_mkdir(const char *path, mode_t mode)
 {
     INJECT_OR_FAIL(OP_MKDIR, -1);
     return mkdir(path, mode);
+}
+
+static const char *not_regular(mode_t mode)
+{
+    return S_ISDIR(mode)    ? "is a directory"
+           : S_ISFIFO(mode) ? "is a FIFO, not a regular file"
+           : S_ISCHR(mode)  ? "is a character device, not a regular file"
+           : S_ISBLK(mode)  ? "is a block device, not a regular file"
+           : S_ISSOCK(mode) ? "is a socket, not a regular file"
+                            : "is not a regular file";
+}
+
+/* Closes fd after a failed call on it, keeping that call's errno in the error. */
+static int close_after(int fd, sl_error *err, const char *path, const char *what)
+{
+    int e = errno;
+    close(fd);
+    return sl_error_errno(err, e, path, what);
+}
+
+int sl_io_open_regular(const char *path, struct stat *st, sl_error *err)
+{
+    struct stat own;
+    if (!st)
+        st = &own;
+    int fd;
+    do
+        fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    while (fd < 0 && errno == EINTR);
+    if (fd < 0) {
+        int e = errno;
+        return sl_error_set(err, sl_error_code_of_errno(e), e, path, "%s", strerror(e));
+    }
+    if (fstat(fd, st) != 0)
+        return close_after(fd, err, path, "fstat");
+    if (!S_ISREG(st->st_mode)) {
+        close(fd);
+        return sl_error_set(err, SL_E_BADINPUT, S_ISDIR(st->st_mode) ? EISDIR : 0, path, "%s",
+                            not_regular(st->st_mode));
+    }
+    int flags = fcntl(fd, F_GETFL);
+    if (flags < 0 || fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) != 0)
+        return close_after(fd, err, path, "fcntl");
+    return fd;
 }

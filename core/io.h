@@ -1,4 +1,5 @@
-/* System-call layer for everything that must be durable, with fault injection.
+/* System-call layer for everything that must be durable, with fault injection; and the
+ * one open of files read whole (sl_io_open_regular).
  *
  * Tests set SCANLOD_FAULT="OP:N[:ERRNO]" (OP one of write, fsync, rename, unlink, mkdir,
  * open, any; ERRNO a name like ENOSPC or EIO, or "crash") to make the N-th call of that
@@ -9,7 +10,10 @@
 #define SCANLOD_CORE_IO_H
 
 #include <stddef.h>
+#include <sys/stat.h>
 #include <sys/types.h>
+
+#include "core/error.h"
 
 int sl_io_open(const char *path, int flags, mode_t mode);
 ssize_t sl_io_write(int fd, const void *buf, size_t n); /* writes all or fails */
@@ -17,6 +21,18 @@ int sl_io_fsync(int fd);
 int sl_io_rename(const char *from, const char *to);
 int sl_io_unlink(const char *path);
 int sl_io_mkdir(const char *path, mode_t mode);
+
+/* Opens a file to read it whole (a scan, an artifact, a model): O_RDONLY | O_NONBLOCK,
+ * then fstat, then anything but a regular file is refused before a byte is read, so a
+ * FIFO can neither block the open nor the reads, and a directory or device gets its own
+ * message: SL_E_BADINPUT "is a directory" / "is a FIFO, not a regular file" / ... .
+ * A failed open records the errno's own words ("No such file or directory"), its code
+ * from sl_error_code_of_errno (a command reading the user's file maps it with
+ * sl_error_input_exit_code). O_NONBLOCK is cleared again before returning.
+ * Returns the descriptor (O_CLOEXEC; caller closes), or a negative SL_E_* code. `st`
+ * (may be NULL) receives the fstat. Not fault-injected: the fault sweeps count the
+ * durable operations, and read-only opens are none. */
+int sl_io_open_regular(const char *path, struct stat *st, sl_error *err);
 
 /* Reads SCANLOD_FAULT once; called by the engine at start (also lazily).
  * SCANLOD_FAULT_SCOPE = all (default) | parent | child picks the processes that inject:

@@ -5,7 +5,6 @@
  * the engine treats a crash as retry-once-then-quarantine.
  */
 #include <errno.h>
-#include <fcntl.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -14,6 +13,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "core/io.h"
 #include "geometry/ply_internal.h"
 
 #define POPULATE_MAX ((size_t)256 << 20)
@@ -159,18 +159,9 @@ int sl_ply_read(const char *path, const sl_ply_limits *limits, sl_mesh *out, sl_
     sl_mesh_init(out);
     if (info)
         memset(info, 0, sizeof *info);
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
+    int fd = sl_io_open_regular(path, &st, err);
     if (fd < 0)
-        return sl_error_errno(err, errno, path, "open");
-    if (fstat(fd, &st) != 0) {
-        int e = errno;
-        close(fd);
-        return sl_error_errno(err, e, path, "fstat");
-    }
-    if (!S_ISREG(st.st_mode)) {
-        close(fd);
-        return sl_error_set(err, SL_E_BADINPUT, 0, path, "not a regular file");
-    }
+        return fd;
     size_t size = (size_t)st.st_size;
     void *map = NULL;
     /* Prefault typical scans in one call (cheaper than a fault per 64 KiB); larger files

@@ -28,6 +28,8 @@
 #include <unistd.h>
 #include <xxhash.h>
 
+#include "core/io.h"
+
 #define CONFIG_MAX_BYTES (1 << 20) /* a config file is a few KiB; refuse anything huge */
 #define CAUSE_MAX 512
 #define NAME_MAX_LEN 64
@@ -434,14 +436,14 @@ static int on_pair(void *user, const char *section, const char *name, const char
 
 static int read_file(const char *path, char **data, size_t *size, sl_error *err)
 {
-    int fd = open(path, O_RDONLY | O_CLOEXEC);
     struct stat st;
-    int e = fd < 0 || fstat(fd, &st) != 0 ? errno : S_ISDIR(st.st_mode) ? EISDIR : 0;
-    if (e) {
-        if (fd >= 0)
-            close(fd);
-        return sl_error_set(err, SL_E_CONFIG, e, path, "cannot read config file: %s", strerror(e));
-    }
+    sl_error open_err;
+    sl_error_init(&open_err);
+    int fd = sl_io_open_regular(path, &st, &open_err); /* a FIFO or folder: refused, no hang */
+    if (fd < 0)
+        return sl_error_set(err, SL_E_CONFIG, open_err.sys_errno, path,
+                            "cannot read config file: %s", open_err.message);
+    int e;
     if (st.st_size > CONFIG_MAX_BYTES) {
         close(fd);
         return sl_error_set(err, SL_E_CONFIG, 0, path, "config file larger than %d bytes",

@@ -11,8 +11,10 @@
 
 /* 2: refuses an octree whose grid its readers would refuse (SL_OCTREE_MAX_EXTENT), so a
  * work folder holding such an octree from version 1 rebuilds it and quarantines the item
- * instead of failing at the next stage on every run. */
-#define MERGE_STAGE_VERSION 2u
+ * instead of failing at the next stage on every run.
+ * 3: refuses samples whose finest level has no triangle (issue 16: such items were
+ * published as a success with empty levels); a work folder from version 2 rebuilds. */
+#define MERGE_STAGE_VERSION 3u
 
 typedef struct merge_config {
     int64_t max_samples;

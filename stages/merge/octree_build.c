@@ -445,6 +445,20 @@ static int check_samples(build_state *b)
     return 0;
 }
 
+/* No leaf edge changes sign: the finest level would have no triangle. That is bad input
+ * (a leaf too coarse for the surface, or samples of one sign), never an empty success. */
+static int no_surface(const build_state *b, const level_tables *leaves)
+{
+    size_t inside = 0;
+    for (size_t i = 0; i < leaves->vcount; i++)
+        inside += leaves->vinside[i];
+    return sl_error_set(b->err, SL_E_BADINPUT, 0, NULL,
+                        "the surface produced no triangles at leaf size %g: no leaf cube has "
+                        "corners on both sides of it (%zu of %zu samples inside); set a "
+                        "smaller [octree] leaf_size or a larger [octree] depth",
+                        b->samples->voxel_size, inside, leaves->vcount);
+}
+
 int sl_octree_build(const sl_sample_grid *samples, sl_octree *out, sl_progress *progress,
                     sl_error *err)
 {
@@ -461,6 +475,8 @@ int sl_octree_build(const sl_sample_grid *samples, sl_octree *out, sl_progress *
     if (rc == 0 && levels[0].ncount == 0)
         rc = sl_error_set(err, SL_E_BADINPUT, 0, NULL,
                           "no leaf cube has all 8 corners sampled: the samples are too sparse");
+    if (rc == 0 && levels[0].ecount == 0)
+        rc = no_surface(&b, &levels[0]);
     uint32_t depth = 0;
     while (rc == 0 && levels[depth].ncount > 1) {
         if (depth + 1 >= SL_OCTREE_MAX_LEVELS) {

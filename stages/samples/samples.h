@@ -48,6 +48,11 @@
 #define SL_SAMPLES_MAX_DEPTH 19 /* vertex coordinates <= 2^19 fit the 20-bit fields of
                                    the key tables (stages/merge/key_table.h) */
 #define SL_SAMPLES_MAX_BAND 8
+/* The automatic leaf (from the point spacing) is at most the bounding box's diagonal
+ * divided by this: a mesh of a few large triangles has vertices as far apart as its
+ * own size, and 1.5 x that spacing would be a leaf with no sample inside the shape
+ * (docs/samples-stage.md, "The grid"). */
+#define SL_SAMPLES_DIAGONAL_LEAVES 16
 
 extern const sl_stage sl_samples_stage;
 

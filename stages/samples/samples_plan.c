@@ -3,7 +3,9 @@
  *
  * The leaf size comes from, in order: [octree] leaf_size; [octree] depth (the longest
  * side of the bounding box plus the band on both sides fills the 2^depth cubes of the
- * root); spacing_factor x the points' mean nearest-neighbour spacing. Everything that
+ * root); spacing_factor x the points' mean nearest-neighbour spacing, at most the
+ * bounding box's diagonal / SL_SAMPLES_DIAGONAL_LEAVES (a few far-apart vertices say
+ * nothing about how fine the surface between them is). Everything that
  * could make the later phases allocate without bound is refused here, before any
  * allocation: a depth beyond max_depth (also the case of a huge extent with tiny
  * features), and clouds from which no size can be derived.
@@ -40,9 +42,15 @@ static int longest_axis(const double extent[3])
     return a;
 }
 
-static int choose_leaf(const sl_samples_config *cfg, const sl_pointset *ps, double longest,
-                       double *leaf, sl_error *err)
+static double diagonal_of(const double extent[3])
 {
+    return sqrt(extent[0] * extent[0] + extent[1] * extent[1] + extent[2] * extent[2]);
+}
+
+static int choose_leaf(const sl_samples_config *cfg, const sl_pointset *ps,
+                       const double extent[3], double *leaf, sl_error *err)
+{
+    double longest = extent[longest_axis(extent)];
     if (cfg->leaf_size > 0) {
         *leaf = cfg->leaf_size;
     } else if (cfg->depth > 0) {
@@ -58,6 +66,9 @@ static int choose_leaf(const sl_samples_config *cfg, const sl_pointset *ps, doub
                                 "be derived; set [octree] leaf_size or [octree] depth",
                                 ps->mean_spacing, (unsigned long long)ps->count);
         *leaf = cfg->spacing_factor * ps->mean_spacing;
+        double bound = diagonal_of(extent) / SL_SAMPLES_DIAGONAL_LEAVES;
+        if (bound > 0 && *leaf > bound)
+            *leaf = bound;
     }
     if (!(*leaf > 0) || !isfinite(*leaf))
         return sl_error_set(err, SL_E_BADINPUT, 0, NULL, "leaf size %g is not usable", *leaf);
@@ -89,7 +100,7 @@ int sl_samples_plan_make(const sl_samples_config *cfg, const sl_pointset *ps,
         extent[k] = plan->bbox_max[k] - plan->bbox_min[k];
     int axis = longest_axis(extent);
     double leaf = 0;
-    if ((rc = choose_leaf(cfg, ps, extent[axis], &leaf, err)) != SL_OK)
+    if ((rc = choose_leaf(cfg, ps, extent, &leaf, err)) != SL_OK)
         return rc;
     double max_cells = ldexp(1.0, cfg->max_depth) - 2.0 * cfg->band, span = 0;
     for (int k = 0; k < 3; k++) {

@@ -15,6 +15,9 @@
 #include "core/log.h"
 #include "stages/samples/samples.h"
 
+#define STRING_(x) #x
+#define STRING(x) STRING_(x)
+
 static const sl_option samples_options[] = {
     {"octree", "leaf_size", SL_OPT_DOUBLE, "0", 0, 1e30, NULL,
      "Edge length of the finest (leaf) marching cubes, in the input's world units. "
@@ -23,7 +26,9 @@ static const sl_option samples_options[] = {
      "Octree depth when leaf_size is 0: the bounding box's longest side plus the band on "
      "both sides is cut into 2^depth leaf cubes. 0 = leaf size from the point spacing."},
     {"octree", "spacing_factor", SL_OPT_DOUBLE, "1.5", 0.5, 64, NULL,
-     "Automatic leaf size = this x the mean nearest-neighbour spacing of the points "
+     "Automatic leaf size = this x the mean nearest-neighbour spacing of the points, at "
+     "most the bounding box's diagonal / " STRING(SL_SAMPLES_DIAGONAL_LEAVES) " (a mesh of "
+     "a few large triangles) "
      "(docs/samples-stage.md has the measurements behind the default)."},
     {"octree", "max_depth", SL_OPT_INT, "16", 1, SL_SAMPLES_MAX_DEPTH, NULL,
      "Items whose leaf size needs a deeper octree are refused (limit error, quarantined): "
@@ -203,7 +208,7 @@ const sl_stage sl_samples_stage = {
     .name = "samples",
     .description = "oriented points -> signed samples at leaf-cube vertices, OpenVDB grids "
                    "(paper 1 section 2.1)",
-    .version = 2,
+    .version = 3, /* 3: automatic leaf at most the diagonal / SL_SAMPLES_DIAGONAL_LEAVES */
     .options = samples_options,
     .sections = samples_sections,
     .configure = samples_configure,

@@ -257,6 +257,13 @@ static void far_clusters(uint64_t i, float *p, float *n)
     n[0] = 1, n[1] = n[2] = 0;
 }
 
+static void octahedron_point(uint64_t i, float *p, float *n)
+{
+    p[0] = p[1] = p[2] = 0;
+    p[i / 2] = i % 2 ? -1.0f : 1.0f; /* (+-1, 0, 0), (0, +-1, 0), (0, 0, +-1) */
+    memcpy(n, p, 3 * sizeof *p);
+}
+
 static void test_degenerate(void)
 {
     sl_samples_config cfg = sl_samples_default_config();
@@ -276,6 +283,14 @@ static void test_degenerate(void)
     cfg = sl_samples_default_config();
     ps = points_from(2, one_point, 0.5); /* leaf 0.75 < their distance 1 */
     CHECK(compute(&ps, &cfg, &counts, &err) == SL_OK && counts.occupied_cubes == 2);
+    sl_pointset_release(&ps);
+
+    /* Six points sqrt(2) apart: 1.5 x the spacing (2.12) would be wider than the shape
+     * (issue 16); the leaf is bounded by the diagonal / SL_SAMPLES_DIAGONAL_LEAVES. */
+    ps = points_from(6, octahedron_point, sqrt(2.0));
+    CHECK(compute(&ps, &cfg, &counts, &err) == SL_OK);
+    CHECK_NEAR(counts.plan.leaf_size, 2 * sqrt(3.0) / SL_SAMPLES_DIAGONAL_LEAVES, 1e-12);
+    CHECK(counts.plan.depth >= 4 && counts.inside > 0);
     sl_pointset_release(&ps);
 
     ps = points_from(2500, plane_point, 0.02); /* coplanar: flat in z */

@@ -227,6 +227,19 @@ static void test_bad_samples(void)
     sl_sample_grid two = {2, coords, dist, NULL, 1.0, {0, 0, 0}};
     sl_error_init(&err);
     CHECK(sl_octree_build(&two, &t, NULL, &err) == SL_E_BADINPUT);
+    /* One whole cube, every corner outside: a leaf but no triangle (issue 16: such
+     * items were published with empty levels). */
+    int32_t cube[24];
+    float outside[8];
+    for (int c = 0; c < 8; c++) {
+        cube[3 * c] = c & 1, cube[3 * c + 1] = c >> 1 & 1, cube[3 * c + 2] = c >> 2 & 1;
+        outside[c] = 0.5f;
+    }
+    sl_sample_grid blank = {8, cube, outside, NULL, 2.0, {0, 0, 0}};
+    sl_error_init(&err);
+    CHECK(sl_octree_build(&blank, &t, NULL, &err) == SL_E_BADINPUT &&
+          strstr(err.message, "no triangles at leaf size 2") &&
+          strstr(err.message, "0 of 8 samples inside"));
     int32_t far[6] = {0, 0, 0, 1 << 21, 0, 0};
     sl_sample_grid wide = {2, far, dist, NULL, 1.0, {0, 0, 0}};
     sl_error_init(&err);
