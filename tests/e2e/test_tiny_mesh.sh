@@ -32,7 +32,7 @@ write_config "$TMP/coarse.ini" "$TMP/in" "$TMP/work2" "$TMP/out2" "${levels[@]}"
 run_scanlod run "$TMP/coarse.ini" -s octree.leaf_size=3
 check "leaf 3: exit 65 (got $rc)" [ "$rc" -eq 65 ]
 check "leaf 3: quarantined with the reason ($err)" \
-  contains "\[merge\] octahedron: quarantined: the surface produced no triangles at leaf size 3: " "$err"
+  contains "\[merge\] octahedron.ply: quarantined: the surface produced no triangles at leaf size 3: " "$err"
 check "leaf 3: nothing published" [ ! -e "$TMP/out2/octahedron.ply" ]
 run_scanlod status "$TMP/coarse.ini" -s octree.leaf_size=3
 check "leaf 3: status lists the quarantine ($out)" grep -q "quarantine (badinput).*no triangles" <<<"$out"
