@@ -134,18 +134,28 @@ static int scale_expansion(int elen, const double *e, double b, double *h)
     return k;
 }
 
-/* h = e * f as the sum of e scaled by each component of f. h and tmp have room for
- * 2 elen flen, part for 2 elen. */
+/* h = e * f as the sum of e scaled by each component of the shorter factor. h and tmp
+ * have room for 2 elen flen, part for 2 max(elen, flen). */
 static int expansion_product(int elen, const double *e, int flen, const double *f, double *h,
                              double *tmp, double *part)
 {
-    int hlen = 0;
-    for (int j = 0; j < flen; j++) {
-        int plen = scale_expansion(elen, e, f[j], part);
-        int n = expansion_sum(hlen, h, plen, part, tmp);
-        memcpy(h, tmp, (size_t)n * sizeof *h);
-        hlen = n;
+    if (flen > elen) {
+        const double *x = e;
+        int xlen = elen;
+        e = f, elen = flen, f = x, flen = xlen;
     }
+    if (flen == 0)
+        return 0;
+    double *acc = h, *spare = tmp;
+    int hlen = scale_expansion(elen, e, f[0], acc);
+    for (int j = 1; j < flen; j++) {
+        int plen = scale_expansion(elen, e, f[j], part);
+        hlen = expansion_sum(hlen, acc, plen, part, spare);
+        double *x = acc;
+        acc = spare, spare = x;
+    }
+    if (acc != h)
+        memcpy(h, acc, (size_t)hlen * sizeof *h);
     return hlen;
 }
 
