@@ -108,7 +108,8 @@ static int place_super_triangle(cdt_work *w, const double *pts)
             lo[a] = i == 0 || x < lo[a] ? x : lo[a];
             hi[a] = i == 0 || x > hi[a] ? x : hi[a];
         }
-    memcpy(w->xy, pts, 2 * (uint64_t)n * sizeof *pts);
+    if (n)
+        memcpy(w->xy, pts, 2 * (uint64_t)n * sizeof *pts);
     double cx = 0.5 * lo[0] + 0.5 * hi[0], cy = 0.5 * lo[1] + 0.5 * hi[1];
     double d = fmax(hi[0] - lo[0], hi[1] - lo[1]);
     d = fmax(d, fmax(fabs(cx), fabs(cy)) * 0x1p-40);
