@@ -276,6 +276,105 @@ static void test_scales(void)
     }
 }
 
+/* Two edges of the loops, not neighbours on one loop, share a point. */
+static int loops_touch(const poly *p)
+{
+    for (uint32_t e = 0; e < p->nidx; e++)
+        for (uint32_t f = e + 1; f < p->nidx; f++) {
+            uint32_t le = 0, lf = 0;
+            while (p->start[le + 1] <= e)
+                le++;
+            while (p->start[lf + 1] <= f)
+                lf++;
+            uint32_t ne = e + 1 == p->start[le + 1] ? p->start[le] : e + 1;
+            uint32_t nf = f + 1 == p->start[lf + 1] ? p->start[lf] : f + 1;
+            if (le == lf && (ne == f || nf == e))
+                continue;
+            if (segments_touch(P(p, p->idx[e]), P(p, p->idx[ne]), P(p, p->idx[f]),
+                               P(p, p->idx[nf])))
+                return 1;
+        }
+    return 0;
+}
+
+static void reverse_loop(poly *p, uint32_t l)
+{
+    for (uint32_t i = p->start[l], j = p->start[l + 1] - 1; i < j; i++, j--) {
+        uint32_t t = p->idx[i];
+        p->idx[i] = p->idx[j], p->idx[j] = t;
+    }
+}
+
+/* Loops through 4-12 random points, often self-intersecting: refused as crossing exactly
+ * when two of their edges cross (brute force), else triangulated correctly. */
+static void test_random_loops(void)
+{
+    int wrong = 0, refused = 0;
+    for (int trial = 0; trial < 600; trial++) {
+        poly p;
+        poly_init(&p);
+        uint32_t m = 4 + trial % 9;
+        for (uint32_t k = 0; k < m; k++)
+            poly_loop_add(&p, poly_point(&p, uniform(), uniform()));
+        poly_close(&p);
+        int crossing = loops_touch(&p);
+        if (!crossing && poly_area(&p) < 0)
+            reverse_loop(&p, 0);
+        int rc;
+        sl_cdt_report rep;
+        sl_cdt_result *r = triangulate(&p, 0, &rc, &rep);
+        if (crossing) {
+            wrong += rc != SL_E_BADINPUT || rep.problem != SL_CDT_CROSSING;
+            refused++;
+        } else {
+            wrong += rc != SL_OK || !r || cdt_verify("random simple loop", &p, r, 0, 1);
+        }
+        sl_cdt_free(r);
+        poly_release(&p);
+    }
+    CHECK_MSG(wrong == 0, "%d of 600 random loops misjudged (%d self-intersecting)", wrong,
+              refused);
+    CHECK(refused > 100 && refused < 550);
+}
+
+/* Star polygons snapped to multiples of 1/16 with every grid point inside: collinear
+ * runs, points on loop edges, cocircular grid squares, all at once. */
+static void test_snapped_polygons(void)
+{
+    int failed = 0, done = 0;
+    for (int trial = 0; trial < 200 && done < 25; trial++) {
+        poly p;
+        poly_init(&p);
+        star_loop(&p, 0, 0, 1, 5 + (uint32_t)(uniform() * 30), 0);
+        for (uint32_t i = 0; i < 2 * p.n; i++)
+            p.xy[i] = round(p.xy[i] * 16) / 16;
+        int dup = 0;
+        for (uint32_t i = 0; i < p.n; i++)
+            for (uint32_t j = i + 1; j < p.n; j++)
+                dup |= p.xy[2 * i] == p.xy[2 * j] && p.xy[2 * i + 1] == p.xy[2 * j + 1];
+        if (dup || loops_touch(&p) || poly_area(&p) <= 0) {
+            poly_release(&p);
+            continue;
+        }
+        uint32_t boundary = p.n;
+        for (int x = -16; x <= 16; x++)
+            for (int y = -16; y <= 16; y++) {
+                double q[2] = {x / 16.0, y / 16.0};
+                int on_loop = 0;
+                for (uint32_t i = 0; i < boundary; i++)
+                    on_loop |= p.xy[2 * i] == q[0] && p.xy[2 * i + 1] == q[1];
+                if (!on_loop && (poly_contains(&p, q) || uniform() < 0.1))
+                    poly_point(&p, q[0], q[1]); /* inside, on an edge, or (some) outside */
+            }
+        char name[64];
+        snprintf(name, sizeof name, "snapped polygon %d (%u points)", trial, p.n);
+        failed += run_and_verify(name, &p, 0, 1) != 0;
+        done++;
+        poly_release(&p);
+    }
+    CHECK_MSG(failed == 0 && done == 25, "%d of %d snapped polygons failed", failed, done);
+}
+
 static void test_touching(void)
 {
     poly p;
@@ -467,6 +566,8 @@ int main(void)
     test_square();
     test_random_polygons();
     test_grids();
+    test_random_loops();
+    test_snapped_polygons();
     test_cocircular();
     test_scales();
     test_touching();
