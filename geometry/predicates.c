@@ -10,7 +10,9 @@
  * difference is 0 or at least 2^-200 in magnitude: then every product in the evaluation is
  * 0 or a normal number and the bound holds as proved (docs/mesh-toolkit.md).
  *
- * Exact stage: the same determinants in expansion arithmetic (a value held as a sum of
+ * Exact stage: when the coordinate differences are exact and few bits wide (grids, nearby
+ * points), the plain evaluation is exact and suffices. Otherwise the same determinants in
+ * expansion arithmetic (a value held as a sum of
  * nonoverlapping doubles of increasing magnitude; Shewchuk sections 2.2-2.8), built from
  * two error-free transforms: Knuth's two-sum and the fused multiply-add's exact product
  * error. We skip his adaptive stages B and C: degenerate calls are rare in our inputs,
@@ -448,8 +450,31 @@ static void scale_if_needed(double *x, int n, int k, int hi, int lo)
         x[i] = ldexp(x[i], -hi);
 }
 
+/* d = x - y; whether that was exact and the d are few bits wide. Then a degree-k
+ * determinant of them makes no rounding error in plain doubles: with every d a multiple of
+ * 2^lo below 2^hi, every intermediate is a multiple of 2^(k lo) below 2^(k hi + k), exact
+ * when k (hi - lo + 1) <= 53, k lo >= -1074 and k (hi + 1) < 1024. Grids and nearby
+ * points (x - y is exact when y/2 <= x <= 2y) are most degenerate calls: they skip the
+ * expansions. */
+static int exact_differences(const double *x, const double *y, int n, int k, double *d)
+{
+    for (int i = 0; i < n; i++) {
+        double err;
+        two_sum(x[i], -y[i], &d[i], &err);
+        if (err != 0.0) /* also NaN: not finite */
+            return 0;
+    }
+    int hi, lo, unit, range = exponent_range(d, n, &hi, &lo, &unit);
+    return range == 0 ||
+           (range > 0 && k * (hi - lo + 1) <= 53 && k * lo >= -1074 && k * (hi + 1) < 1024);
+}
+
 int sl_orient2d_exact(const double a[2], const double b[2], const double c[2])
 {
+    const double from[4] = {a[0], a[1], b[0], b[1]}, to[4] = {c[0], c[1], c[0], c[1]};
+    double dd[4];
+    if (exact_differences(from, to, 4, 2, dd))
+        return sign_of(dd[0] * dd[3] - dd[1] * dd[2]);
     double x[6] = {a[0], a[1], b[0], b[1], c[0], c[1]};
     int hi, lo, unit;
     int range = exponent_range(x, 6, &hi, &lo, &unit);
@@ -493,6 +518,13 @@ static int incircle_term(int nx, const double *dx, int ny, const double *dy, int
 int sl_incircle_exact(const double a[2], const double b[2], const double c[2],
                       const double d[2])
 {
+    const double from[6] = {a[0], a[1], b[0], b[1], c[0], c[1]};
+    const double to[6] = {d[0], d[1], d[0], d[1], d[0], d[1]};
+    double e[6];
+    if (exact_differences(from, to, 6, 4, e))
+        return sign_of((e[0] * e[0] + e[1] * e[1]) * (e[2] * e[5] - e[4] * e[3]) +
+                       (e[2] * e[2] + e[3] * e[3]) * (e[4] * e[1] - e[0] * e[5]) +
+                       (e[4] * e[4] + e[5] * e[5]) * (e[0] * e[3] - e[2] * e[1]));
     double x[8] = {a[0], a[1], b[0], b[1], c[0], c[1], d[0], d[1]};
     int hi, lo, unit;
     int range = exponent_range(x, 8, &hi, &lo, &unit);

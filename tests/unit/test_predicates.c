@@ -135,6 +135,36 @@ static void test_incircle_cocircular(void)
            naive_wrong, wrong);
 }
 
+/* Integer points exactly on the circle of radius 32045 = 5 13 17 29 (it has thousands):
+ * 15-bit differences, too wide for plain doubles to be exact (products of four of them
+ * need 64 bits), so this is the expansions' job. */
+static void test_incircle_lattice_circle(void)
+{
+    enum { R = 32045 };
+    static double pts[8192][2];
+    int n = 0;
+    for (long x = -R; x <= R && n < 8190; x++) {
+        long y = (long)llround(sqrt((double)R * R - (double)x * x));
+        if (x * x + y * y == (long)R * R) {
+            pts[n][0] = (double)x, pts[n++][1] = (double)y;
+            if (y)
+                pts[n][0] = (double)x, pts[n++][1] = (double)-y;
+        }
+    }
+    int naive_wrong = 0, wrong = 0;
+    for (int t = 0; t < 20000; t++) {
+        const double *q[4];
+        for (int k = 0; k < 4; k++)
+            q[k] = pts[(int)(uniform() * n)];
+        naive_wrong += naive_incircle(q[0], q[1], q[2], q[3]) != 0;
+        wrong += sl_incircle(q[0], q[1], q[2], q[3]) != 0;
+    }
+    CHECK_MSG(n > 300 && naive_wrong > 100, "%d lattice points, naive wrong %d", n, naive_wrong);
+    CHECK_MSG(wrong == 0, "%d of 20000 lattice quadruples on one circle not cocircular", wrong);
+    printf("integer circle (%d points): naive incircle nonzero on %d of 20000, sl_incircle on %d\n",
+           n, naive_wrong, wrong);
+}
+
 /* d a few ulps off the unit circle, a b c = (1,0) (0,1) (-1,0): the truth is the sign of
  * 1 - x^2 - y^2, exact in 128-bit integers as x = X 2^-60 (|x|, |y| >= 2^-7). */
 static void test_incircle_unit_circle(void)
@@ -247,6 +277,23 @@ static void test_cross_check(void)
             nonzero += ic != 0;
             zero += ic == 0;
         }
+    /* Small integers (and scaled copies): exact differences, often exactly degenerate; the
+     * exact stage evaluates them in plain doubles when that is provably exact. */
+    const int int_scales[] = {-1000, -270, 0, 30, 245, 900};
+    for (int s = 0; s < 6; s++)
+        for (int t = 0; t < 20000; t++) {
+            double p[4][2];
+            int range = t % 2 ? 8 : 4096;
+            for (int k = 0; k < 4; k++)
+                for (int a = 0; a < 2; a++)
+                    p[k][a] = ldexp((double)(int)(uniform() * range) - range / 2, int_scales[s]);
+            int o = sl_orient2d_exact(p[0], p[1], p[2]);
+            int ic = sl_incircle_exact(p[0], p[1], p[2], p[3]);
+            disagree += o != sl_orient2d_bigint(p[0], p[1], p[2]) || o != sl_orient2d(p[0], p[1], p[2]);
+            disagree += ic != sl_incircle_bigint(p[0], p[1], p[2], p[3]) ||
+                        ic != sl_incircle(p[0], p[1], p[2], p[3]);
+            zero += ic == 0;
+        }
     CHECK_MSG(disagree == 0, "%d calls where the filter, expansions and big integers differ",
               disagree);
     CHECK_MSG(identity == 0, "%d permutation identities broken", identity);
@@ -298,6 +345,7 @@ int main(void)
     test_orient_near_line();
     test_incircle_cocircular();
     test_incircle_unit_circle();
+    test_incircle_lattice_circle();
     test_wide_exponent_span();
     test_cross_check();
     test_nonfinite();
