@@ -15,9 +15,10 @@
  * A side need not be a simple polygon: when the segment passes close to a point, it can
  * cross every triangle around it but one edge, and the chain then runs out to that point
  * and back along the same edge (a spike; the point is inside the side). The recursion
- * still triangulates it (the spike's tip is inside any triangle that would skip it, so it
- * wins the empty-circle choice); the two copies of the spike edge are joined to each other
- * instead of to the triangles beyond them, which are cavity triangles themselves.
+ * still triangulates it: a triangle covering the spike's tip would have the tip inside its
+ * circumcircle, so the empty-circle choice never makes one. The two copies of the spike
+ * edge are joined to each other instead of to the triangles beyond them, which are cavity
+ * triangles themselves.
  *
  * A point exactly on the segment splits it: a-p is inserted, then p-b. Crossing an
  * already inserted loop edge refuses the input (the loops intersect); so does marking an
