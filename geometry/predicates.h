@@ -7,9 +7,10 @@
  *
  * How (docs/mesh-toolkit.md has the proofs): a floating-point evaluation with Shewchuk's
  * a-priori error bound decides almost every call; only when the bound cannot certify the
- * sign (nearly or exactly degenerate input) does an exact evaluation run, in floating-point
- * expansion arithmetic, or in big integers when one call's coordinates span more binary
- * orders of magnitude than expansions can hold without underflow.
+ * sign (nearly or exactly degenerate input) does an exact evaluation run: in plain doubles
+ * when the coordinate differences are exact and narrow enough that no operation rounds
+ * (grids), else in floating-point expansion arithmetic, or in big integers when one call's
+ * coordinates span more binary orders of magnitude than expansions hold without underflow.
  *
  * Domain: every finite double, including subnormals, huge values and mixtures of both.
  * A NaN or infinite coordinate makes the answer 0 (callers check finiteness first).
@@ -32,7 +33,8 @@ int sl_orient2d(const double a[2], const double b[2], const double c[2]);
 int sl_incircle(const double a[2], const double b[2], const double c[2], const double d[2]);
 
 /* The same answers without the floating-point filter: always the exact evaluation
- * (expansions, or big integers for a wide exponent range). For tests and measurements. */
+ * (plain doubles when provably exact, expansions, or big integers for a wide exponent
+ * range). For tests and measurements. */
 int sl_orient2d_exact(const double a[2], const double b[2], const double c[2]);
 int sl_incircle_exact(const double a[2], const double b[2], const double c[2],
                       const double d[2]);
