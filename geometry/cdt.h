@@ -40,7 +40,7 @@
 
 #include <stdint.h>
 
-#include "pipeline/error.h"
+#include "core/error.h"
 
 #define SL_CDT_MAX_POINTS (1u << 28)
 #define SL_CDT_MAX_LOOP_POINTS (1u << 30)

@@ -18,7 +18,7 @@
 
 #include <stdint.h>
 
-#include "pipeline/error.h"
+#include "core/error.h"
 
 enum sl_plane_method {
     SL_PLANE_TLS = 0,    /* perpendicular least squares (PCA) */
