@@ -24,6 +24,7 @@
 #include <unistd.h>
 
 #include "core/atomicfile.h"
+#include "core/dirs.h"
 #include "core/io.h"
 #include "core/json.h"
 #include "core/log.h"
@@ -118,28 +119,6 @@ static int write_reports(sl_engine *e, const char *item, const char *ticket,
     return rc;
 }
 
-static int remove_tree(const char *dir)
-{
-    DIR *d = opendir(dir);
-    if (!d)
-        return errno == ENOENT ? 0 : -1;
-    struct dirent *de;
-    while ((de = readdir(d))) {
-        if (!strcmp(de->d_name, ".") || !strcmp(de->d_name, ".."))
-            continue;
-        char path[PATH_MAX];
-        if (sl_engine_path(path, sizeof path, "%s/%s", dir, de->d_name))
-            continue;
-        struct stat st;
-        if (lstat(path, &st) == 0 && S_ISDIR(st.st_mode))
-            remove_tree(path);
-        else
-            unlink(path);
-    }
-    closedir(d);
-    return rmdir(dir);
-}
-
 /* The files of every publishing stage, by the names in its record; their names are
  * appended to `names` (for the publish record). */
 static int publish_stage_files(sl_engine *e, const char *ticket, const char *staged,
@@ -182,7 +161,9 @@ static int swap_in(const char *staged, const char *final_dir, const char *parent
     if (renameat2(AT_FDCWD, staged, AT_FDCWD, final_dir, RENAME_EXCHANGE) != 0)
         return sl_error_errno(err, errno, final_dir, "rename (exchange)");
     int rc = sl_fsync_dir(parent, err);
-    remove_tree(staged); /* now the previous publication */
+    sl_error ignored;
+    sl_error_init(&ignored);
+    sl_remove_tree(staged, 0, &ignored); /* now the previous publication */
     return rc;
 }
 
@@ -207,7 +188,9 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
     if (rc == 0)
         rc = sl_mkdirs(parent, err);
     if (rc == 0) {
-        remove_tree(staged); /* leftovers of a killed attempt by this pid */
+        sl_error ignored;
+        sl_error_init(&ignored);
+        sl_remove_tree(staged, 0, &ignored); /* leftovers of a killed attempt by this pid */
         rc = sl_mkdirs(staged, err);
     }
     if (rc == 0)
@@ -228,7 +211,9 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
     if (rc == 0)
         rc = swap_in(staged, final_dir, parent, err);
     if (rc) {
-        remove_tree(staged);
+        sl_error ignored;
+        sl_error_init(&ignored);
+        sl_remove_tree(staged, 0, &ignored);
         return rc;
     }
     rc = sl_mkdirs(record_dir, err);
