@@ -46,7 +46,7 @@
 
 #define SL_SAMPLES_FILE "samples.vdb"
 #define SL_SAMPLES_MAX_DEPTH 19 /* vertex coordinates <= 2^19 fit the 20-bit fields of
-                                   the key tables (stages/merge/key_table.h) */
+                                   the key tables (geometry/key_table.h) */
 #define SL_SAMPLES_MAX_BAND 8
 
 extern const sl_stage sl_samples_stage;
