@@ -27,6 +27,10 @@ typedef struct sl_export_config {
     uint64_t fidelity_samples;
 } sl_export_config;
 
+/* A generated level as an sl_mesh view (geometry/mesh.h): what the writers and the
+ * measurements read. */
+sl_mesh sl_export_mesh_view(const sl_lod_mesh *m);
+
 /* Renders the level's PNG thumbnail (geometry/raster.h). */
 int sl_export_thumbnail(const char *path, const sl_lod_mesh *mesh, int size, sl_error *err);
 

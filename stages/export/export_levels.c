@@ -81,19 +81,6 @@ int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_
     return 0;
 }
 
-static sl_mesh mesh_view(const sl_lod_mesh *m)
-{
-    sl_mesh v;
-    sl_mesh_init(&v);
-    v.vertex_count = m->vertex_count;
-    v.positions = m->positions;
-    v.normals = m->normals;
-    v.colors = m->colors;
-    v.triangle_count = m->triangle_count;
-    v.triangles = m->indices;
-    return v;
-}
-
 static int write_files(const sl_export_config *c, const sl_export_level *lv,
                        const sl_lod_mesh *mesh, const char *extras, const sl_stage_io *io,
                        sl_error *err)
@@ -127,7 +114,7 @@ typedef struct level_row {
 static int measure_level(const sl_export_config *c, const sl_mesh *input, const sl_lod_mesh *mesh,
                          const sl_stage_io *io, sl_json *r, level_row *row, sl_error *err)
 {
-    sl_mesh view = mesh_view(mesh);
+    sl_mesh view = sl_export_mesh_view(mesh);
     sl_mesh_topology topo;
     int rc = sl_mesh_topology_compute(&view, &topo, err);
     if (rc)
