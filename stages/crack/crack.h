@@ -23,6 +23,15 @@
 
 extern const sl_stage sl_crack_stage;
 
+/* The crack stage reads no options: its model follows from its inputs alone. The struct
+ * keeps the stage face uniform (and C has no empty struct). */
+typedef struct sl_crack_config {
+    int unused; /* always 0 */
+} sl_crack_config;
+
+/* The (empty) section at its defaults (sl_stage_default_config). */
+sl_crack_config sl_crack_default_config(void);
+
 /* Gathers every internal node's transition record from the finer level (O(n log n)
  * lookups, OpenMP over nodes, deterministic). *unresolved = how many edge midpoints and
  * face centres of internal nodes no finer cell has (the report's finer_samples_missing).

@@ -55,6 +55,14 @@ typedef enum sl_priority_metric {
     SL_PRIORITY_AREA       /* the paper's M_r, with the paper's waiting rule */
 } sl_priority_metric;
 
+/* The resolved [priority] section (options: stages/priority/priority_stage.c). */
+typedef struct sl_priority_config {
+    sl_priority_metric metric; /* what orders the expansions */
+} sl_priority_config;
+
+/* The section at its option table's defaults (sl_stage_default_config). */
+sl_priority_config sl_priority_default_config(void);
+
 /* "error", "hausdorff", "area" -> metric; -1 for another name. And back. */
 int sl_priority_metric_parse(const char *name);
 const char *sl_priority_metric_name(sl_priority_metric metric);

@@ -75,6 +75,7 @@ typedef struct sl_samples_config {
                               the k nearest points' normals */
 } sl_samples_config;
 
+/* Both sections at their option table's defaults (sl_stage_default_config). */
 sl_samples_config sl_samples_default_config(void);
 
 /* The grid the samples live on. */
