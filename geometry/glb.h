@@ -1,7 +1,8 @@
 /* Mesh output for viewers: binary glTF 2.0 (.glb) and Wavefront OBJ.
  *
- * Both writers take the same borrowed view of a triangle mesh (sl_glb_mesh: nothing is
- * copied or freed) and write through the atomic-write helper, so nothing is visible at
+ * Both writers read an sl_mesh (positions, triangles, and normals and colours when given;
+ * often a view of someone else's arrays, sl_mesh_view(): nothing is copied or freed) and
+ * write through the atomic-write helper, so nothing is visible at
  * `path` until the file is complete and durable (core/atomicfile.h).
  *
  * What a .glb holds (docs/glb.md): one scene, one node, one mesh with one TRIANGLES
@@ -9,7 +10,8 @@
  * length) and COLOR_0 (unsigned byte VEC4, normalized) when given; indices as
  * UNSIGNED_SHORT when vertex_count < 65536, else UNSIGNED_INT; one matte double-sided
  * material (glTF's default material is fully metallic, which renders scans dark);
- * asset.generator "scanlod"; the caller's `extras_json` as the mesh's `extras`.
+ * asset.generator "scanlod"; the caller's `extras_json` (may be NULL) as the mesh's
+ * `extras`.
  * The files pass the Khronos glTF validator with 0 errors (tests/export/test_glb.sh).
  *
  * Rejected, with nothing written:
@@ -32,29 +34,20 @@
 #include "core/error.h"
 #include "geometry/mesh.h"
 
-typedef struct sl_glb_mesh {
-    uint64_t vertex_count, triangle_count;
-    const float *positions;   /* 3 * vertex_count, world */
-    const float *normals;     /* 3 * vertex_count, or NULL (any length; written unit) */
-    const uint8_t *colors;    /* 4 * vertex_count RGBA (sRGB), or NULL */
-    const uint32_t *indices;  /* 3 * triangle_count, counter-clockwise seen from outside */
-    const char *extras_json;  /* a JSON object text ("{...}") for mesh.extras, or NULL */
-} sl_glb_mesh;
+/* What the writers read of `m`: positions (world), triangles (counter-clockwise seen from
+ * outside), normals (any length; written unit) and colours (RGBA, sRGB) when not NULL.
+ * The checks every writer of a mesh for viewers needs (GLB, OBJ, thumbnails): at least
+ * one triangle, finite positions, indices in range. `path` names the file in messages
+ * (may be NULL). */
+int sl_mesh_check_writable(const sl_mesh *m, const char *path, sl_error *err);
 
-/* A view of `m` (no copy): positions, normals, colours and triangles. */
-sl_glb_mesh sl_glb_mesh_view(const sl_mesh *m, const char *extras_json);
-
-/* The checks every consumer of an sl_glb_mesh needs (GLB, OBJ, thumbnails): at least one
- * triangle, finite positions, indices in range. `path` names the file in messages (may be
- * NULL). */
-int sl_glb_mesh_check(const sl_glb_mesh *m, const char *path, sl_error *err);
-
-int sl_glb_write(const char *path, const sl_glb_mesh *m, sl_error *err);
+/* `extras_json`: a JSON object text ("{...}") for mesh.extras, or NULL. */
+int sl_glb_write(const char *path, const sl_mesh *m, const char *extras_json, sl_error *err);
 
 /* OBJ: `v x y z [r g b]` (colours as floats in [0, 1], the common extension that
  * MeshLab and Blender read), `vn` when normals are given, faces 1-based (`f a//a ...` with
  * normals). extras_json is written as a `#` comment line when it has no line break.
  * Rejects what sl_glb_write rejects, except the 32-bit size limit. */
-int sl_obj_write(const char *path, const sl_glb_mesh *m, sl_error *err);
+int sl_obj_write(const char *path, const sl_mesh *m, const char *extras_json, sl_error *err);
 
 #endif

@@ -49,7 +49,7 @@ static uint64_t pad4(uint64_t n)
     return (n + 3) & ~(uint64_t)3;
 }
 
-static glb_layout make_layout(const sl_glb_mesh *m)
+static glb_layout make_layout(const sl_mesh *m)
 {
     glb_layout l = {0};
     uint64_t vec3 = 12 * m->vertex_count, at = vec3;
@@ -64,33 +64,25 @@ static glb_layout make_layout(const sl_glb_mesh *m)
     return l;
 }
 
-sl_glb_mesh sl_glb_mesh_view(const sl_mesh *m, const char *extras_json)
-{
-    sl_glb_mesh v = {.vertex_count = m->vertex_count, .triangle_count = m->triangle_count,
-                     .positions = m->positions, .normals = m->normals, .colors = m->colors,
-                     .indices = m->triangles, .extras_json = extras_json};
-    return v;
-}
-
-int sl_glb_mesh_check(const sl_glb_mesh *m, const char *path, sl_error *err)
+int sl_mesh_check_writable(const sl_mesh *m, const char *path, sl_error *err)
 {
     if (m->vertex_count == 0 || m->triangle_count == 0)
         return sl_error_set(err, SL_E_BADINPUT, 0, path,
                             "nothing to write: the mesh has %llu vertices and %llu triangles",
                             (unsigned long long)m->vertex_count,
                             (unsigned long long)m->triangle_count);
-    if (!m->positions || !m->indices)
-        return sl_error_set(err, SL_E_INTERNAL, 0, path, "mesh without positions or indices");
+    if (!m->positions || !m->triangles)
+        return sl_error_set(err, SL_E_INTERNAL, 0, path, "mesh without positions or triangles");
     for (uint64_t i = 0; i < 3 * m->vertex_count; i++)
         if (!isfinite(m->positions[i]))
             return sl_error_set(err, SL_E_BADINPUT, 0, path,
                                 "vertex %llu has a non-finite position",
                                 (unsigned long long)(i / 3));
     for (uint64_t i = 0; i < 3 * m->triangle_count; i++)
-        if (m->indices[i] >= m->vertex_count)
+        if (m->triangles[i] >= m->vertex_count)
             return sl_error_set(err, SL_E_INTERNAL, 0, path,
                                 "triangle %llu has vertex index %u (%llu vertices)",
-                                (unsigned long long)(i / 3), m->indices[i],
+                                (unsigned long long)(i / 3), m->triangles[i],
                                 (unsigned long long)m->vertex_count);
     return 0;
 }
@@ -128,7 +120,7 @@ static void json_accessor(sl_json *j, int view, int component, uint64_t count, c
 
 /* min/max of POSITION, required by the spec and compared with the data by validators:
  * %.9g (core/json.h) round-trips a float exactly. */
-static void json_position_bounds(sl_json *j, const sl_glb_mesh *m)
+static void json_position_bounds(sl_json *j, const sl_mesh *m)
 {
     float lo[3], hi[3];
     memcpy(lo, m->positions, sizeof lo);
@@ -149,7 +141,7 @@ static void json_position_bounds(sl_json *j, const sl_glb_mesh *m)
     sl_json_array_end(j);
 }
 
-static void json_mesh(sl_json *j, const sl_glb_mesh *m, int nrm, int col, int idx)
+static void json_mesh(sl_json *j, const char *extras_json, int nrm, int col, int idx)
 {
     sl_json_array_begin(j, "meshes");
     sl_json_object_begin(j, NULL);
@@ -168,8 +160,8 @@ static void json_mesh(sl_json *j, const sl_glb_mesh *m, int nrm, int col, int id
     sl_json_u64(j, "mode", GLTF_TRIANGLES);
     sl_json_object_end(j);
     sl_json_array_end(j);
-    if (m->extras_json)
-        sl_json_raw(j, "extras", m->extras_json);
+    if (extras_json)
+        sl_json_raw(j, "extras", extras_json);
     sl_json_object_end(j);
     sl_json_array_end(j);
 }
@@ -190,7 +182,7 @@ static void json_material(sl_json *j)
     sl_json_array_end(j);
 }
 
-static void json_views_and_accessors(sl_json *j, const sl_glb_mesh *m, const glb_layout *l)
+static void json_views_and_accessors(sl_json *j, const sl_mesh *m, const glb_layout *l)
 {
     int views = 0;
     sl_json_array_begin(j, "bufferViews");
@@ -222,7 +214,8 @@ static void json_views_and_accessors(sl_json *j, const sl_glb_mesh *m, const glb
     sl_json_array_end(j);
 }
 
-static void build_json(sl_json *j, const sl_glb_mesh *m, const glb_layout *l)
+static void build_json(sl_json *j, const sl_mesh *m, const char *extras_json,
+                       const glb_layout *l)
 {
     int nrm = m->normals ? 1 : -1;
     int col = m->colors ? 1 + (nrm > 0) : -1;
@@ -247,7 +240,7 @@ static void build_json(sl_json *j, const sl_glb_mesh *m, const glb_layout *l)
     sl_json_u64(j, "mesh", 0);
     sl_json_object_end(j);
     sl_json_array_end(j);
-    json_mesh(j, m, nrm, col, idx);
+    json_mesh(j, extras_json, nrm, col, idx);
     json_material(j);
     sl_json_array_begin(j, "buffers");
     sl_json_object_begin(j, NULL);
@@ -288,7 +281,7 @@ static void unit_normal(const float *n, float out[3])
         out[k] = (float)(n[k] / len);
 }
 
-static int write_bin(sl_atomic_file *f, const sl_glb_mesh *m, const glb_layout *l, sl_error *err)
+static int write_bin(sl_atomic_file *f, const sl_mesh *m, const glb_layout *l, sl_error *err)
 {
     int rc = 0;
     for (uint64_t i = 0; i < 3 * m->vertex_count && !rc; i++)
@@ -302,7 +295,7 @@ static int write_bin(sl_atomic_file *f, const sl_glb_mesh *m, const glb_layout *
     if (m->colors && !rc)
         rc = sl_atomic_write(f, m->colors, (size_t)(4 * m->vertex_count), err);
     for (uint64_t i = 0; i < 3 * m->triangle_count && !rc; i++) {
-        uint32_t v = m->indices[i];
+        uint32_t v = m->triangles[i];
         if (l->short_indices) {
             unsigned char b[2] = {(unsigned char)v, (unsigned char)(v >> 8)};
             rc = sl_atomic_write(f, b, 2, err);
@@ -315,7 +308,7 @@ static int write_bin(sl_atomic_file *f, const sl_glb_mesh *m, const glb_layout *
     return rc ? rc : sl_atomic_write(f, zeros, (size_t)(l->bin_length - used), err);
 }
 
-static int write_glb(sl_atomic_file *f, const sl_glb_mesh *m, const glb_layout *l,
+static int write_glb(sl_atomic_file *f, const sl_mesh *m, const glb_layout *l,
                      const char *json, uint64_t json_length, sl_error *err)
 {
     uint64_t total = 12 + 8 + json_length + 8 + l->bin_length;
@@ -331,18 +324,18 @@ static int write_glb(sl_atomic_file *f, const sl_glb_mesh *m, const glb_layout *
     return rc ? rc : write_bin(f, m, l, err);
 }
 
-int sl_glb_write(const char *path, const sl_glb_mesh *m, sl_error *err)
+int sl_glb_write(const char *path, const sl_mesh *m, const char *extras_json, sl_error *err)
 {
-    int rc = sl_glb_mesh_check(m, path, err);
+    int rc = sl_mesh_check_writable(m, path, err);
     if (rc)
         return rc;
-    if (m->extras_json && !is_object_text(m->extras_json))
+    if (extras_json && !is_object_text(extras_json))
         return sl_error_set(err, SL_E_INTERNAL, 0, path, "GLB extras are not a JSON object");
 
     glb_layout layout = make_layout(m);
     sl_json j;
     sl_json_init(&j, 0);
-    build_json(&j, m, &layout);
+    build_json(&j, m, extras_json, &layout);
     if (j.failed) {
         sl_json_release(&j);
         return sl_error_set(err, SL_E_NOMEM, 0, path, "out of memory for the glTF JSON");

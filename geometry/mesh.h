@@ -42,4 +42,11 @@ typedef struct sl_mesh {
 void sl_mesh_init(sl_mesh *m);
 void sl_mesh_release(sl_mesh *m); /* frees every array and re-inits */
 
+/* A view of arrays someone else owns, as an sl_mesh (normals and colours may be NULL;
+ * every other optional array is NULL): the one way to hand generated or borrowed
+ * geometry to what reads an sl_mesh (writers, topology, BVH, distances). Nothing is
+ * copied; never sl_mesh_release() a view. */
+sl_mesh sl_mesh_view(uint64_t vertex_count, float *positions, float *normals, uint8_t *colors,
+                     uint64_t triangle_count, uint32_t *triangles);
+
 #endif

@@ -11,11 +11,36 @@
 #ifndef SCANLOD_STAGES_EXPORT_H
 #define SCANLOD_STAGES_EXPORT_H
 
+#include <stdint.h>
+
 #include "core/error.h"
 #include "pipeline/stage.h"
 #include "runtime/lod_mesh.h"
 
 extern const sl_stage sl_export_stage;
+
+#define SL_EXPORT_MAX_LEVELS 32
+
+/* One level to cut and write. */
+typedef struct sl_export_level {
+    char name[32];  /* its file names: "lod20" for 20 %, the budget's name ("medium") */
+    int by_percent; /* cut by LOD percent (paper Table 1), else by triangle budget */
+    double percent; /* by_percent: in [0, 100] */
+    uint64_t budget; /* else: the largest level with at most this many triangles */
+} sl_export_level;
+
+/* The resolved [export] section (options: stages/export/export_stage.c). */
+typedef struct sl_export_config {
+    int level_count;                            /* lod_percents, then budgets */
+    sl_export_level levels[SL_EXPORT_MAX_LEVELS];
+    int write_ply, write_glb, write_obj;        /* [export] formats */
+    int thumbnail_size;                         /* PNG edge in pixels; 0 = none */
+    int fidelity;                               /* measure every level against the input */
+    uint64_t fidelity_samples;                  /* area samples per surface for that */
+} sl_export_config;
+
+/* The section at its option table's defaults (sl_stage_default_config). */
+sl_export_config sl_export_default_config(void);
 
 /* Writes `mesh` to `path` in the format its extension names (.ply, .glb, .obj).
  * `extras_json` (may be NULL) goes into the GLB's extras. */

@@ -9,23 +9,9 @@
 #include "runtime/lod_model.h"
 #include "stages/export/export.h"
 
-#define SL_EXPORT_MAX_LEVELS 32
-
-typedef struct sl_export_level {
-    char name[32];       /* "lod20", "medium" */
-    int by_percent;      /* else by triangle budget */
-    double percent;
-    uint64_t budget;
-} sl_export_level;
-
-typedef struct sl_export_config {
-    int level_count;
-    sl_export_level *levels;
-    int write_ply, write_glb, write_obj;
-    int thumbnail_size;
-    int fidelity;
-    uint64_t fidelity_samples;
-} sl_export_config;
+/* A generated level as an sl_mesh view (geometry/mesh.h): what the writers and the
+ * measurements read. */
+sl_mesh sl_export_mesh_view(const sl_lod_mesh *m);
 
 /* Renders the level's PNG thumbnail (geometry/raster.h). */
 int sl_export_thumbnail(const char *path, const sl_lod_mesh *mesh, int size, sl_error *err);

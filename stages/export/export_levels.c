@@ -27,9 +27,6 @@ static int good_level_name(const char *name)
 int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_config *c,
                            sl_error *err)
 {
-    c->levels = calloc(SL_EXPORT_MAX_LEVELS, sizeof *c->levels);
-    if (!c->levels)
-        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     const char *lists[2] = {percents, budgets};
     for (int l = 0; l < 2; l++) {
         const char *p = lists[l];
@@ -81,37 +78,22 @@ int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_
     return 0;
 }
 
-static sl_mesh mesh_view(const sl_lod_mesh *m)
-{
-    sl_mesh v;
-    sl_mesh_init(&v);
-    v.vertex_count = m->vertex_count;
-    v.positions = m->positions;
-    v.normals = m->normals;
-    v.colors = m->colors;
-    v.triangle_count = m->triangle_count;
-    v.triangles = m->indices;
-    return v;
-}
-
 static int write_files(const sl_export_config *c, const sl_export_level *lv,
                        const sl_lod_mesh *mesh, const char *extras, const sl_stage_io *io,
                        sl_error *err)
 {
-    static const char *const exts[3] = {"ply", "glb", "obj"};
-    const int wanted[3] = {c->write_ply, c->write_glb, c->write_obj};
+    static const char *const exts[4] = {"ply", "glb", "obj", "png"};
+    const int wanted[4] = {c->write_ply, c->write_glb, c->write_obj, c->thumbnail_size > 0};
     int rc = 0;
-    for (int i = 0; i < 3 && rc == 0; i++) {
+    for (int i = 0; i < 4 && rc == 0; i++) {
         if (!wanted[i])
             continue;
-        char path[PATH_MAX];
-        snprintf(path, sizeof path, "%s/%s.%s", io->out_dir, lv->name, exts[i]);
-        rc = sl_export_write_mesh(path, mesh, extras, err);
-    }
-    if (rc == 0 && c->thumbnail_size > 0) {
-        char path[PATH_MAX];
-        snprintf(path, sizeof path, "%s/%s.png", io->out_dir, lv->name);
-        rc = sl_export_thumbnail(path, mesh, c->thumbnail_size, err);
+        char file[sizeof lv->name + 8], path[PATH_MAX];
+        snprintf(file, sizeof file, "%s.%s", lv->name, exts[i]);
+        rc = sl_stage_path(path, io->out_dir, file, err);
+        if (rc == 0)
+            rc = i < 3 ? sl_export_write_mesh(path, mesh, extras, err)
+                       : sl_export_thumbnail(path, mesh, c->thumbnail_size, err);
     }
     return rc;
 }
@@ -127,7 +109,7 @@ typedef struct level_row {
 static int measure_level(const sl_export_config *c, const sl_mesh *input, const sl_lod_mesh *mesh,
                          const sl_stage_io *io, sl_json *r, level_row *row, sl_error *err)
 {
-    sl_mesh view = mesh_view(mesh);
+    sl_mesh view = sl_export_mesh_view(mesh);
     sl_mesh_topology topo;
     int rc = sl_mesh_topology_compute(&view, &topo, err);
     if (rc)
@@ -209,9 +191,10 @@ static int write_summary_section(const sl_export_config *c, const sl_lod_model *
         fputs("\n\n", md);
     fclose(md);
     char path[PATH_MAX];
-    snprintf(path, sizeof path, "%s/summary-item.md", io->out_dir);
-    int rc = text ? sl_write_file_atomic(path, text, size, err)
+    int rc = text ? sl_stage_path(path, io->out_dir, "summary-item.md", err)
                   : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    if (rc == 0)
+        rc = sl_write_file_atomic(path, text, size, err);
     free(text);
     return rc;
 }
@@ -233,10 +216,8 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
         const sl_export_level *lv = &c->levels[i];
         uint32_t k = lv->by_percent ? sl_lod_expansions_for_percent(model, lv->percent)
                                     : sl_lod_expansions_for_triangles(model, lv->budget);
-        if (sl_progress_step(io->progress, "export", (double)i / c->level_count)) {
-            rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+        if ((rc = sl_stage_step(io, "export", (double)i / c->level_count, err)))
             break;
-        }
         sl_lod_mesh mesh;
         uint64_t cracks = 0;
         if (sl_lod_generate(model, k, &mesh, &cracks)) {

@@ -42,15 +42,6 @@ static const sl_option export_options[] = {
     SL_OPTION_END,
 };
 
-static void free_config(void *p)
-{
-    sl_export_config *c = p;
-    if (c) {
-        free(c->levels);
-        free(c);
-    }
-}
-
 static int export_configure(const sl_config *cfg, void **out, sl_error *err)
 {
     sl_export_config *c = calloc(1, sizeof *c);
@@ -69,21 +60,30 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
     c->fidelity = sl_config_bool(cfg, "export", "fidelity");
     c->fidelity_samples = (uint64_t)sl_config_int(cfg, "export", "fidelity_samples");
     if (rc) {
-        free_config(c);
+        free(c);
         return rc;
     }
     *out = c;
     return 0;
 }
 
+sl_export_config sl_export_default_config(void)
+{
+    sl_export_config c;
+    sl_stage_default_config(&sl_export_stage, &c, sizeof c);
+    return c;
+}
+
 static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
 {
     const sl_export_config *c = config;
     char model_path[PATH_MAX], published[PATH_MAX];
-    snprintf(model_path, sizeof model_path, "%s/%s", io->in_dir, SL_MODEL_FILE);
-    snprintf(published, sizeof published, "%s/%s", io->out_dir, SL_MODEL_FILE);
     sl_lod_model model;
-    int rc = sl_lod_model_read(model_path, &model, err);
+    int rc = sl_stage_path(model_path, io->in_dir, SL_MODEL_FILE, err);
+    if (rc == 0)
+        rc = sl_stage_path(published, io->out_dir, SL_MODEL_FILE, err);
+    if (rc == 0)
+        rc = sl_lod_model_read(model_path, &model, err);
     if (rc)
         return rc;
     sl_mesh input;
@@ -112,7 +112,7 @@ const sl_stage sl_export_stage = {
     .version = EXPORT_STAGE_VERSION,
     .options = export_options,
     .configure = export_configure,
-    .release_config = free_config,
+    .release_config = free,
     .run = export_run,
     .publish = 1,
 };

@@ -19,25 +19,10 @@ static const char *extension(const char *path)
     return dot && (!slash || dot > slash) ? dot + 1 : "";
 }
 
-static sl_glb_mesh glb_view(const sl_lod_mesh *m, const char *extras_json)
+sl_mesh sl_export_mesh_view(const sl_lod_mesh *m)
 {
-    sl_glb_mesh g = {m->vertex_count, m->triangle_count, m->positions, m->normals,
-                     m->colors,       m->indices,        extras_json};
-    return g;
-}
-
-static int write_ply(const char *path, const sl_lod_mesh *m, sl_error *err)
-{
-    /* sl_mesh views the generated arrays; nothing is copied or freed here. */
-    sl_mesh view;
-    sl_mesh_init(&view);
-    view.vertex_count = m->vertex_count;
-    view.positions = m->positions;
-    view.normals = m->normals;
-    view.colors = m->colors;
-    view.triangle_count = m->triangle_count;
-    view.triangles = m->indices;
-    return sl_ply_write(path, &view, err);
+    return sl_mesh_view(m->vertex_count, m->positions, m->normals, m->colors, m->triangle_count,
+                        m->indices);
 }
 
 /* GLB in meshoptimizer's vertex-cache and vertex-fetch order (same surface, same welds). */
@@ -60,8 +45,8 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
         meshopt_remapVertexBuffer(nrm, m->normals, vertices, 3 * sizeof(float), remap);
         if (col)
             meshopt_remapVertexBuffer(col, m->colors, vertices, 4, remap);
-        sl_glb_mesh g = {used, m->triangle_count, pos, nrm, col, order, extras};
-        rc = sl_glb_write(path, &g, err);
+        sl_mesh g = sl_mesh_view(used, pos, nrm, col, m->triangle_count, order);
+        rc = sl_glb_write(path, &g, extras, err);
     }
     free(order);
     free(remap);
@@ -75,20 +60,19 @@ int sl_export_write_mesh(const char *path, const sl_lod_mesh *mesh, const char *
                          sl_error *err)
 {
     const char *ext = extension(path);
+    sl_mesh view = sl_export_mesh_view(mesh);
     if (strcasecmp(ext, "ply") == 0)
-        return write_ply(path, mesh, err);
+        return sl_ply_write(path, &view, err);
     if (strcasecmp(ext, "glb") == 0)
         return write_glb(path, mesh, extras_json, err);
-    if (strcasecmp(ext, "obj") == 0) {
-        sl_glb_mesh g = glb_view(mesh, NULL);
-        return sl_obj_write(path, &g, err);
-    }
+    if (strcasecmp(ext, "obj") == 0)
+        return sl_obj_write(path, &view, NULL, err);
     return sl_error_set(err, SL_E_USAGE, 0, path,
                         "unknown output format '.%s' (use .ply, .glb or .obj)", ext);
 }
 
 int sl_export_thumbnail(const char *path, const sl_lod_mesh *mesh, int size, sl_error *err)
 {
-    sl_glb_mesh g = glb_view(mesh, NULL);
-    return sl_write_thumbnail(path, &g, size, err);
+    sl_mesh view = sl_export_mesh_view(mesh);
+    return sl_write_thumbnail(path, &view, size, err);
 }

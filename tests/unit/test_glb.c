@@ -99,8 +99,7 @@ static void test_cube_layout(void)
     path_in_tmp("cube.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    sl_glb_mesh g = sl_glb_mesh_view(&m, "{\"lod_percent\":20,\"triangles\":12}");
-    CHECK(sl_glb_write(path, &g, &err) == 0);
+    CHECK(sl_glb_write(path, &m, "{\"lod_percent\":20,\"triangles\":12}", &err) == 0);
     glb_file f;
     if (glb_read(path, &f) == 0) {
         /* 24 positions + 24 normals (12 bytes each), 24 colours (4), 36 short indices. */
@@ -133,12 +132,12 @@ static void test_padding_and_minimal(void)
 {
     float pos[9] = {0.1f, 0.2f, 0.3f, 1e-7f, -5.5f, 3.25f, 7.0f, 0.333333343f, -0.0f};
     uint32_t idx[3] = {0, 1, 2};
-    sl_glb_mesh g = {3, 1, pos, NULL, NULL, idx, NULL};
+    sl_mesh g = sl_mesh_view(3, pos, NULL, NULL, 1, idx);
     char path[600];
     path_in_tmp("one.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    CHECK(sl_glb_write(path, &g, &err) == 0);
+    CHECK(sl_glb_write(path, &g, NULL, &err) == 0);
     glb_file f;
     if (glb_read(path, &f) == 0) {
         CHECK_EQ_U64(f.bin_length, 36 + 8);
@@ -171,8 +170,7 @@ static void test_large_indices_and_normals(void)
     path_in_tmp("grid.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    sl_glb_mesh g = sl_glb_mesh_view(&m, NULL);
-    CHECK(sl_glb_write(path, &g, &err) == 0);
+    CHECK(sl_glb_write(path, &m, NULL, &err) == 0);
     glb_file f;
     if (glb_read(path, &f) == 0) {
         uint64_t v = m.vertex_count, t = m.triangle_count;
@@ -192,19 +190,19 @@ static void test_large_indices_and_normals(void)
     sl_mesh_release(&m);
 }
 
-static void expect_rejected(const sl_glb_mesh *g, int code, const char *message_part)
+static void expect_rejected(const sl_mesh *g, int code, const char *message_part)
 {
     char path[600];
     path_in_tmp("rejected.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    CHECK_MSG(sl_glb_write(path, g, &err) == code, "%s", sl_error_name(err.code));
+    CHECK_MSG(sl_glb_write(path, g, NULL, &err) == code, "%s", sl_error_name(err.code));
     CHECK_MSG(strstr(err.message, message_part) != NULL, "%s", err.message);
     CHECK(access(path, F_OK) != 0 && errno == ENOENT);
     sl_error_init(&err);
     path_in_tmp("rejected.obj", path, sizeof path);
     if (code != SL_E_INTERNAL || strstr(message_part, "index"))
-        CHECK(sl_obj_write(path, g, &err) == code);
+        CHECK(sl_obj_write(path, g, NULL, &err) == code);
     CHECK(access(path, F_OK) != 0);
 }
 
@@ -212,25 +210,25 @@ static void test_rejections(void)
 {
     float pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     uint32_t idx[3] = {0, 1, 2};
-    sl_glb_mesh empty = {3, 0, pos, NULL, NULL, idx, NULL};
+    sl_mesh empty = sl_mesh_view(3, pos, NULL, NULL, 0, idx);
     expect_rejected(&empty, SL_E_BADINPUT, "nothing to write");
-    sl_glb_mesh no_vertices = {0, 1, pos, NULL, NULL, idx, NULL};
+    sl_mesh no_vertices = sl_mesh_view(0, pos, NULL, NULL, 1, idx);
     expect_rejected(&no_vertices, SL_E_BADINPUT, "nothing to write");
     uint32_t bad_idx[3] = {0, 1, 3};
-    sl_glb_mesh out_of_range = {3, 1, pos, NULL, NULL, bad_idx, NULL};
+    sl_mesh out_of_range = sl_mesh_view(3, pos, NULL, NULL, 1, bad_idx);
     expect_rejected(&out_of_range, SL_E_INTERNAL, "vertex index 3");
     float nan_pos[9] = {0, 0, 0, 1, NAN, 0, 0, 1, 0};
-    sl_glb_mesh nan = {3, 1, nan_pos, NULL, NULL, idx, NULL};
+    sl_mesh nan = sl_mesh_view(3, nan_pos, NULL, NULL, 1, idx);
     expect_rejected(&nan, SL_E_BADINPUT, "vertex 1 has a non-finite position");
     float inf_pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, -INFINITY};
-    sl_glb_mesh inf = {3, 1, inf_pos, NULL, NULL, idx, NULL};
+    sl_mesh inf = sl_mesh_view(3, inf_pos, NULL, NULL, 1, idx);
     expect_rejected(&inf, SL_E_BADINPUT, "vertex 2 has a non-finite position");
-    sl_glb_mesh not_object = {3, 1, pos, NULL, NULL, idx, "\"lod\""};
+    sl_mesh not_object = sl_mesh_view(3, pos, NULL, NULL, 1, idx);
     char path[600];
     path_in_tmp("rejected.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    CHECK(sl_glb_write(path, &not_object, &err) == SL_E_INTERNAL);
+    CHECK(sl_glb_write(path, &not_object, "\"lod\"", &err) == SL_E_INTERNAL);
     CHECK(access(path, F_OK) != 0);
 }
 
@@ -239,13 +237,14 @@ static void test_deterministic(void)
     sl_mesh m;
     float c[3] = {0.5f, 0, 0};
     meshes_sphere(&m, 12, 24, c, 1);
-    sl_glb_mesh g = sl_glb_mesh_view(&m, "{\"level\":1}");
+
     char a[600], b[600];
     path_in_tmp("a.glb", a, sizeof a);
     path_in_tmp("b.glb", b, sizeof b);
     sl_error err;
     sl_error_init(&err);
-    CHECK(sl_glb_write(a, &g, &err) == 0 && sl_glb_write(b, &g, &err) == 0);
+    const char *extras = "{\"level\":1}";
+    CHECK(sl_glb_write(a, &m, extras, &err) == 0 && sl_glb_write(b, &m, extras, &err) == 0);
     char *da = NULL, *db = NULL;
     size_t na = 0, nb = 0;
     CHECK(sl_read_file(a, 1 << 24, &da, &na, &err) == 0);
@@ -264,8 +263,7 @@ static void test_obj(void)
     path_in_tmp("cube.obj", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    sl_glb_mesh g = sl_glb_mesh_view(&m, "{\"level\":2}");
-    CHECK(sl_obj_write(path, &g, &err) == 0);
+    CHECK(sl_obj_write(path, &m, "{\"level\":2}", &err) == 0);
     char *text = NULL;
     size_t size = 0;
     CHECK(sl_read_file(path, 1 << 20, &text, &size, &err) == 0);
@@ -301,19 +299,17 @@ static void write_samples(const char *dir)
     for (size_t i = 0; i < sizeof cubes / sizeof cubes[0]; i++) {
         meshes_cube(&m, -0.5f, 0.5f, cubes[i].normals, cubes[i].colors);
         snprintf(path, sizeof path, "%s/%s.glb", dir, cubes[i].name);
-        sl_glb_mesh g = sl_glb_mesh_view(&m, "{\"scanlod\":{\"level\":0}}");
-        CHECK(sl_glb_write(path, &g, &err) == 0);
+        CHECK(sl_glb_write(path, &m, "{\"scanlod\":{\"level\":0}}", &err) == 0);
         sl_mesh_release(&m);
     }
     float one_pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, one_nrm[9] = {0, 0, 3, 0, 0, 3, 0, 0, 3};
     uint32_t one_idx[3] = {0, 1, 2};
-    sl_glb_mesh one = {3, 1, one_pos, one_nrm, NULL, one_idx, NULL};
+    sl_mesh one = sl_mesh_view(3, one_pos, one_nrm, NULL, 1, one_idx);
     snprintf(path, sizeof path, "%s/one_triangle.glb", dir);
-    CHECK(sl_glb_write(path, &one, &err) == 0);
+    CHECK(sl_glb_write(path, &one, NULL, &err) == 0);
     meshes_grid(&m, 300, 1, 1);
     snprintf(path, sizeof path, "%s/grid_uint32.glb", dir);
-    sl_glb_mesh grid = sl_glb_mesh_view(&m, NULL);
-    CHECK(sl_glb_write(path, &grid, &err) == 0);
+    CHECK(sl_glb_write(path, &m, NULL, &err) == 0);
     sl_mesh_release(&m);
     const char *scans[] = {"cow", "fandisk", "bun_zipper_res3", "rocker_arm"};
     for (size_t i = 0; i < sizeof scans / sizeof scans[0]; i++) {
@@ -323,9 +319,8 @@ static void write_samples(const char *dir)
         }
         meshes_vertex_normals(&m);
         snprintf(path, sizeof path, "%s/%s.glb", dir, scans[i]);
-        sl_glb_mesh g =
-            sl_glb_mesh_view(&m, "{\"scanlod\":{\"item\":\"scan\",\"lod_percent\":100}}");
-        CHECK_MSG(sl_glb_write(path, &g, &err) == 0, "%s: %s", scans[i], err.message);
+        const char *extras = "{\"scanlod\":{\"item\":\"scan\",\"lod_percent\":100}}";
+        CHECK_MSG(sl_glb_write(path, &m, extras, &err) == 0, "%s: %s", scans[i], err.message);
         sl_mesh_release(&m);
     }
 }
