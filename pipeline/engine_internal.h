@@ -50,7 +50,11 @@ struct sl_engine {
     sl_engine_counts counts;
     int stop;                /* storage failure: stop claiming */
     sl_error storage_error;  /* why */
-    uint64_t items_total, items_settled; /* progress bar */
+    /* Progress (engine_status.c): items in the collection and those needing nothing more
+     * (published, quarantined), the settled count and the time when the work began, and
+     * the bar's last fraction (it never goes back). */
+    uint64_t items_total, items_settled, settled_at_start;
+    double work_start, bar_fraction;
     char **items;            /* item ids found by the scan (for the collection summary) */
     uint64_t item_count, item_capacity;
 };
@@ -109,7 +113,8 @@ uint64_t sl_stage_config_hash(const sl_config *cfg, const sl_stage *stage);
  * on (publishing it when every stage is done). */
 void sl_ticket_for(sl_ticket *t, const char *item, const char *source_rel, sl_hash key);
 int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
-                        sl_error *err);
+                        int *settled, sl_error *err); /* settled (may be NULL): 1 when the
+                                                         item needs nothing more */
 
 /* engine_child.c: runs stage `s` for the claimed ticket; moves the ticket on. */
 int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_error *err);
@@ -124,6 +129,12 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err);
 
 /* engine_gc.c: temp files and staged folders of dead processes. */
 void sl_engine_gc(sl_engine *e);
+
+/* engine_status.c: the progress bar for stage `s` of `item` at `stage_fraction` of it
+ * (TTY only), and the same facts as text for log lines ("12/40 items, 31 %, 1:02
+ * elapsed, ETA 2:15"). */
+void sl_engine_progress(sl_engine *e, int s, const char *item, double stage_fraction);
+void sl_engine_progress_text(sl_engine *e, char *buf, size_t size);
 
 /* engine_verify.c: items whose last stage is done but that have no publication (each named
  * on `out`); their number. */

@@ -222,7 +222,11 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
     if (rc == 0) {
         e->counts.published++;
         e->items_settled++;
-        SL_LOG(SL_LOG_INFO, "publish", item, "published %s", final_dir);
+        char progress[160];
+        sl_engine_progress_text(e, progress, sizeof progress);
+        /* The progress rides on this line: in a cron log (no terminal, no bar) it is what
+         * says how far the night has come. */
+        SL_LOG(SL_LOG_INFO, "publish", item, "published %s (%s)", final_dir, progress);
         sl_log_event("published", "publish", item, 0, NULL, NULL);
     }
     return rc;

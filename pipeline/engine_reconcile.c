@@ -38,7 +38,7 @@ static int requeue(sl_engine *e, const char *stage, const char *name, int from, 
 }
 
 int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
-                        sl_error *err)
+                        int *settled, sl_error *err)
 {
     char name[SL_TICKET_NAME_MAX + 1];
     int rc = sl_ticket_name(item, name, sizeof name, err);
@@ -47,7 +47,7 @@ int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, 
     sl_hash upstream;
     rc = sl_upstream_chain(e, name, source_rel, from, 0, &upstream, err);
     if (rc == SL_E_CORRUPT && from > 0)
-        return sl_engine_reconcile(e, item, source_rel, 0, err);
+        return sl_engine_reconcile(e, item, source_rel, 0, settled, err);
     if (rc)
         return rc;
     for (int s = from; s < e->stage_count; s++) {
@@ -91,13 +91,19 @@ int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, 
         sl_hash_hex(key, key_hex);
         int same_key = strcmp(t.key, key_hex) == 0;
         snprintf(t.source, sizeof t.source, "%s", source_rel);
-        if (state == SL_STATE_QUARANTINE && same_key)
+        if (state == SL_STATE_QUARANTINE && same_key) {
+            if (settled)
+                *settled = 1;
             return 0; /* stays quarantined until its input, config or code changes */
+        }
         if (state == SL_STATE_READY && same_key)
             return 0;
         return requeue(e, stage, name, state, &t, key, !same_key || state == SL_STATE_DONE, err);
     }
-    if (sl_engine_publish_valid(e, item, name))
+    if (sl_engine_publish_valid(e, item, name)) {
+        if (settled)
+            *settled = 1;
         return 0;
+    }
     return sl_engine_publish(e, item, name, source_rel, 1, err);
 }

@@ -89,10 +89,13 @@ static int scan_item(sl_engine *e, const char *rel, const char *unreadable, sl_e
         e->items[e->item_count++] = strdup(rel);
     sl_error item_err;
     sl_error_init(&item_err);
+    int settled = 0;
     int rc = unreadable ? quarantine_unreadable(e, rel, unreadable, &item_err)
-                        : sl_engine_reconcile(e, rel, rel, 0, &item_err);
-    if (rc == 0)
+                        : sl_engine_reconcile(e, rel, rel, 0, &settled, &item_err);
+    if (rc == 0) {
+        e->items_settled += unreadable || settled; /* nothing left to do for it */
         return 0;
+    }
     sl_error_context(&item_err, NULL, rel);
     char line[1400];
     SL_LOG(SL_LOG_ERROR, "scan", rel, "%s", sl_error_format(&item_err, line, sizeof line));
@@ -220,7 +223,11 @@ int sl_engine_scan(sl_engine *e, sl_error *err)
     double start = sl_now_seconds();
     sl_engine_scan_mark(e, 1);
     sl_engine_gc(e);
+    e->items_settled = 0;
     int rc = walk(e, "", 0, err);
+    e->items_total = e->counts.items;
+    e->work_start = sl_now_seconds();
+    e->settled_at_start = e->items_settled;
     if (rc == 0 && !*sl_interrupt_flag())
         sl_engine_scan_stamp(e); /* before the mark goes: a waiting worker sees one of them */
     sl_engine_scan_mark(e, 0);

@@ -142,3 +142,68 @@ int sl_engine_status(sl_engine *e, FILE *out, sl_error *err)
         }
     return 0;
 }
+
+/* ---- progress ---------------------------------------------------------------------- */
+
+/* The share of the collection done, the running item counted by its stages (stage s of
+ * n at f of it is (s + f) / n of the item), never less than what was shown before: a
+ * stage's own fraction starts at 0 again, the collection's does not. */
+static double collection_fraction(sl_engine *e, int s, double stage_fraction)
+{
+    if (!e->items_total)
+        return -1;
+    double part = 0;
+    if (s >= 0 && e->stage_count > 0) {
+        double f = stage_fraction >= 0 && stage_fraction <= 1 ? stage_fraction : 0;
+        part = ((double)s + f) / (double)e->stage_count;
+    }
+    double fraction = ((double)e->items_settled + part) / (double)e->items_total;
+    if (fraction > 1)
+        fraction = 1;
+    if (fraction < e->bar_fraction)
+        fraction = e->bar_fraction;
+    e->bar_fraction = fraction;
+    return fraction;
+}
+
+/* Seconds left, from the pace of this run's own work (items settled before it began do
+ * not count); < 0 until there is a pace to go by. */
+static double eta_seconds(const sl_engine *e, double fraction, double elapsed)
+{
+    if (fraction < 0 || !e->items_total || elapsed < 2)
+        return -1;
+    double before = (double)e->settled_at_start / (double)e->items_total;
+    double done = fraction - before, left = 1 - fraction;
+    return done > 0.001 ? elapsed * left / done : -1;
+}
+
+void sl_engine_progress(sl_engine *e, int s, const char *item, double stage_fraction)
+{
+    double now = sl_now_seconds();
+    if (!e->work_start)
+        e->work_start = now;
+    char label[300];
+    snprintf(label, sizeof label, "%.200s %.32s", item, s >= 0 ? e->stages[s]->name : "");
+    sl_log_bar bar = {e->items_settled, e->items_total, collection_fraction(e, s, stage_fraction),
+                      now - e->work_start, -1, label, stage_fraction};
+    bar.eta_s = eta_seconds(e, bar.fraction, bar.elapsed_s);
+    sl_log_progress(&bar);
+}
+
+void sl_engine_progress_text(sl_engine *e, char *buf, size_t size)
+{
+    double now = sl_now_seconds();
+    double elapsed = e->work_start ? now - e->work_start : 0;
+    double fraction = collection_fraction(e, -1, -1);
+    double eta = eta_seconds(e, fraction, elapsed);
+    char took[24], left[24];
+    sl_log_duration(elapsed, took, sizeof took);
+    sl_log_duration(eta, left, sizeof left);
+    if (!e->items_total)
+        snprintf(buf, size, "%llu items settled, %s elapsed", (unsigned long long)e->items_settled,
+                 took);
+    else
+        snprintf(buf, size, "%llu/%llu items, %d %%, %s elapsed%s%s",
+                 (unsigned long long)e->items_settled, (unsigned long long)e->items_total,
+                 (int)(fraction * 100), took, eta >= 0 ? ", ETA " : "", eta >= 0 ? left : "");
+}
