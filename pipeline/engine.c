@@ -26,6 +26,32 @@ static void make_run_id(const sl_identity *id, const char *command, char *buf, s
     snprintf(buf, size, "%s-%s-%.32s-%ld", stamp, command, id->host, id->pid);
 }
 
+/* The stages of [lod] method's path, in registry order (stage.h, sl_lod_method). */
+static int choose_method(sl_engine *e, const sl_stage *const *stages, sl_error *err)
+{
+    const char *method = sl_config_string(e->cfg, "lod", "method");
+    const char *names = SL_METHOD_NAMES;
+    unsigned bit = 1;
+    for (size_t n = strlen(method); strncmp(names, method, n) || (names[n] && names[n] != '|');
+         bit <<= 1)
+        names = strchr(names, '|') + 1; /* the enum option admits only these names */
+    e->method = bit;
+    int own = 0; /* stages of this method alone: without one it has no way to make levels */
+    for (const sl_stage *const *s = stages; *s && e->stage_count < SL_MAX_STAGES; s++) {
+        if (!((*s)->methods & bit))
+            continue;
+        own += (*s)->methods != SL_METHODS_ALL;
+        e->config_hash[e->stage_count] = sl_stage_config_hash(e->cfg, *s);
+        e->stages[e->stage_count++] = *s;
+    }
+    if (own)
+        return 0;
+    char where[PATH_MAX];
+    sl_config_where(e->cfg, "lod", "method", where, sizeof where);
+    return sl_error_set(err, SL_E_CONFIG, 0, where,
+                        "[lod] method = %s: this build has no stages for it yet", method);
+}
+
 int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err)
 {
     *out = NULL;
@@ -50,11 +76,7 @@ int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err
     e->item_timeout_s = sl_config_int(e->cfg, "run", "item_timeout_s");
     e->lease_seconds = sl_config_int(e->cfg, "queue", "lease_seconds");
     e->max_crashes = (int)sl_config_int(e->cfg, "queue", "max_crashes");
-    for (const sl_stage *const *s = opts->stages; *s && e->stage_count < SL_MAX_STAGES;
-         s++) {
-        e->config_hash[e->stage_count] = sl_stage_config_hash(e->cfg, *s);
-        e->stages[e->stage_count++] = *s;
-    }
+    rc = choose_method(e, opts->stages, err);
     sl_identity_self(&e->self);
 
     /* Every stage reads its section now, once, so a value only a stage can judge (a

@@ -43,7 +43,8 @@ struct sl_engine {
     int64_t memory_limit_mb, item_timeout_s, lease_seconds;
     int64_t scan_mark_expires;    /* this process's scan mark (engine_work.c); 0 = none */
     int max_crashes;
-    const sl_stage *stages[SL_MAX_STAGES];
+    unsigned method;         /* [lod] method (sl_lod_method bit) */
+    const sl_stage *stages[SL_MAX_STAGES]; /* the method's path, in order */
     uint64_t config_hash[SL_MAX_STAGES];
     int stage_count;
     sl_identity self;

@@ -31,7 +31,10 @@
 
 static int publish_key(sl_engine *e, const char *ticket, sl_hash *key, sl_error *err)
 {
-    char text[SL_MAX_STAGES * 40 + 32] = "scanlod-publish 1\n";
+    /* The version names what the engine itself writes into a publication (report.json's
+     * shape): bumped when that changes, so every item is published again once. 2: the
+     * item id keeps its suffix, report.json names the method. */
+    char text[SL_MAX_STAGES * 40 + 32] = "scanlod-publish 2\n";
     for (int s = 0; s < e->stage_count; s++) {
         char dir[PATH_MAX], path[PATH_MAX];
         sl_artifact_dir(e, s, ticket, dir, sizeof dir);
@@ -78,6 +81,7 @@ static int write_reports(sl_engine *e, const char *item, const char *ticket,
     sl_json_object_begin(&report, NULL);
     sl_json_string(&report, "item", item);
     sl_json_string(&report, "source", source_rel);
+    sl_json_string(&report, "method", sl_config_string(e->cfg, "lod", "method"));
     sl_json_object_begin(&report, "stages");
     sl_json_object_begin(&timings, NULL);
     sl_json_string(&timings, "item", item);

@@ -56,8 +56,24 @@ int sl_stage_path(char path[PATH_MAX], const char *dir, const char *name, sl_err
  * set) when the run has been asked to stop, else 0. */
 int sl_stage_step(const sl_stage_io *io, const char *phase, double fraction, sl_error *err);
 
+/* The LOD methods (ARCHITECTURE section 2): each is a path of stages from the range stage
+ * to the export stage, picked per run by `[lod] method`; a stage names the methods whose
+ * path it is on. The engine runs the registry's stages of the chosen method, in order.
+ *   octree  (paper 1): range -> samples -> merge -> priority -> crack -> export
+ *   segment (paper 3): range -> segment -> export
+ *   cluster (paper 2): range -> cluster -> export */
+enum sl_lod_method {
+    SL_METHOD_OCTREE = 1 << 0,
+    SL_METHOD_SEGMENT = 1 << 1,
+    SL_METHOD_CLUSTER = 1 << 2,
+};
+#define SL_METHODS_ALL (SL_METHOD_OCTREE | SL_METHOD_SEGMENT | SL_METHOD_CLUSTER)
+/* "octree|segment|cluster": the [lod] method choices, in bit order. */
+#define SL_METHOD_NAMES "octree|segment|cluster"
+
 typedef struct sl_stage {
     const char *name;         /* also the config section */
+    unsigned methods;         /* the methods whose path includes it (sl_lod_method bits) */
     const char *description;  /* one line, for --help and docs */
     uint32_t version;         /* bump when the output for the same input changes */
     const sl_option *options; /* the options this stage declares (usually section == name) */

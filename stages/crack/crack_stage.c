@@ -77,6 +77,7 @@ static int crack_run(const void *config, const sl_stage_io *io, sl_error *err)
 
 const sl_stage sl_crack_stage = {
     .name = "crack",
+    .methods = SL_METHOD_OCTREE,
     .description = "LOD array -> crack compensation records and the LOD model (paper 1 2.4)",
     .version = CRACK_STAGE_VERSION,
     .options = NULL,

@@ -108,6 +108,7 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
 
 const sl_stage sl_export_stage = {
     .name = "export",
+    .methods = SL_METHODS_ALL,
     .description = "LOD model -> meshes (PLY, GLB), thumbnails, fidelity report (paper 1 3)",
     .version = EXPORT_STAGE_VERSION,
     .options = export_options,

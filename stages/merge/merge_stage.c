@@ -90,6 +90,7 @@ static int merge_run(const void *config, const sl_stage_io *io, sl_error *err)
 
 const sl_stage sl_merge_stage = {
     .name = "merge",
+    .methods = SL_METHOD_OCTREE,
     .description = "signed samples -> marching-cube octree (paper 1 section 2.2)",
     .version = MERGE_STAGE_VERSION,
     .options = merge_options,

@@ -213,6 +213,7 @@ static int priority_run(const void *config, const sl_stage_io *io, sl_error *err
 
 const sl_stage sl_priority_stage = {
     .name = "priority",
+    .methods = SL_METHOD_OCTREE,
     .description = "octree -> error-driven (or area-difference) LOD array (paper 1 section 2.3)",
     .version = PRIORITY_STAGE_VERSION,
     .options = priority_options,

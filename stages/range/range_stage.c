@@ -152,6 +152,7 @@ done:
 
 const sl_stage sl_range_stage = {
     .name = "range",
+    .methods = SL_METHODS_ALL,
     .description = "PLY mesh or point cloud -> oriented, coloured point set (paper 1 section 4)",
     .version = 2,
     .options = range_options,

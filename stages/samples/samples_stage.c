@@ -192,6 +192,7 @@ static int samples_run(const void *stage_config, const sl_stage_io *io, sl_error
 
 const sl_stage sl_samples_stage = {
     .name = "samples",
+    .methods = SL_METHOD_OCTREE,
     .description = "oriented points -> signed samples at leaf-cube vertices, OpenVDB grids "
                    "(paper 1 section 2.1)",
     .version = 3, /* 3: automatic leaf at most the diagonal / SL_SAMPLES_DIAGONAL_LEAVES */
