@@ -103,6 +103,16 @@ int sl_queue_move(const char *work, const char *stage, const char *name, int fro
     return rc;
 }
 
+int sl_queue_get(const char *work, const char *stage, int state, const char *name,
+                 sl_ticket *t)
+{
+    char path[PATH_MAX];
+    sl_error err;
+    sl_error_init(&err);
+    return sl_queue_path(path, sizeof path, work, stage, state, name) ||
+           sl_ticket_read(path, t, &err) != 0;
+}
+
 int sl_queue_put(const char *work, const char *stage, int state, const char *name,
                  const sl_ticket *t, sl_error *err)
 {
