@@ -7,7 +7,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 packages=(
   build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev
   libopenvdb-dev libboost-iostreams-dev libtbb-dev
-  libopenimageio-dev libinih-dev libxxhash-dev libmeshoptimizer-dev
+  libopenimageio-dev libinih-dev libxxhash-dev libmeshoptimizer-dev libdraco-dev
   zlib1g-dev time gnuplot-nox
   # tests/cluster/: a throwaway single-node Slurm (its own config; no service is enabled)
   slurm-wlm munge iproute2
