@@ -79,8 +79,8 @@ int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_
 }
 
 static int write_files(const sl_export_config *c, const sl_export_level *lv,
-                       const sl_lod_mesh *mesh, const char *extras, const sl_stage_io *io,
-                       sl_error *err)
+                       const sl_lod_mesh *mesh, const char *extras, const sl_export_glb *glb,
+                       sl_glb_stats *stats, const sl_stage_io *io, sl_error *err)
 {
     static const char *const exts[4] = {"ply", "glb", "obj", "png"};
     const int wanted[4] = {c->write_ply, c->write_glb, c->write_obj, c->thumbnail_size > 0};
@@ -92,10 +92,41 @@ static int write_files(const sl_export_config *c, const sl_export_level *lv,
         snprintf(file, sizeof file, "%s.%s", lv->name, exts[i]);
         rc = sl_stage_path(path, io->out_dir, file, err);
         if (rc == 0)
-            rc = i < 3 ? sl_export_write_mesh(path, mesh, extras, err)
-                       : sl_export_thumbnail(path, mesh, c->thumbnail_size, err);
+            rc = i < 3 ? sl_export_write_mesh(path, mesh, extras, glb, i == 1 ? stats : NULL, err)
+                       : sl_export_thumbnail(path, mesh, c->thumbnail_size, glb->z_up, err);
     }
     return rc;
+}
+
+/* The GLB's encoding and what quantisation did to it, in the input's units and as
+ * fractions of the input's diagonal (0 when not measured): the bound is added to the
+ * level's errors, since no point of the published surface is further than it from the
+ * point of the unquantised level it came from. */
+static void report_glb(sl_json *r, const sl_export_config *c, const sl_glb_stats *g,
+                       double to_metres, double max_error, double diagonal,
+                       double hausdorff, int measured)
+{
+    static const char *const names[] = {"none", "meshopt", "draco"};
+    double bound = g->position_bound / to_metres, worst = g->position_error_max / to_metres;
+    sl_json_object_begin(r, "glb");
+    sl_json_string(r, "compression", names[c->glb.compression]);
+    sl_json_bool(r, "quantized", c->glb.quantize || c->glb.compression == SL_GLB_DRACO);
+    sl_json_u64(r, "vertices", g->vertices);
+    sl_json_u64(r, "triangles", g->triangles);
+    sl_json_double(r, "position_step_world", g->position_step / to_metres);
+    sl_json_double(r, "quantization_bound_world", bound);
+    sl_json_double(r, "quantization_error_world", worst);
+    sl_json_double(r, "quantization_rms_world", g->position_error_rms / to_metres);
+    if (diagonal > 0) {
+        sl_json_double(r, "quantization_bound", bound / diagonal);
+        sl_json_double(r, "quantization_error", worst / diagonal);
+    }
+    sl_json_double(r, "normal_error_deg", g->normal_error_max_deg);
+    sl_json_double(r, "color_error_srgb_steps", g->color_error_max);
+    sl_json_double(r, "max_error", max_error + bound);
+    if (measured)
+        sl_json_double(r, "hausdorff", hausdorff + bound / diagonal);
+    sl_json_object_end(r);
 }
 
 /* One level's line of the collection summary. */
@@ -104,6 +135,7 @@ typedef struct level_row {
     uint64_t triangles, vertices;
     int watertight, measured, thumbnail;
     double rms, hausdorff; /* fractions of the input's diagonal, when measured */
+    double diagonal;       /* the input's, world; when measured */
 } level_row;
 
 static int measure_level(const sl_export_config *c, const sl_mesh *input, const sl_lod_mesh *mesh,
@@ -137,6 +169,7 @@ static int measure_level(const sl_export_config *c, const sl_mesh *input, const 
         row->measured = 1;
         row->rms = d.fraction.rms;
         row->hausdorff = d.fraction.hausdorff;
+        row->diagonal = d.diagonal;
     }
     return 0;
 }
@@ -200,8 +233,9 @@ static int write_summary_section(const sl_export_config *c, const sl_lod_model *
 }
 
 int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_mesh *input,
-                     const sl_stage_io *io, sl_error *err)
+                     const sl_export_frame *frame, const sl_stage_io *io, sl_error *err)
 {
+    sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z'};
     sl_json *r = io->report;
     uint64_t finest = model->accumulation[model->expansion_count];
     sl_json_u64(r, "expansions", model->expansion_count);
@@ -246,9 +280,14 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
         row->triangles = mesh.triangle_count;
         row->vertices = mesh.vertex_count;
         row->thumbnail = mesh.triangle_count && c->thumbnail_size > 0;
-        rc = mesh.triangle_count ? write_files(c, lv, &mesh, extras, io, err) : 0;
+        sl_glb_stats stats;
+        memset(&stats, 0, sizeof stats);
+        rc = mesh.triangle_count ? write_files(c, lv, &mesh, extras, &glb, &stats, io, err) : 0;
         if (rc == 0)
             rc = measure_level(c, input, &mesh, io, r, row, err);
+        if (rc == 0 && mesh.triangle_count && c->write_glb)
+            report_glb(r, c, &stats, frame->to_metres, model->error_after[k], row->diagonal,
+                       row->hausdorff, row->measured);
         sl_json_object_end(r);
         sl_lod_mesh_release(&mesh);
     }
