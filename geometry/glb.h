@@ -6,9 +6,9 @@
  * `path` until the file is complete and durable (core/atomicfile.h).
  *
  * What a .glb holds (docs/glb.md): one scene, one node, one mesh with one TRIANGLES
- * primitive; POSITION, NORMAL (written unit length), COLOR_0 (the mesh's sRGB bytes
- * converted to linear, as glTF defines vertex colours) and TEXCOORD_0 (v flipped: glTF's
- * origin is the image's top left) when given; indices as UNSIGNED_SHORT when the vertex
+ * primitive; POSITION, NORMAL (written unit length) and COLOR_0 (the mesh's sRGB bytes
+ * converted to linear, as glTF defines vertex colours) when given, TEXCOORD_0 (v flipped:
+ * glTF's origin is the image's top left) when given with an image; indices as UNSIGNED_SHORT when the vertex
  * count < 65536, else UNSIGNED_INT; one matte double-sided material, with the given image
  * as its baseColorTexture; asset.generator "scanlod"; the caller's `extras_json` (may be
  * NULL) as the mesh's `extras`. Per sl_glb_options:

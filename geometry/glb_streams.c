@@ -529,11 +529,13 @@ int glb_doc_build(glb_doc *d, const sl_mesh *m, sl_error *err)
         rc = quantize ? quantized_normals(d, m, err) : float_normals(d, m, err);
     if (rc == 0 && m->colors)
         rc = colors(d, m, err);
-    if (rc == 0 && m->texcoords)
+    /* Texture coordinates without a texture would be an unused attribute. */
+    int textured = o->image && o->image_size && m->texcoords;
+    if (rc == 0 && textured)
         rc = texcoords(d, m, quantize, err);
     if (rc == 0)
         rc = indices(d, m, err);
-    if (rc == 0 && o->image && o->image_size && m->texcoords)
+    if (rc == 0 && textured)
         rc = image(d, err);
     if (rc == 0 && o->compression == SL_GLB_MESHOPT)
         rc = meshopt_pack(d, m, err);
