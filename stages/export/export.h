@@ -36,6 +36,7 @@ typedef struct sl_export_glb {
     sl_glb_options options;
     double to_metres; /* metres per input unit (mm: 0.001) */
     int z_up;         /* the input's up is +Z: (x, y, z) -> (x, z, -y), a rotation */
+    const float *texcoords; /* per vertex (OpenGL convention) with options.image, or NULL */
 } sl_export_glb;
 
 /* The resolved [export] section (options: stages/export/export_stage.c). */
@@ -50,6 +51,11 @@ typedef struct sl_export_config {
     double units_to_metres;                     /* [export] units; 0 = auto (the header) */
     char units[8];                              /* its name: "auto", "mm", ... */
     char up;                                    /* [export] up: 'y', 'z', or 0 = auto */
+    int texture;                                /* [export] texture = auto: bake atlases */
+    int texture_png;                            /* texture_format png, else jpeg */
+    int texture_quality;                        /* JPEG quality */
+    int texture_size;                           /* atlas edge of levels not listed below */
+    char texture_sizes[256];                    /* "name:edge,..." */
 } sl_export_config;
 
 /* The section at its option table's defaults (sl_stage_default_config). */

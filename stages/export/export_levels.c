@@ -78,10 +78,29 @@ int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_
     return 0;
 }
 
-static int write_files(const sl_export_config *c, const sl_export_level *lv,
-                       const sl_lod_mesh *mesh, const char *extras, const sl_export_glb *glb,
-                       sl_glb_stats *stats, const sl_stage_io *io, sl_error *err)
+/* The level's GLB geometry: the level itself, or with a baked atlas its per-triangle
+ * charts (three vertices per triangle) with texture coordinates and the image. */
+static sl_lod_mesh glb_geometry(const sl_lod_mesh *mesh, const sl_export_baked *baked,
+                                sl_export_glb *glb)
 {
+    if (!baked || !baked->image)
+        return *mesh;
+    glb->texcoords = baked->texcoords;
+    glb->options.image = baked->image;
+    glb->options.image_size = baked->image_size;
+    glb->options.image_mime_type = baked->mime_type;
+    sl_lod_mesh g = {baked->vertex_count, baked->triangle_count, baked->positions,
+                     baked->normals, NULL, baked->triangles};
+    return g; /* vertex colours would multiply the texture: left out */
+}
+
+static int write_files(const sl_export_config *c, const sl_export_level *lv,
+                       const sl_lod_mesh *mesh, const sl_export_baked *baked, const char *extras,
+                       const sl_export_glb *level_glb, sl_glb_stats *stats,
+                       const sl_stage_io *io, sl_error *err)
+{
+    sl_export_glb glb = *level_glb;
+    sl_lod_mesh textured = glb_geometry(mesh, baked, &glb);
     static const char *const exts[4] = {"ply", "glb", "obj", "png"};
     const int wanted[4] = {c->write_ply, c->write_glb, c->write_obj, c->thumbnail_size > 0};
     int rc = 0;
@@ -92,8 +111,9 @@ static int write_files(const sl_export_config *c, const sl_export_level *lv,
         snprintf(file, sizeof file, "%s.%s", lv->name, exts[i]);
         rc = sl_stage_path(path, io->out_dir, file, err);
         if (rc == 0)
-            rc = i < 3 ? sl_export_write_mesh(path, mesh, extras, glb, i == 1 ? stats : NULL, err)
-                       : sl_export_thumbnail(path, mesh, c->thumbnail_size, glb->z_up, err);
+            rc = i == 1 ? sl_export_write_mesh(path, &textured, extras, &glb, stats, err)
+                 : i < 3 ? sl_export_write_mesh(path, mesh, extras, &glb, NULL, err)
+                         : sl_export_thumbnail(path, mesh, c->thumbnail_size, glb.z_up, err);
     }
     return rc;
 }
@@ -232,10 +252,38 @@ static int write_summary_section(const sl_export_config *c, const sl_lod_model *
     return rc;
 }
 
-int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_mesh *input,
-                     const sl_export_frame *frame, const sl_stage_io *io, sl_error *err)
+/* Bakes the level's atlas when the input has a texture (and GLBs are written); reports
+ * what it made. 0, or SL_E_NOMEM/SL_E_INTERNAL. */
+static int bake_level(const sl_export_config *c, const sl_export_texture *texture,
+                      const sl_export_level *lv, const sl_lod_mesh *mesh, sl_json *r,
+                      sl_export_baked *baked, sl_error *err)
 {
-    sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z'};
+    memset(baked, 0, sizeof *baked);
+    if (!texture || !c->write_glb || mesh->triangle_count == 0)
+        return 0;
+    int wanted = sl_export_texture_size(c, lv->name);
+    int rc = sl_export_bake(texture, mesh, wanted, c->texture_png, c->texture_quality, baked, err);
+    if (rc < 0)
+        return rc;
+    sl_json_object_begin(r, "texture");
+    if (rc == 1) {
+        sl_json_string(r, "warning", "too many triangles for the atlas: vertex colours only");
+    } else {
+        sl_json_u64(r, "size", (uint64_t)baked->size);
+        sl_json_string(r, "mime_type", baked->mime_type);
+        sl_json_u64(r, "image_bytes", baked->image_size);
+        sl_json_u64(r, "cell_texels", (uint64_t)baked->cell);
+        sl_json_double(r, "texel_efficiency", baked->texel_efficiency);
+    }
+    sl_json_object_end(r);
+    return 0;
+}
+
+int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_mesh *input,
+                     const sl_export_frame *frame, const sl_export_texture *texture,
+                     const sl_stage_io *io, sl_error *err)
+{
+    sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z', NULL};
     sl_json *r = io->report;
     uint64_t finest = model->accumulation[model->expansion_count];
     sl_json_u64(r, "expansions", model->expansion_count);
@@ -282,7 +330,11 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
         row->thumbnail = mesh.triangle_count && c->thumbnail_size > 0;
         sl_glb_stats stats;
         memset(&stats, 0, sizeof stats);
-        rc = mesh.triangle_count ? write_files(c, lv, &mesh, extras, &glb, &stats, io, err) : 0;
+        sl_export_baked baked;
+        rc = bake_level(c, texture, lv, &mesh, r, &baked, err);
+        if (rc == 0 && mesh.triangle_count)
+            rc = write_files(c, lv, &mesh, &baked, extras, &glb, &stats, io, err);
+        sl_export_baked_release(&baked);
         if (rc == 0)
             rc = measure_level(c, input, &mesh, io, r, row, err);
         if (rc == 0 && mesh.triangle_count && c->write_glb)

@@ -68,6 +68,19 @@ static const sl_option export_options[] = {
      "(x, z, -y)), and thumbnails look at the model upright. auto = a 'comment up AXIS' "
      "line in the PLY header if there is one, else y (as given). A value given here wins "
      "over the header."},
+    {"export", "texture", SL_OPT_ENUM, "auto", 0, 0, "auto|none",
+     "auto: a textured input (PLY 'comment TextureFile' with texture coordinates) gives "
+     "every level a baked texture atlas, embedded in its GLB as baseColorTexture with "
+     "TEXCOORD_0 (PLY files keep vertex colours). none: vertex colours only."},
+    {"export", "texture_format", SL_OPT_ENUM, "jpeg", 0, 0, "jpeg|png",
+     "Image format of the atlases (glTF core: JPEG or PNG)."},
+    {"export", "texture_quality", SL_OPT_INT, "90", 1, 100, NULL, "JPEG quality of the atlases."},
+    {"export", "texture_sizes", SL_OPT_LIST, "thumb:512,low:1024,medium:2048,high:4096", 0, 0,
+     NULL,
+     "Atlas edge in pixels per level name (name:pixels), like Voyager's derivative ladder. "
+     "A level with few triangles gets a smaller atlas (chart cells of at most 64 texels)."},
+    {"export", "texture_size", SL_OPT_INT, "2048", 64, 8192, NULL,
+     "Atlas edge of the levels texture_sizes does not name (the lodP levels)."},
     SL_OPTION_END,
 };
 
@@ -101,6 +114,22 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
     c->units_to_metres = sl_export_unit_metres(c->units); /* 0 for auto */
     const char *up = sl_config_string(cfg, "export", "up");
     c->up = !strcmp(up, "auto") ? 0 : up[0];
+    c->texture = !strcmp(sl_config_string(cfg, "export", "texture"), "auto");
+    c->texture_png = !strcmp(sl_config_string(cfg, "export", "texture_format"), "png");
+    c->texture_quality = (int)sl_config_int(cfg, "export", "texture_quality");
+    c->texture_size = (int)sl_config_int(cfg, "export", "texture_size");
+    snprintf(c->texture_sizes, sizeof c->texture_sizes, "%s",
+             sl_config_string(cfg, "export", "texture_sizes"));
+    for (const char *p = c->texture_sizes; *p && rc == 0;) { /* name:pixels, 64..8192 */
+        size_t n = strcspn(p, ",");
+        const char *colon = memchr(p, ':', n);
+        size_t digits = colon ? strspn(colon + 1, "0123456789") : 0;
+        long v = colon ? strtol(colon + 1, NULL, 10) : 0;
+        if (!colon || colon == p || colon + 1 + digits != p + n || v < 64 || v > 8192)
+            rc = sl_error_set(err, SL_E_CONFIG, 0, "[export] texture_sizes",
+                              "'%.*s' is not name:pixels with 64 <= pixels <= 8192", (int)n, p);
+        p += n + (p[n] == ',');
+    }
     if (rc) {
         free(c);
         return rc;
@@ -145,7 +174,7 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
     sl_mesh input;
     sl_mesh_init(&input);
     int have_input = 0, measure = 0;
-    if (c->fidelity || !c->units_to_metres || !c->up) {
+    if (c->fidelity || !c->units_to_metres || !c->up || c->texture) {
         sl_error ierr;
         sl_error_init(&ierr);
         have_input = sl_ply_read(io->source_path, NULL, &input, NULL, NULL, &ierr) == 0;
@@ -162,9 +191,31 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
     sl_json_string(io->report, "up", frame.up == 'z' ? "z" : "y");
     sl_json_string(io->report, "up_from", frame.up_from);
     sl_json_object_end(io->report);
+    sl_export_texture texture;
+    memset(&texture, 0, sizeof texture);
+    if (c->texture && have_input && input.texture_file[0]) {
+        char dir[PATH_MAX], why[1024];
+        snprintf(dir, sizeof dir, "%s", io->source_path);
+        char *slash = strrchr(dir, '/'); /* the PLY's directory */
+        if (!slash)
+            snprintf(dir, sizeof dir, ".");
+        else
+            slash[slash == dir] = '\0';
+        sl_json_object_begin(io->report, "texture");
+        sl_json_string(io->report, "file", input.texture_file);
+        if (sl_export_texture_open(&input, dir, &texture, why, sizeof why)) {
+            sl_json_u64(io->report, "width", (uint64_t)texture.image.width);
+            sl_json_u64(io->report, "height", (uint64_t)texture.image.height);
+        } else {
+            sl_json_string(io->report, "warning", why);
+        }
+        sl_json_object_end(io->report);
+    }
     rc = sl_link_or_copy(model_path, published, err);
     if (rc == 0)
-        rc = sl_export_levels(c, &model, measure ? &input : NULL, &frame, io, err);
+        rc = sl_export_levels(c, &model, measure ? &input : NULL, &frame,
+                              texture.input ? &texture : NULL, io, err);
+    sl_export_texture_close(&texture);
     sl_mesh_release(&input);
     sl_lod_model_release(&model);
     return rc;

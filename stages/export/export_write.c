@@ -56,7 +56,7 @@ static void to_gltf_frame(float *pos, float *nrm, uint64_t n, double to_metres, 
 static sl_export_glb default_glb(void)
 {
     sl_export_config c = sl_export_default_config();
-    sl_export_glb g = {c.glb, 1.0, 0};
+    sl_export_glb g = {c.glb, 1.0, 0, NULL};
     return g;
 }
 
@@ -70,8 +70,9 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
     float *pos = malloc((vertices ? vertices : 1) * 3 * sizeof *pos);
     float *nrm = malloc((vertices ? vertices : 1) * 3 * sizeof *nrm);
     uint8_t *col = m->colors ? malloc((vertices ? vertices : 1) * 4) : NULL;
+    float *uv = glb->texcoords ? malloc((vertices ? vertices : 1) * 2 * sizeof *uv) : NULL;
     int rc;
-    if (!order || !remap || !pos || !nrm || (m->colors && !col)) {
+    if (!order || !remap || !pos || !nrm || (m->colors && !col) || (glb->texcoords && !uv)) {
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
     } else {
         meshopt_optimizeVertexCache(order, m->indices, indices, vertices);
@@ -81,8 +82,11 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
         meshopt_remapVertexBuffer(nrm, m->normals, vertices, 3 * sizeof(float), remap);
         if (col)
             meshopt_remapVertexBuffer(col, m->colors, vertices, 4, remap);
+        if (uv)
+            meshopt_remapVertexBuffer(uv, glb->texcoords, vertices, 2 * sizeof *uv, remap);
         to_gltf_frame(pos, nrm, used, glb->to_metres, glb->z_up);
         sl_mesh g = sl_mesh_view(used, pos, nrm, col, m->triangle_count, order);
+        g.texcoords = uv;
         rc = sl_glb_write(path, &g, extras, &glb->options, stats, err);
     }
     free(order);
@@ -90,6 +94,7 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
     free(pos);
     free(nrm);
     free(col);
+    free(uv);
     return rc;
 }
 
