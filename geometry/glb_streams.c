@@ -395,28 +395,34 @@ static void draco_attribute(sl_draco_mesh *dm, int semantic, int type, int compo
 }
 
 /* Errors of the decoded mesh: each decoded vertex against the nearest vertex given (the
- * quantisation step is far below the vertex spacing of any mesh worth compressing). */
+ * quantisation step is far below the vertex spacing of any mesh worth compressing); its
+ * normal against the best matching normal among the given vertices within the position
+ * bound (vertices at one place with different normals are common: creases, seams). */
 static int draco_errors(glb_doc *d, const sl_mesh *m, const sl_draco_mesh *out, sl_error *err)
 {
+    enum { K = 8 };
     sl_kdtree *tree = NULL;
     int rc = sl_kdtree_build(&tree, m->positions, m->vertex_count, err);
     if (rc)
         return rc;
     const float *pos = out->attributes[0].data;
     const float *nrm = m->normals ? out->attributes[1].data : NULL;
-    double sum2 = 0, max2 = 0, worst = 0;
+    double sum2 = 0, max2 = 0, worst = 0, r2 = 4 * d->stats.position_bound * d->stats.position_bound;
     for (uint64_t i = 0; i < out->vertex_count; i++) {
-        float d2;
-        uint32_t j = sl_kdtree_nearest(tree, pos + 3 * i, &d2);
-        sum2 += d2;
-        max2 = d2 > max2 ? d2 : max2;
-        if (nrm) {
+        uint32_t idx[K];
+        float d2[K];
+        uint32_t n = sl_kdtree_knn(tree, pos + 3 * i, K, idx, d2);
+        sum2 += d2[0];
+        max2 = d2[0] > max2 ? d2[0] : max2;
+        double best = 180;
+        for (uint32_t c = 0; nrm && c < n && (c == 0 || d2[c] <= r2); c++) {
             float given[3];
-            unit_normal(m->normals + 3 * j, given);
+            unit_normal(m->normals + 3 * (uint64_t)idx[c], given);
             double back[3] = {nrm[3 * i], nrm[3 * i + 1], nrm[3 * i + 2]};
             double a = angle_deg(given, back);
-            worst = a > worst ? a : worst;
+            best = a < best ? a : best;
         }
+        worst = nrm && best > worst ? best : worst;
     }
     sl_kdtree_free(tree);
     d->stats.position_error_max = sqrt(max2);
