@@ -170,8 +170,10 @@ static void json_mesh(sl_json *j, const glb_doc *d, const char *extras_json)
 }
 
 /* Scans are matte and often open (holes, single scanned side): metallic 0, high
- * roughness and double-sided. Vertex colours multiply the white base colour; a texture
- * is sampled with mipmaps and clamped at its edges (an atlas does not repeat). */
+ * roughness and double-sided. Vertex colours multiply the white base colour. A texture is
+ * an atlas of small charts (stages/export/export_texture.c): sampled without mipmaps,
+ * whose averaging would mix neighbouring charts across their two-texel gaps (seen as
+ * light seams along every edge), and clamped at its edges (an atlas does not repeat). */
 static void json_material(sl_json *j, const glb_doc *d)
 {
     sl_json_array_begin(j, "materials");
@@ -194,7 +196,7 @@ static void json_material(sl_json *j, const glb_doc *d)
     sl_json_array_begin(j, "samplers");
     sl_json_object_begin(j, NULL);
     sl_json_u64(j, "magFilter", 9729);  /* LINEAR */
-    sl_json_u64(j, "minFilter", 9987);  /* LINEAR_MIPMAP_LINEAR */
+    sl_json_u64(j, "minFilter", 9729);  /* LINEAR */
     sl_json_u64(j, "wrapS", 33071);     /* CLAMP_TO_EDGE */
     sl_json_u64(j, "wrapT", 33071);
     sl_json_object_end(j);
