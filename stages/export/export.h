@@ -6,7 +6,11 @@
  *
  * Levels: every `[export] lod_percents` (paper Table 1: k = P% of the LOD array) and every
  * named triangle budget `[export] budgets` (name:triangles; a budget above the finest level
- * gives the finest, marked "clamped").
+ * gives the finest, marked "clamped"). Levels whose meshes are identical (a clamped budget
+ * and lod100) are published once, under one of their names (docs/formats.md).
+ *
+ * Also per item: `scene.svx.json` (a Smithsonian Voyager scene of the GLBs, mapped to
+ * Voyager's qualities by triangle count).
  */
 #ifndef SCANLOD_STAGES_EXPORT_H
 #define SCANLOD_STAGES_EXPORT_H
