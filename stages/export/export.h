@@ -10,7 +10,8 @@
  * and lod100) are published once, under one of their names (docs/formats.md).
  *
  * Also per item: `scene.svx.json` (a Smithsonian Voyager scene of the GLBs, mapped to
- * Voyager's qualities by triangle count).
+ * Voyager's qualities by triangle count) and `index.html` (the item's page with a 3D view
+ * of each level), and the item's sections of the collection's summaries.
  */
 #ifndef SCANLOD_STAGES_EXPORT_H
 #define SCANLOD_STAGES_EXPORT_H
@@ -41,6 +42,7 @@ typedef struct sl_export_config {
     int thumbnail_size;                         /* PNG edge in pixels; 0 = none */
     int fidelity;                               /* measure every level against the input */
     uint64_t fidelity_samples;                  /* area samples per surface for that */
+    int viewer; /* index.html gets a 3D view per level: viewer bundle + NAME.glb.js copies */
 } sl_export_config;
 
 /* The section at its option table's defaults (sl_stage_default_config). */

@@ -55,4 +55,11 @@ int sl_export_manifest(const sl_export_config *c, const sl_export_result *result
                        const int level_of_quality[SL_EXPORT_QUALITIES], const sl_stage_io *io,
                        sl_error *err);
 
+/* index.html and summary-item.html (the item's section of OUTPUT/summary.html), and with
+ * [export] viewer the viewer bundle and NAME.glb.js per GLB (export_html.c). */
+int sl_export_html(const sl_export_config *c, const sl_lod_model *model, const sl_mesh *input,
+                   const sl_export_result *results,
+                   const int level_of_quality[SL_EXPORT_QUALITIES], const sl_stage_io *io,
+                   sl_error *err);
+
 #endif

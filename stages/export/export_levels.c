@@ -349,6 +349,8 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
     }
     if (rc == 0)
         rc = sl_export_manifest(c, rows, level_of_quality, io, err);
+    if (rc == 0)
+        rc = sl_export_html(c, model, input, rows, level_of_quality, io, err);
     free(rows);
     return rc;
 }

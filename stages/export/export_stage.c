@@ -39,6 +39,11 @@ static const sl_option export_options[] = {
      "measured."},
     {"export", "fidelity_samples", SL_OPT_INT, "200000", 1000, 100000000, NULL,
      "Area samples per surface for the fidelity measurement."},
+    {"export", "viewer", SL_OPT_BOOL, "true", 0, 0, NULL,
+     "With glb in formats: the item's index.html (and the collection's summary.html) show "
+     "each level in an interactive 3D view that needs no network and works from a local "
+     "file. This adds the viewer script (about 1 MB) and each GLB again as a script "
+     "(NAME.glb.js, a third larger than the GLB) to every item."},
     SL_OPTION_END,
 };
 
@@ -59,6 +64,7 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
     c->thumbnail_size = (int)sl_config_int(cfg, "export", "thumbnail_size");
     c->fidelity = sl_config_bool(cfg, "export", "fidelity");
     c->fidelity_samples = (uint64_t)sl_config_int(cfg, "export", "fidelity_samples");
+    c->viewer = sl_config_bool(cfg, "export", "viewer");
     if (rc) {
         free(c);
         return rc;

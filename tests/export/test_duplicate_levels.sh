@@ -35,7 +35,7 @@ for name in shared:
     lv = levels[name]
     check(lv["clamped"] and lv["triangles"] == finest, f"{name}: clamped at the finest level ({lv['triangles']})")
     check(lv["file"] == "lod100", f"{name}: published as lod100's files (file = {lv['file']!r})")
-    for ext in ("ply", "glb", "png"):
+    for ext in ("ply", "glb", "png", "glb.js"):
         check(not os.path.exists(os.path.join(folder, f"{name}.{ext}")), f"{name}.{ext} is not published")
     check(all(lv[k] == levels["lod100"][k] for k in ("triangles", "vertices", "watertight", "boundary_edges")),
           f"{name}: the report keeps its facts (those of lod100)")
@@ -65,6 +65,9 @@ for f in sorted(os.listdir(folder)):
 md = open(os.path.join(folder, "summary-item.md")).read()
 check("| medium | %d | %d |" % (levels["medium"]["expansions"], finest) in md and
       md.count(" | lod100 |\n") == 5, "summary-item.md: medium's row, five rows served by lod100's files")
+html = open(os.path.join(folder, "index.html")).read()
+check(html.count("the same mesh as lod100") == 4, "index.html: four levels point to lod100's files")
+check(html.count('<figure class="sl-view"') == len(files), "index.html: one 3D view per published mesh")
 sys.exit(1 if bad else 0)
 EOF
 prc=$?

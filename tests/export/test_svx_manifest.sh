@@ -12,7 +12,7 @@ cp "$SCANS/cow.ply" "$SCANS/bun_zipper_res3.ply" "$TMP/in/"
 cp "$SCANS/fandisk.ply" "$TMP/in/sub/"
 write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out" "[export]" \
   "budgets = thumb:1000,low:5000,medium:100000,high:500000" \
-  "thumbnail_size = 0" "fidelity = false"
+  "thumbnail_size = 0" "fidelity = false" "viewer = false"
 run_scanlod run "$TMP/c.ini" -q
 check "run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
 items=("$TMP/out/cow.ply" "$TMP/out/bun_zipper_res3.ply" "$TMP/out/sub/fandisk.ply")
