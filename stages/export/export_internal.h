@@ -94,7 +94,13 @@ typedef struct sl_export_result {
      * level with the identical mesh (lod100 for a budget clamped at the finest level, say),
      * so the mesh is published once; -1 when the level has no triangles, so no files. */
     int file;
+    /* The published level this level's GLB morphs to ([export] morph), or -1. */
+    int morph_to;
 } sl_export_result;
+
+/* With [export] morph and GLBs written: the published level (rows[j].file == j) next
+ * coarser than published level i, the one with the most triangles below i's; else -1. */
+int sl_export_morph_coarser(const sl_export_config *c, const sl_export_result *rows, int i);
 
 /* The size of the level file NAME.EXT this stage wrote, 0 when there is none. */
 uint64_t sl_export_file_bytes(const sl_stage_io *io, const char *name, const char *ext);

@@ -145,6 +145,8 @@ static void report_glb(sl_json *r, const sl_export_config *c, const sl_glb_stats
     sl_json_double(r, "normal_error_deg", g->normal_error_max_deg);
     sl_json_double(r, "color_error_srgb_steps", g->color_error_max);
     sl_json_double(r, "max_error", max_error + bound);
+    if (g->morph) /* how far weight 1 lands from the coarser level's surface point */
+        sl_json_double(r, "morph_error_world", g->morph_error_max / to_metres);
     if (measured)
         sl_json_double(r, "hausdorff", hausdorff + bound / diagonal);
     sl_json_object_end(r);
@@ -390,6 +392,8 @@ static void report_level(const sl_export_config *c, const sl_lod_model *model,
     sl_json_string(r, "file", row->file >= 0 ? c->levels[row->file].name : NULL);
     if (row->texture)
         report_texture(row, r);
+    if (row->morph_to >= 0)
+        sl_json_string(r, "morph_to", c->levels[row->morph_to].name);
     if (row->triangles && c->write_glb)
         report_glb(r, c, &row->glb, frame->to_metres, model->error_after[row->k], row->diagonal,
                    row->hausdorff, row->measured);
@@ -400,7 +404,7 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
                      const sl_export_frame *frame, const sl_export_texture *texture,
                      const sl_stage_io *io, sl_error *err)
 {
-    sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z', NULL};
+    sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z', NULL, NULL};
     sl_json *r = io->report;
     sl_json_u64(r, "expansions", model->expansion_count);
     sl_json_u64(r, "triangles_finest", model->accumulation[model->expansion_count]);
@@ -415,13 +419,24 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
         const sl_export_level *lv = &c->levels[i];
         if ((rc = sl_stage_step(io, "export", (double)i / c->level_count, err)))
             break;
+        rows[i].morph_to = -1;
         if (rows[i].file != i)
             continue;
-        sl_lod_mesh mesh;
+        sl_lod_mesh mesh, coarser;
+        memset(&coarser, 0, sizeof coarser);
+        int to = sl_export_morph_coarser(c, rows, i);
         if (sl_lod_generate(model, rows[i].k, &mesh, NULL)) {
             rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
             break;
         }
+        if (to >= 0 && sl_lod_generate(model, rows[to].k, &coarser, NULL)) {
+            sl_lod_mesh_release(&mesh);
+            rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+            break;
+        }
+        rows[i].morph_to = to;
+        sl_export_glb level_glb = glb;
+        level_glb.morph_to = to >= 0 ? &coarser : NULL;
         char extras[256];
         snprintf(extras, sizeof extras,
                  "{\"scanlod\":{\"level\":\"%s\",\"expansions\":%u,\"of\":%u}}", lv->name,
@@ -429,8 +444,10 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
         sl_export_baked baked;
         rc = bake_level(c, texture, lv, &mesh, &rows[i], &baked, err);
         if (rc == 0)
-            rc = write_files(c, lv, &mesh, &baked, extras, &glb, &rows[i].glb, io, err);
+            rc = write_files(c, lv, &mesh, &baked, extras, &level_glb, &rows[i].glb, io, err);
         sl_export_baked_release(&baked);
+        if (to >= 0)
+            sl_lod_mesh_release(&coarser);
         if (rc == 0)
             rc = measure_level(c, input, &mesh, io, &rows[i], err);
         sl_lod_mesh_release(&mesh);

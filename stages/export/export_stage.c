@@ -14,7 +14,7 @@
 #include "stages/crack/crack.h"
 #include "stages/export/export_internal.h"
 
-#define EXPORT_STAGE_VERSION 4u
+#define EXPORT_STAGE_VERSION 5u
 
 static const sl_option export_options[] = {
     {"export", "lod_percents", SL_OPT_LIST, "20,40,60,80,100", 0, 100, NULL,
@@ -86,6 +86,13 @@ static const sl_option export_options[] = {
      "each level in an interactive 3D view that needs no network and works from a local "
      "file. This adds the viewer script (about 1 MB) and each GLB again as a script "
      "(NAME.glb.js, a third larger than the GLB) to every item."},
+    {"export", "morph", SL_OPT_BOOL, "false", 0, 0, NULL,
+     "Each published level's GLB carries one glTF morph target (docs/morphing.md) that "
+     "moves every vertex to its closest point on the next coarser published level, so a "
+     "viewer can blend between levels instead of popping (the 3D views do, by camera "
+     "distance). At weight 0 the GLB is the level, at weight 1 it lies on the coarser level. "
+     "The coarsest level has none. Works with every compression (Draco: the target is "
+     "stored uncompressed beside the Draco stream)."},
     SL_OPTION_END,
 };
 
@@ -136,6 +143,7 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
         p += n + (p[n] == ',');
     }
     c->viewer = sl_config_bool(cfg, "export", "viewer");
+    c->morph = sl_config_bool(cfg, "export", "morph");
     if (rc) {
         free(c);
         return rc;
