@@ -1,0 +1,123 @@
+#!/usr/bin/env bash
+# [export] morph = true (docs/morphing.md) on the octree method's levels of the bundled
+# bunny (lod30, lod60, lod100), for every GLB encoding (none float, none quantised,
+# meshopt, draco):
+#   - lod100 morphs to lod60, lod60 to lod30, the coarsest (lod30) has no target;
+#   - every GLB passes the Khronos validator with 0 errors;
+#   - weight 1 lies on the coarser level: each vertex of the GLB decoded by the tests' own
+#     reader with the target at weight 1 is within 1e-5 of the diagonal of lod30's / lod60's
+#     surface (float files), within that plus the file's quantisation bound (quantised);
+#   - weight 0 is the level byte for byte: every bufferView, accessor and attribute of the
+#     GLB written with morph = false is in the morphing GLB unchanged;
+# and scanlod extract --morph-to: the PLY at weight 0 is the plain level's PLY byte for
+# byte, at weight 1 its vertices lie on the coarser cut (<= 1e-5 of the diagonal), at 0.5
+# half way; a GLB carries the target; bad requests are refused in one line.
+source "$(dirname "$0")/../lib.sh"
+gltf="$SCANLOD_SOURCE_DIR/scripts/gltf"
+mc="${SCANLOD_BUILD_DIR:?}/tests/morph_check"
+views="$SCANLOD_SOURCE_DIR/tests/export/glb_views.py"
+gltf_validator_ready || { echo "FAIL: the glTF validator is not installed (scripts/install-deps.sh)" >&2; exit 1; }
+
+mkdir -p "$TMP/in"
+cp "$SCANS/bun_zipper_res3.ply" "$TMP/in/"
+item=bun_zipper_res3.ply
+run_mode() { # run_mode NAME compression quantize morph
+  write_config "$TMP/$1.ini" "$TMP/in" "$TMP/work-$1" "$TMP/out-$1" "[export]" \
+    "lod_percents = 30,60,100" "budgets =" "formats = ply,glb" "thumbnail_size = 0" \
+    "fidelity = false" "compression = $2" "quantize = $3" "morph = $4"
+  run_scanlod run "$TMP/$1.ini" -q
+  check "$1: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
+}
+ratio_of() { sed -n 's/.* ratio \([^ ]*\)$/\1/p' <<<"$1"; }
+within() { python3 -c "import sys; sys.exit(0 if float('$1') <= float('$2') else 1)"; }
+for mode in float:none:false quantized:none:true meshopt:meshopt:true draco:draco:true; do
+  IFS=: read -r name comp quant <<<"$mode"
+  run_mode "$name" "$comp" "$quant" true
+  run_mode "$name-plain" "$comp" "$quant" false
+  dir="$TMP/out-$name/$item"
+  targets=$(python3 -c "
+import json, struct
+for n in ('lod100', 'lod60', 'lod30'):
+    d = open('$dir/' + n + '.glb', 'rb').read(); k = struct.unpack('<I', d[12:16])[0]
+    print(n, len(json.loads(d[20:20 + k])['meshes'][0]['primitives'][0].get('targets', [])))" | tr '\n' ' ')
+  check "$name: lod100 and lod60 have one target, lod30 none ($targets)" [ "$targets" = "lod100 1 lod60 1 lod30 0 " ]
+  morph_to=$(grep -o '"morph_to": *"[a-z0-9]*"' "$dir/report.json" | tr -d ' "' | tr '\n' ' ')
+  check "$name: the report says lod60 and lod100 morph to lod30 and lod60 ($morph_to)" \
+    [ "$morph_to" = "morph_to:lod30 morph_to:lod60 " ]
+  set +e
+  node "$gltf/validate.mjs" "$dir"/*.glb >"$TMP/$name.jsonl" 2>&1
+  vrc=$?
+  set -e
+  check "$name: validator 0 errors on every GLB ($(head -c 300 "$TMP/$name.jsonl"))" \
+    [ "$vrc" -eq 0 -a "$(grep -c '"numErrors":0,' "$TMP/$name.jsonl")" -eq 3 ]
+  for pair in lod100:lod60 lod60:lod30; do
+    IFS=: read -r fine coarse <<<"$pair"
+    bound=$(python3 -c "
+import json; r = json.load(open('$dir/report.json'))
+def find(o):
+    if isinstance(o, dict):
+        if o.get('name') == '$fine' and 'glb' in o: return o['glb']
+        for v in o.values():
+            f = find(v)
+            if f: return f
+    if isinstance(o, list):
+        for v in o:
+            f = find(v)
+            if f: return f
+print(find(r)['quantization_bound_world'])")
+    out1=$("$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 1)
+    out0=$("$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 0)
+    outh=$("$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 0.5)
+    limit=$(python3 -c "
+import re; d = float(re.search(r'diagonal (\S+)', '''$out1''').group(1))
+print((1e-5 * d + $bound) / d)")
+    check "$name $fine: weight 1 on $coarse ($out1; limit $limit of the diagonal)" within "$(ratio_of "$out1")" "$limit"
+    check "$name $fine: weight 0 is off $coarse ($(ratio_of "$out0")), 0.5 half way ($(ratio_of "$outh"))" \
+      python3 -c "import sys; a, h = $(ratio_of "$out0"), $(ratio_of "$outh"); sys.exit(0 if a > 1e-3 and 0.3 * a < h < 0.7 * a else 1)"
+    n=$(python3 "$views" "$TMP/out-$name-plain/$item/$fine.glb" "$dir/$fine.glb") && same=0 || same=1
+    check "$name $fine: weight 0 is the level byte for byte ($n views)" [ "$same" -eq 0 ]
+  done
+  n=$(python3 "$views" "$TMP/out-$name-plain/$item/lod30.glb" "$dir/lod30.glb") && same=0 || same=1
+  check "$name lod30: the coarsest level is written as without morph" cmp -s "$TMP/out-$name-plain/$item/lod30.glb" "$dir/lod30.glb"
+done
+
+# scanlod extract --morph-to on the published model.
+model="$TMP/out-float/$item/model.slod"
+run_scanlod extract "$model" --triangles 3000 -o "$TMP/level.ply"
+check "extract the level: exit 0 ($err)" [ "$rc" -eq 0 ]
+run_scanlod extract "$model" --triangles 1500 -o "$TMP/coarse.ply"
+check "extract the coarser cut: exit 0 ($err)" [ "$rc" -eq 0 ]
+run_scanlod extract "$model" --triangles 3000 --morph-to 1500 --morph-weight 0 -o "$TMP/w0.ply"
+check "extract weight 0: exit 0 ($err)" [ "$rc" -eq 0 ]
+check "extract weight 0 is the level byte for byte" cmp -s "$TMP/level.ply" "$TMP/w0.ply"
+run_scanlod extract "$model" --triangles 3000 --morph-to 1500 -o "$TMP/w1.ply"
+check "extract weight 1 (default): exit 0 ($out $err)" [ "$rc" -eq 0 ]
+out1=$("$mc" "$TMP/coarse.ply" "$TMP/w1.ply")
+check "extract weight 1 lies on the coarser cut ($out1)" within "$(ratio_of "$out1")" 1e-5
+run_scanlod extract "$model" --triangles 3000 --morph-to 1500 --morph-weight 0.5 -o "$TMP/wh.ply"
+outh=$("$mc" "$TMP/coarse.ply" "$TMP/wh.ply") out0=$("$mc" "$TMP/coarse.ply" "$TMP/level.ply")
+check "extract weight 0.5 half way ($(ratio_of "$outh") of $(ratio_of "$out0"))" \
+  python3 -c "import sys; a, h = $(ratio_of "$out0"), $(ratio_of "$outh"); sys.exit(0 if 0.3 * a < h < 0.7 * a else 1)"
+run_scanlod extract "$model" --triangles 3000 --morph-to 1500 -o "$TMP/m.glb"
+outg=$("$mc" "$TMP/coarse.ply" "$TMP/m.glb" 1)
+# extract writes [export]'s default GLB: meshopt, 14-bit positions, whose grid step is at
+# most the diagonal / 16383: weight 1 lands within sqrt(3)/2 of a step.
+check "extract GLB: weight 1 on the coarser cut ($outg)" within "$(ratio_of "$outg")" 6.3e-5
+set +e
+node "$gltf/validate.mjs" "$TMP/m.glb" >"$TMP/m.jsonl" 2>&1
+vrc=$?
+set -e
+check "extract GLB: validator 0 errors ($(head -c 200 "$TMP/m.jsonl"))" [ "$vrc" -eq 0 ]
+for bad in "--morph-to 3000|not fewer" "--morph-to 0|>= 1" "--morph-to 1500 --morph-weight 2|\[0, 1\]" \
+           "--morph-to 1500 --morph-weight nan|finite" "--morph-weight 0.5|needs --morph-to"; do
+  IFS='|' read -r args want <<<"$bad"
+  # shellcheck disable=SC2086
+  run_scanlod extract "$model" --triangles 3000 $args -o "$TMP/bad.ply"
+  check "extract $args: exit 64 and one line naming it ($rc: $err)" \
+    [ "$rc" -eq 64 -a "$(wc -l <<<"$err")" -eq 1 ]
+  check "extract $args: says '$want'" contains "$want" "$err"
+done
+run_scanlod extract "$model" --triangles 3000 --morph-to 1500 --morph-weight 0.5 -o "$TMP/bad.glb"
+check "extract --morph-weight with .glb is refused ($err)" [ "$rc" -eq 64 ]
+check "no output written by a refused request" [ ! -e "$TMP/bad.ply" -a ! -e "$TMP/bad.glb" ]
+finish
