@@ -29,7 +29,7 @@ run_mode() { # run_mode NAME compression quantize morph
   check "$1: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
 }
 ratio_of() { sed -n 's/.* ratio \([^ ]*\)$/\1/p' <<<"$1"; }
-within() { python3 -c "import sys; sys.exit(0 if float('$1') <= float('$2') else 1)"; }
+within() { python3 -c "import sys; sys.exit(0 if '$1' and float('$1') <= float('$2') else 1)"; }
 for mode in float:none:false quantized:none:true meshopt:meshopt:true draco:draco:true; do
   IFS=: read -r name comp quant <<<"$mode"
   run_mode "$name" "$comp" "$quant" true
@@ -65,15 +65,16 @@ def find(o):
             f = find(v)
             if f: return f
 print(find(r)['quantization_bound_world'])")
-    out1=$("$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 1)
-    out0=$("$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 0)
-    outh=$("$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 0.5)
+    out1=$("$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 1 2>&1) || true
+    out0=$("$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 0 2>&1) || true
+    outh=$("$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 0.5 2>&1) || true
     limit=$(python3 -c "
-import re; d = float(re.search(r'diagonal (\S+)', '''$out1''').group(1))
-print((1e-5 * d + $bound) / d)")
+import re; m = re.search(r'diagonal (\S+)', '''$out1''')
+print((1e-5 * float(m.group(1)) + $bound) / float(m.group(1)) if m else -1)")
     check "$name $fine: weight 1 on $coarse ($out1; limit $limit of the diagonal)" within "$(ratio_of "$out1")" "$limit"
+    r0=$(ratio_of "$out0") rh=$(ratio_of "$outh")
     check "$name $fine: weight 0 is off $coarse ($(ratio_of "$out0")), 0.5 half way ($(ratio_of "$outh"))" \
-      python3 -c "import sys; a, h = $(ratio_of "$out0"), $(ratio_of "$outh"); sys.exit(0 if a > 1e-3 and 0.3 * a < h < 0.7 * a else 1)"
+      python3 -c "import sys; a, h = ${r0:-0}, ${rh:-0}; sys.exit(0 if a > 1e-3 and 0.3 * a < h < 0.7 * a else 1)"
     n=$(python3 "$views" "$TMP/out-$name-plain/$item/$fine.glb" "$dir/$fine.glb") && same=0 || same=1
     check "$name $fine: weight 0 is the level byte for byte ($n views)" [ "$same" -eq 0 ]
   done
