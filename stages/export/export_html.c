@@ -264,6 +264,11 @@ static void view_caption(FILE *out, const page *p, int i)
     grouped(out, p->results[i].triangles);
     fputs(" triangles, ", out);
     size_text(out, sl_export_file_bytes(p->io, p->c->levels[i].name, "glb"));
+    if (p->results[i].morph_to >= 0) { /* viewer.js blends by camera distance */
+        fputs(", blends into ", out);
+        sl_html_text(out, p->c->levels[p->results[i].morph_to].name);
+        fputs(" as you zoom out", out);
+    }
 }
 
 /* index.html: a view per published level. */

@@ -7,7 +7,9 @@
 # pixels that differ from lod30's picture falls strictly from weight 0 to 0.5 to 1 (and
 # weight 1 is at most 60 % as far as weight 0; the rest is coarser surface no vertex of
 # the finer level projects to), and the number that differ from weight 0's picture rises.
-# Run for meshopt and Draco files. Chromium, node and the npm packages are test
+# examples/viewer (tests/export/example_viewer.cjs) must draw weights 0, 0.5, 1 at 1, 2, 4
+# times the framing distance, and the report's index.html (check_page.mjs) must draw
+# lod60 with the blending on. Run for meshopt and Draco files. Chromium, node and the npm packages are test
 # dependencies: missing ones FAIL the test.
 source "$(dirname "$0")/../lib.sh"
 export PYTHONDONTWRITEBYTECODE=1
@@ -60,5 +62,22 @@ PY
   check "$comp: pixels off weight 0's picture rise with the weight (0 < $d0h < $d01)" \
     python3 -c "import sys; sys.exit(0 if 0 < $d0h < $d01 else 1)"
   [ -z "${SCANLOD_RENDER_OUT:-}" ] || cp "$TMP/$comp"-*.png "$SCANLOD_RENDER_OUT/"
+  # examples/viewer blends by camera distance: weight 0 at the framing distance, 0.5 at
+  # twice it, 1 from three times it; a level without a target has no weight.
+  for dw in 1:0 2:0.5 4:1; do
+    IFS=: read -r d want <<<"$dw"
+    got=$(node "$SCANLOD_SOURCE_DIR/tests/export/example_viewer.cjs" "$SCANLOD_SOURCE_DIR" "$dir/lod60.glb" "$d" 2>&1 | tail -1) || true
+    check "$comp examples/viewer at $d x the framing distance: weight $want ($got)" [ "$got" = "$want" ]
+  done
+  got=$(node "$SCANLOD_SOURCE_DIR/tests/export/example_viewer.cjs" "$SCANLOD_SOURCE_DIR" "$dir/lod30.glb" 2 2>&1 | tail -1) || true
+  check "$comp examples/viewer: lod30 has no morph weight ($got)" [ "$got" = "null" ]
+  # The report's index.html: its views draw, lod60's with the blending (weight 0 at the
+  # framing distance), and its caption says what it blends into.
+  (cd "$dir" && node "$render/check_page.mjs" index.html) >"$TMP/$comp-page.jsonl" 2>&1 || true
+  check "$comp index.html: lod60 drawn with morph weight 0.000 ($(grep lod60 "$TMP/$comp-page.jsonl" | head -1))" \
+    grep -q '"src":"lod60.glb.js","state":"drawn".*"morph":"0.000"' "$TMP/$comp-page.jsonl"
+  check "$comp index.html: lod30 drawn without morph" \
+    grep -q '"src":"lod30.glb.js","state":"drawn".*"morph":null' "$TMP/$comp-page.jsonl"
+  check "$comp index.html: the caption names the coarser level" grep -q "blends into lod30 as you zoom out" "$dir/index.html"
 done
 finish
