@@ -1,9 +1,14 @@
-/* The collection summary: OUTPUT/summary.json (every published item's report, and the
- * quarantined items with their reasons), OUTPUT/summary.md (per item the export stage's
+/* The collection summary: OUTPUT/summary.json (every published item's report, the
+ * quarantined items with their reasons, and the stale ones), OUTPUT/summary.md (per item the export stage's
  * summary-item.md: a Table-1-style table and the thumbnails; then the quarantine list) and
  * OUTPUT/summary.html (the same from each item's summary-item.html, with a 3D view per
  * item: docs/formats.md, "The HTML report"). All are rewritten atomically at the end of
  * every `scanlod run`.
+ *
+ * An item both published and quarantined is stale: its input changed, the new version was
+ * quarantined, and the derivatives of the previous version stay published (a museum's
+ * web page keeps working). Every summary says so where the item's levels are shown and in
+ * the quarantine list, never listing the item as simply published (docs/engine.md).
  *
  * summary.html runs the viewer bundle from OUTPUT/scanlod-viewer.js, a copy of the first
  * published item's own (every item carries one, so that its folder works alone). */
@@ -114,6 +119,19 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
         published++;
         sl_json_raw(&js, NULL, report);
         free(report);
+        sl_ticket t;
+        if (quarantined(e, e->items[i], &t)) {
+            fputs("> **Stale:** the input of `", out);
+            sl_md_text(out, e->items[i]);
+            fprintf(out, "` changed and its new version was quarantined (%s): ", t.cls);
+            sl_md_text(out, t.reason);
+            fputs(". The levels below are the previous version's.\n\n", out);
+            fputs("<p class=\"stale\"><strong>Stale:</strong> the input of <code>", page);
+            sl_html_text(page, e->items[i]);
+            fprintf(page, "</code> changed and its new version was quarantined (%s): ", t.cls);
+            sl_html_text(page, t.reason);
+            fputs(". The levels below are the previous version's.</p>\n", page);
+        }
         sl_engine_path(path, sizeof path, "%s/%s/summary-item.md", e->output, e->items[i]);
         char *section = read_optional(path);
         if (section)
@@ -143,26 +161,32 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
     fprintf(out, "## Quarantined\n\n");
     fputs("<h2>Quarantined</h2>\n<ul>\n", page);
     sl_json_array_begin(&js, "quarantined");
-    uint64_t bad = 0;
+    uint64_t bad = 0, stale = 0;
     for (uint64_t i = 0; i < e->item_count; i++) {
         sl_ticket t;
         if (!quarantined(e, e->items[i], &t))
             continue;
         bad++;
+        int previous = sl_engine_item_published(e, e->items[i]);
+        stale += (uint64_t)previous;
+        const char *kept = previous ? "; the previous version's levels stay published, "
+                                      "marked stale"
+                                    : "";
         fputs("- ", out);
         sl_md_text(out, e->items[i]);
         fprintf(out, " (%s): ", t.cls);
         sl_md_text(out, t.reason);
-        fputc('\n', out);
+        fprintf(out, "%s\n", kept);
         fputs("<li>", page);
         sl_html_text(page, e->items[i]);
         fprintf(page, " (%s): ", t.cls);
         sl_html_text(page, t.reason);
-        fputs("</li>\n", page);
+        fprintf(page, "%s</li>\n", kept);
         sl_json_object_begin(&js, NULL);
         sl_json_string(&js, "item", e->items[i]);
         sl_json_string(&js, "class", t.cls);
         sl_json_string(&js, "reason", t.reason);
+        sl_json_raw(&js, "stale_publication", previous ? "true" : "false");
         sl_json_object_end(&js);
     }
     if (!bad)
@@ -172,6 +196,7 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
     sl_json_u64(&js, "items_total", e->item_count);
     sl_json_u64(&js, "items_published", published);
     sl_json_u64(&js, "items_quarantined", bad);
+    sl_json_u64(&js, "items_stale", stale);
     sl_json_object_end(&js);
     fclose(out);
     int viewer = copy_viewer(e, err);
