@@ -51,6 +51,49 @@ static int quarantined(sl_engine *e, const char *item, sl_ticket *t)
     return 0;
 }
 
+/* The "Stale:" note of an item whose new input was quarantined (engine.md, "Stale
+ * publications"), in Markdown or HTML. */
+static void stale_note(FILE *out, const char *item, const sl_ticket *t, int html)
+{
+    void (*text)(FILE *, const char *) = html ? sl_html_text : sl_md_text;
+    fputs(html ? "<p class=\"stale\"><strong>Stale:</strong> the input of <code>"
+               : "> **Stale:** the input of `",
+          out);
+    text(out, item);
+    fprintf(out, html ? "</code> changed and its new version was quarantined (%s): "
+                      : "` changed and its new version was quarantined (%s): ",
+            t->cls);
+    text(out, t->reason);
+    fputs(html ? ". The levels below are the previous version's.</p>\n"
+               : "\n>\n> The levels below are the previous version's.\n\n",
+          out);
+}
+
+/* An item's section of summary.md or .html (the export's summary-item.*), with the stale
+ * note after its heading (the text up to the first `heading_end`); a stand-in heading
+ * when the item has no section. */
+static void put_section(FILE *out, const char *section, const char *heading_end,
+                        const char *item, const sl_ticket *stale, int html)
+{
+    const char *rest = section;
+    if (section && (rest = strstr(section, heading_end)))
+        rest += strlen(heading_end);
+    if (section && rest)
+        fwrite(section, 1, (size_t)(rest - section), out);
+    else {
+        fputs(html ? "<section class=\"item\">\n<h2>" : "### ", out);
+        (html ? sl_html_text : sl_md_text)(out, item);
+        fputs(html ? "</h2>\n" : "\n\n", out);
+        rest = NULL;
+    }
+    if (stale)
+        stale_note(out, item, stale, html);
+    if (rest)
+        fputs(rest, out);
+    else
+        fputs(html ? "<p>(no levels)</p>\n</section>\n" : "(no levels)\n\n", out);
+}
+
 #define VIEWER_FILE "scanlod-viewer.js" /* stages/export/export_html.c */
 
 static void html_begin(sl_engine *e, FILE *out)
@@ -120,37 +163,14 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
         sl_json_raw(&js, NULL, report);
         free(report);
         sl_ticket t;
-        if (quarantined(e, e->items[i], &t)) {
-            fputs("> **Stale:** the input of `", out);
-            sl_md_text(out, e->items[i]);
-            fprintf(out, "` changed and its new version was quarantined (%s): ", t.cls);
-            sl_md_text(out, t.reason);
-            fputs(". The levels below are the previous version's.\n\n", out);
-            fputs("<p class=\"stale\"><strong>Stale:</strong> the input of <code>", page);
-            sl_html_text(page, e->items[i]);
-            fprintf(page, "</code> changed and its new version was quarantined (%s): ", t.cls);
-            sl_html_text(page, t.reason);
-            fputs(". The levels below are the previous version's.</p>\n", page);
-        }
+        int stale = quarantined(e, e->items[i], &t);
         sl_engine_path(path, sizeof path, "%s/%s/summary-item.md", e->output, e->items[i]);
         char *section = read_optional(path);
-        if (section)
-            fputs(section, out);
-        else {
-            fputs("### ", out);
-            sl_md_text(out, e->items[i]);
-            fputs("\n\n(no levels)\n\n", out);
-        }
+        put_section(out, section, "\n", e->items[i], stale ? &t : NULL, 0);
         free(section);
         sl_engine_path(path, sizeof path, "%s/%s/summary-item.html", e->output, e->items[i]);
         section = read_optional(path);
-        if (section)
-            fputs(section, page);
-        else {
-            fputs("<section class=\"item\">\n<h2>", page);
-            sl_html_text(page, e->items[i]);
-            fputs("</h2>\n<p>(no levels)</p>\n</section>\n", page);
-        }
+        put_section(page, section, "</h2>\n", e->items[i], stale ? &t : NULL, 1);
         free(section);
     }
     sl_json_array_end(&js);
