@@ -117,6 +117,8 @@ typedef struct sl_cluster_pass_stats {
     uint64_t borders_reverted; /* straightening undone because a polygon would not triangulate */
     uint64_t forced_splits;   /* segments split to keep polygons and edges distinct */
     uint64_t triangulation_failures; /* polygons the triangulation refused (then retried) */
+    uint32_t regrowths;       /* clusterings redone with a smaller angle where a cluster's
+                                 own polygon folded in projection */
     uint64_t removed_interior; /* vertices inside clusters, gone */
     uint64_t removed_border;   /* border vertices gone by straightening */
     uint64_t triangles_in, triangles_out;

@@ -13,6 +13,7 @@
 #include "stages/cluster/cluster.h"
 
 #define CL_NONE UINT32_MAX
+#define CL_KEPT_REFUSED 3
 
 /* The clusters of one pass, each with the frame the whole pass measures it in. */
 typedef struct cl_clusters {
@@ -22,15 +23,17 @@ typedef struct cl_clusters {
     double *lo, *hi;         /* the slab: min and max of n . (p - o) over its vertices */
     uint32_t *tri_start;     /* count + 1: cluster k's triangles are tris[tri_start[k]..) */
     uint32_t *tris;
-    uint8_t *kept;           /* 1: keeps its input triangles (its borders stay as they are) */
+    uint8_t *kept;           /* nonzero: keeps its input triangles (its borders stay as they
+                                are); CL_KEPT_REFUSED: because its polygon was refused */
 } cl_clusters;
 
 /* Grows the clusters of `adj` (positions: 3 floats per vertex; normals: 3 doubles per
- * triangle, zero for none): slab width at most `slab`, normals within acos(cos_angle) of
- * the cluster's direction, every triangle strictly counter-clockwise in the cluster's
- * frame (exact test). Serial, ordered by indices. */
+ * triangle, zero for none). A triangle joins a cluster when the cluster's slab stays within
+ * its own slab_limit and the seed's, the cosine of its normal's angle to the cluster's
+ * direction is at least its own cos_limit and the seed's, and it is strictly
+ * counter-clockwise in the cluster's frame (exact test). Serial, ordered by indices. */
 int cl_grow(const sl_mesh_adjacency *adj, const float *positions, const double *normals,
-            double slab, double cos_angle, cl_clusters *out, sl_error *err);
+            const double *slab_limit, const double *cos_limit, cl_clusters *out, sl_error *err);
 void cl_clusters_release(cl_clusters *c);
 
 /* Projection of a point into cluster k's frame: (u, v) and height n . (p - o). */

@@ -49,6 +49,7 @@ typedef struct morph {
     uint8_t *keep;    /* per entry: the current intermediate's keep flags */
     double *theta;    /* m + 1: theta[j], the share of d_c below which intermediate j drops */
     float *pos;       /* the current intermediate's positions (vertex_count) */
+    uint8_t *moves;   /* per cluster: some border of it has a vertex M' dropped */
 } morph;
 
 static void entry_point(const morph *mo, uint32_t e, double p[3])
@@ -234,20 +235,22 @@ static void state_of(morph *mo, uint32_t j, double t)
         }
 }
 
-/* The rounding of the moved positions to float: the largest distance it moved a vertex. */
+/* The rounding of the moved positions to float: the largest distance it moved a vertex
+ * (of the borders that move: a fallen border's kept vertices are M''s, unmoved). */
 static double rounding(const morph *mo, double t)
 {
     const cl_borders *b = mo->in->borders;
     double worst = 0.0;
-    for (uint32_t i = 0; i < mo->entries; i++)
-        if (mo->level[i] <= mo->in->m) {
-            double p[3], d2 = 0.0;
-            moved_point(mo, i, t, p);
-            const float *q = mo->pos + 3 * (uint64_t)b->verts[i];
-            for (int k = 0; k < 3; k++)
-                d2 += (p[k] - q[k]) * (p[k] - q[k]);
-            worst = fmax(worst, sqrt(d2));
-        }
+    for (uint32_t br = 0; br < b->count; br++)
+        for (uint32_t i = b->start[br]; i < b->start[br + 1] && !mo->fallen[br]; i++)
+            if (mo->level[i] <= mo->in->m) {
+                double p[3], d2 = 0.0;
+                moved_point(mo, i, t, p);
+                const float *q = mo->pos + 3 * (uint64_t)b->verts[i];
+                for (int k = 0; k < 3; k++)
+                    d2 += (p[k] - q[k]) * (p[k] - q[k]);
+                worst = fmax(worst, sqrt(d2));
+            }
     return worst;
 }
 
@@ -311,16 +314,33 @@ static int assemble(const morph *mo, const cl_triangulation *t, uint32_t j, doub
     return 0;
 }
 
+/* Cluster k's triangles in M' as its triangles in t; -1 out of memory. */
+static int copy_destination(const morph *mo, uint32_t k, cl_triangulation *t)
+{
+    const cl_triangulation *dst = mo->in->destination;
+    uint32_t n = dst->count[k];
+    uint32_t *tri = malloc(3 * (size_t)(n ? n : 1) * sizeof *tri);
+    if (!tri)
+        return -1;
+    memcpy(tri, dst->tri[k], 3 * (size_t)n * sizeof *tri);
+    free(t->tri[k]);
+    t->tri[k] = tri;
+    t->count[k] = n;
+    return 0;
+}
+
 /* Triangulates intermediate j into t; refused clusters make their borders fall back. */
 static int intermediate(morph *mo, uint32_t j, cl_triangulation *t, uint8_t *dirty,
                         uint8_t *failed, sl_error *err)
 {
     const cl_clusters *c = mo->in->clusters;
     const cl_borders *b = mo->in->borders;
-    const cl_triangulation *dst = mo->in->destination;
     double tj = (double)j / (mo->in->m + 1);
-    for (uint32_t k = 0; k < c->count; k++)
-        dirty[k] = 1;
+    for (uint32_t k = 0; k < c->count; k++) { /* a cluster whose borders never move: M''s */
+        dirty[k] = mo->moves[k];
+        if (!mo->moves[k] && !c->kept[k] && copy_destination(mo, k, t))
+            return sl_error_set(err, SL_E_NOMEM, 0, NULL, "intermediate %u", j);
+    }
     for (int round = 0;; round++) {
         state_of(mo, j, tj);
         int rc = cl_triangulate(c, b, mo->pos, mo->keep, dirty, failed, t, err,
@@ -344,32 +364,16 @@ static int intermediate(morph *mo, uint32_t j, cl_triangulation *t, uint8_t *dir
                     if (b->right[br] != CL_NONE)
                         dirty[b->right[br]] = 1;
                 }
-            if (!changed) { /* M''s own polygon: its triangles */
-                uint32_t n = dst->count[k];
-                uint32_t *tri = malloc(3 * (size_t)(n ? n : 1) * sizeof *tri);
-                if (!tri)
-                    return sl_error_set(err, SL_E_NOMEM, 0, NULL, "intermediate %u", j);
-                memcpy(tri, dst->tri[k], 3 * (size_t)n * sizeof *tri);
-                free(t->tri[k]);
-                t->tri[k] = tri;
-                t->count[k] = n;
-            }
+            if (!changed && copy_destination(mo, k, t)) /* M''s own polygon */
+                return sl_error_set(err, SL_E_NOMEM, 0, NULL, "intermediate %u", j);
             any = 1;
         }
         if (!any)
             break;
     }
     for (uint32_t k = 0; k < c->count; k++)
-        if (c->kept[k]) {
-            uint32_t n = dst->count[k];
-            uint32_t *tri = malloc(3 * (size_t)(n ? n : 1) * sizeof *tri);
-            if (!tri)
-                return sl_error_set(err, SL_E_NOMEM, 0, NULL, "intermediate %u", j);
-            memcpy(tri, dst->tri[k], 3 * (size_t)n * sizeof *tri);
-            free(t->tri[k]);
-            t->tri[k] = tri;
-            t->count[k] = n;
-        }
+        if (c->kept[k] && copy_destination(mo, k, t))
+            return sl_error_set(err, SL_E_NOMEM, 0, NULL, "intermediate %u", j);
     return 0;
 }
 
@@ -378,19 +382,28 @@ int cl_morph(const cl_morph_input *in, sl_cluster_intermediate *out, sl_progress
 {
     const cl_borders *b = in->borders;
     uint32_t nc = in->clusters->count;
-    morph mo = {in, b->start[b->count], NULL, NULL, NULL, NULL, NULL, NULL};
+    morph mo = {in, b->start[b->count], NULL, NULL, NULL, NULL, NULL, NULL, NULL};
     uint64_t entries = mo.entries ? mo.entries : 1;
     mo.proj = malloc(3 * entries * sizeof *mo.proj);
     mo.level = malloc(entries);
     mo.keep = malloc(entries);
     mo.fallen = calloc(b->count ? b->count : 1, 1);
     mo.theta = calloc((size_t)in->m + 1, sizeof *mo.theta);
+    mo.moves = calloc(nc ? nc : 1, 1);
     mo.pos = malloc(3 * (in->vertex_count ? in->vertex_count : 1) * sizeof *mo.pos);
     uint8_t *dirty = malloc(nc ? nc : 1), *failed = calloc(nc ? nc : 1, 1);
-    int rc = mo.proj && mo.level && mo.keep && mo.fallen && mo.theta && mo.pos && dirty && failed &&
+    int rc = mo.proj && mo.level && mo.keep && mo.fallen && mo.theta && mo.moves && mo.pos && dirty && failed &&
                      levels(&mo) == 0
                  ? 0
                  : sl_error_set(err, SL_E_NOMEM, 0, NULL, "intermediate models");
+    for (uint32_t br = 0; br < b->count && rc == 0; br++)
+        for (uint32_t i = b->start[br]; i < b->start[br + 1]; i++)
+            if (mo.level[i] <= in->m) {
+                mo.moves[b->left[br]] = 1;
+                if (b->right[br] != CL_NONE)
+                    mo.moves[b->right[br]] = 1;
+                break;
+            }
     for (uint32_t j = 1; j <= in->m && rc == 0; j++) {
         if (sl_progress_interrupted(progress)) {
             rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
@@ -417,6 +430,7 @@ int cl_morph(const cl_morph_input *in, sl_cluster_intermediate *out, sl_progress
     free(mo.keep);
     free(mo.fallen);
     free(mo.theta);
+    free(mo.moves);
     free(mo.pos);
     free(dirty);
     free(failed);

@@ -97,7 +97,7 @@ static int settle(cl_clusters *c, cl_borders *b, const cl_pass_input *in, cl_tri
             uint32_t changed = revert_cluster(b, k, dirty);
             st->borders_reverted += changed;
             if (!changed) { /* nothing left to undo: the input's triangles */
-                c->kept[k] = 1;
+                c->kept[k] = CL_KEPT_REFUSED;
                 st->clusters_kept++;
                 if (cl_keep_input(c, in->triangles, k, t))
                     rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "triangles of cluster %u", k);
@@ -169,6 +169,80 @@ static int assemble(const cl_clusters *c, const cl_triangulation *t, cl_pass_out
     return 0;
 }
 
+/* The clusters, borders and triangulation of one try. */
+typedef struct pass_try {
+    sl_segment_loops loops;
+    cl_clusters c;
+    cl_borders b;
+    cl_triangulation t;
+} pass_try;
+
+static void try_release(pass_try *p)
+{
+    cl_triangulation_release(&p->t, p->c.count);
+    cl_borders_release(&p->b);
+    cl_clusters_release(&p->c);
+    sl_segment_loops_release(&p->loops);
+}
+
+static int run_try(const cl_pass_input *in, const sl_mesh_adjacency *adj, const double *normals,
+                   const double *slab_limit, const double *cos_limit, pass_try *p,
+                   sl_cluster_pass_stats *st, sl_progress *progress, sl_error *err)
+{
+    memset(p, 0, sizeof *p);
+    sl_cluster_pass_stats fresh = {0};
+    fresh.tolerance = st->tolerance;
+    fresh.triangles_in = st->triangles_in;
+    *st = fresh;
+    int rc = cl_grow(adj, in->positions, normals, slab_limit, cos_limit, &p->c, err);
+    if (rc == 0 && sl_progress_interrupted(progress))
+        rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+    if (rc == 0)
+        rc = sl_segment_loops_build(adj, in->positions, p->c.of_triangle, p->c.count, &p->loops, err);
+    if (rc == 0)
+        rc = cl_borders_build(adj, &p->loops, &p->c, &p->b, err);
+    if (rc == 0) {
+        set_tolerances(&p->c, &p->b, in->tolerance);
+        st->forced_splits = cl_borders_straighten(&p->b, in->positions);
+        st->clusters = p->c.count;
+        st->corners = p->b.corners;
+        st->borders = p->b.count;
+        for (uint32_t k = 0; k < p->c.count; k++)
+            st->clusters_kept += p->c.kept[k] != 0;
+        if (cl_triangulation_init(&p->t, p->c.count))
+            rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "triangulation of %u clusters", p->c.count);
+    }
+    if (rc == 0)
+        rc = settle(&p->c, &p->b, in, &p->t, st, err);
+    return rc;
+}
+
+/* Halves the angle and slab limits of the triangles of clusters whose own polygon was
+ * refused (a projection that folds: a cluster reaching over a crease, or over two layers
+ * of a scan), when they hold at least 1/200 of the triangles (smaller ones are not worth
+ * clustering everything again: they keep their triangles); 0 when there are none such. */
+static int tighten(const cl_clusters *c, uint32_t triangles, double *angle, double *slab_limit,
+                   double *cos_limit)
+{
+    uint64_t refused = 0;
+    for (uint32_t k = 0; k < c->count; k++)
+        if (c->kept[k] == CL_KEPT_REFUSED)
+            refused += c->tri_start[k + 1] - c->tri_start[k];
+    if (refused == 0 || 200 * refused < triangles)
+        return 0;
+    for (uint32_t k = 0; k < c->count; k++) {
+        if (c->kept[k] != CL_KEPT_REFUSED)
+            continue;
+        for (uint32_t i = c->tri_start[k]; i < c->tri_start[k + 1]; i++) {
+            uint32_t t = c->tris[i];
+            angle[t] *= 0.5;
+            cos_limit[t] = cos(angle[t] * (M_PI / 180.0));
+            slab_limit[t] *= 0.5;
+        }
+    }
+    return 1;
+}
+
 int cl_pass_run(const cl_pass_input *in, cl_pass_output *out, sl_progress *progress,
                 sl_error *err)
 {
@@ -177,52 +251,38 @@ int cl_pass_run(const cl_pass_input *in, cl_pass_output *out, sl_progress *progr
     st->tolerance = in->tolerance;
     st->triangles_in = in->triangle_count;
     sl_mesh_adjacency adj;
-    sl_segment_loops loops;
-    cl_clusters c;
-    cl_borders b;
-    cl_triangulation t;
-    memset(&loops, 0, sizeof loops);
-    memset(&c, 0, sizeof c);
-    memset(&b, 0, sizeof b);
-    memset(&t, 0, sizeof t);
-    double *normals = NULL;
+    pass_try p;
+    memset(&p, 0, sizeof p);
     uint8_t *mark = NULL;
     int rc = sl_mesh_adjacency_build(in->triangles, in->triangle_count, in->vertex_count,
                                      in->positions, 0, &adj, err);
     if (rc)
         return rc;
-    normals = malloc(3 * (size_t)(in->triangle_count ? in->triangle_count : 1) * sizeof *normals);
-    if (!normals)
+    size_t n = in->triangle_count ? in->triangle_count : 1;
+    double *normals = malloc(3 * n * sizeof *normals), *angle = malloc(n * sizeof *angle);
+    double *cos_limit = malloc(n * sizeof *cos_limit), *slab_limit = malloc(n * sizeof *slab_limit);
+    if (!normals || !angle || !cos_limit || !slab_limit)
         rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "normals of %u triangles", in->triangle_count);
     if (rc == 0) {
         sl_face_normals(&adj, in->positions, normals);
-        rc = cl_grow(&adj, in->positions, normals, in->cfg->slab_share * in->tolerance,
-                     cos(in->cfg->max_angle * (M_PI / 180.0)), &c, err);
+        for (uint32_t t = 0; t < in->triangle_count; t++) {
+            angle[t] = in->cfg->max_angle;
+            cos_limit[t] = cos(angle[t] * (M_PI / 180.0));
+            slab_limit[t] = in->cfg->slab_share * in->tolerance;
+        }
     }
-    if (rc == 0 && sl_progress_interrupted(progress))
-        rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
-    if (rc == 0)
-        rc = sl_segment_loops_build(&adj, in->positions, c.of_triangle, c.count, &loops, err);
-    if (rc == 0)
-        rc = cl_borders_build(&adj, &loops, &c, &b, err);
-    if (rc == 0) {
-        set_tolerances(&c, &b, in->tolerance);
-        st->forced_splits = cl_borders_straighten(&b, in->positions);
-        st->clusters = c.count;
-        st->corners = b.corners;
-        st->borders = b.count;
-        for (uint32_t k = 0; k < c.count; k++)
-            st->clusters_kept += c.kept[k];
-        if (cl_triangulation_init(&t, c.count))
-            rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "triangulation of %u clusters", c.count);
+    for (int tries = 0; rc == 0; tries++) {
+        rc = run_try(in, &adj, normals, slab_limit, cos_limit, &p, st, progress, err);
+        st->regrowths = (uint32_t)tries;
+        if (rc || tries == 3 || !tighten(&p.c, in->triangle_count, angle, slab_limit, cos_limit))
+            break;
+        try_release(&p);
     }
-    if (rc == 0)
-        rc = settle(&c, &b, in, &t, st, err);
     if (rc == 0 && !(mark = malloc(in->vertex_count ? in->vertex_count : 1)))
         rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "vertex marks");
     if (rc == 0) {
-        pass_figures(&c, &b, in, &t, st, mark);
-        rc = assemble(&c, &t, out, err);
+        pass_figures(&p.c, &p.b, in, &p.t, st, mark);
+        rc = assemble(&p.c, &p.t, out, err);
         st->triangles_out = out->triangle_count;
     }
     if (rc == 0 && in->intermediates) {
@@ -231,7 +291,7 @@ int cl_pass_run(const cl_pass_input *in, cl_pass_output *out, sl_progress *progr
             rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "intermediate models");
         else {
             out->intermediate_count = in->intermediates;
-            cl_morph_input mi = {&c, &b, in->positions, in->vertex_count, &t,
+            cl_morph_input mi = {&p.c, &p.b, in->positions, in->vertex_count, &p.t,
                                  in->intermediates, in->base_bound, in->margin};
             rc = cl_morph(&mi, out->intermediates, progress, err);
         }
@@ -240,10 +300,10 @@ int cl_pass_run(const cl_pass_input *in, cl_pass_output *out, sl_progress *progr
         cl_pass_output_release(out);
     free(mark);
     free(normals);
-    cl_triangulation_release(&t, c.count);
-    cl_borders_release(&b);
-    cl_clusters_release(&c);
-    sl_segment_loops_release(&loops);
+    free(angle);
+    free(cos_limit);
+    free(slab_limit);
+    try_release(&p);
     sl_mesh_adjacency_release(&adj);
     return rc;
 }

@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "geometry/cdt.h"
+#include "geometry/predicates.h"
 #include "stages/cluster/cluster_internal.h"
 
 int cl_triangulation_init(cl_triangulation *t, uint32_t clusters)
@@ -131,6 +132,24 @@ static int triangulate_one(const cl_clusters *c, const cl_borders *b, const floa
     if (build_polygon(c, b, positions, keep, k, s)) {
         reset_local(s);
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "polygon of cluster %u", k);
+    }
+    if (s->loops == 1 && s->entries == 3 && s->points == 3) { /* a triangle: no search */
+        const double *uv = s->uv;
+        int ccw = sl_orient2d(uv, uv + 2, uv + 4) > 0;
+        uint32_t *tri = ccw ? malloc(3 * sizeof *tri) : NULL;
+        if (ccw && !tri) {
+            reset_local(s);
+            return sl_error_set(err, SL_E_NOMEM, 0, NULL, "triangles of cluster %u", k);
+        }
+        if (ccw) {
+            for (int i = 0; i < 3; i++)
+                tri[i] = s->global[s->loop_points[i]];
+            free(t->tri[k]);
+            t->tri[k] = tri;
+            t->count[k] = 1;
+        }
+        reset_local(s);
+        return !ccw;
     }
     sl_cdt_input in = {s->points, s->uv, s->loops, s->loop_start, s->loop_points};
     sl_cdt_result *res = NULL;
