@@ -177,8 +177,10 @@ extern const sl_stage sl_cluster_stage;
 
 /* One mesh of the level list: a level or an intermediate model. */
 typedef struct sl_cluster_list_mesh {
-    char name[40];            /* file stem: the export level's name; an intermediate's is
-                                 "LEVEL.morphJ" (J = 1..m, from the finer level) */
+    char name[32];            /* file stem: the export level's name; an intermediate's is
+                                 "LEVEL.morphJ" (J = 1..m, from the finer level; LEVEL cut
+                                 to 22 characters) */
+    char from[32];            /* the finer level it was simplified from ("" for the input) */
     int intermediate;         /* 1 for an intermediate model */
     int by_percent;           /* the level was asked as lod_percents (else a budget) */
     double percent;           /* by_percent: P */

@@ -25,4 +25,28 @@ int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_
 int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_mesh *input,
                      const sl_stage_io *io, sl_error *err);
 
+/* One level's line of the collection summary. */
+typedef struct level_row {
+    uint32_t k;
+    uint64_t triangles, vertices;
+    int watertight, measured, thumbnail;
+    double rms, hausdorff; /* fractions of the input's diagonal, when measured */
+} level_row;
+
+/* Writes lv->name.{ply,glb,obj,png} of `mesh`, as [export] formats and thumbnail_size ask. */
+int sl_export_write_files(const sl_export_config *c, const sl_export_level *lv,
+                          const sl_lod_mesh *mesh, const char *extras, const sl_stage_io *io,
+                          sl_error *err);
+
+/* Edge topology and (with `input`) fidelity of `mesh` into the open object r and *row. */
+int sl_export_measure_level(const sl_export_config *c, const sl_mesh *input,
+                            const sl_lod_mesh *mesh, const sl_stage_io *io, sl_json *r,
+                            level_row *row, sl_error *err);
+
+/* The levels of a level list (the cluster stage's, stages/cluster/cluster.h) instead of an
+ * LOD model: written, measured and reported like sl_export_levels (export_level_list.c). */
+int sl_export_level_list(const sl_export_config *c, const char *cluster_dir,
+                         const char *range_dir, const sl_mesh *input, const sl_stage_io *io,
+                         sl_error *err);
+
 #endif

@@ -78,9 +78,9 @@ int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_
     return 0;
 }
 
-static int write_files(const sl_export_config *c, const sl_export_level *lv,
-                       const sl_lod_mesh *mesh, const char *extras, const sl_stage_io *io,
-                       sl_error *err)
+int sl_export_write_files(const sl_export_config *c, const sl_export_level *lv,
+                          const sl_lod_mesh *mesh, const char *extras, const sl_stage_io *io,
+                          sl_error *err)
 {
     static const char *const exts[4] = {"ply", "glb", "obj", "png"};
     const int wanted[4] = {c->write_ply, c->write_glb, c->write_obj, c->thumbnail_size > 0};
@@ -98,15 +98,7 @@ static int write_files(const sl_export_config *c, const sl_export_level *lv,
     return rc;
 }
 
-/* One level's line of the collection summary. */
-typedef struct level_row {
-    uint32_t k;
-    uint64_t triangles, vertices;
-    int watertight, measured, thumbnail;
-    double rms, hausdorff; /* fractions of the input's diagonal, when measured */
-} level_row;
-
-static int measure_level(const sl_export_config *c, const sl_mesh *input, const sl_lod_mesh *mesh,
+int sl_export_measure_level(const sl_export_config *c, const sl_mesh *input, const sl_lod_mesh *mesh,
                          const sl_stage_io *io, sl_json *r, level_row *row, sl_error *err)
 {
     sl_mesh view = sl_export_mesh_view(mesh);
@@ -246,9 +238,9 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
         row->triangles = mesh.triangle_count;
         row->vertices = mesh.vertex_count;
         row->thumbnail = mesh.triangle_count && c->thumbnail_size > 0;
-        rc = mesh.triangle_count ? write_files(c, lv, &mesh, extras, io, err) : 0;
+        rc = mesh.triangle_count ? sl_export_write_files(c, lv, &mesh, extras, io, err) : 0;
         if (rc == 0)
-            rc = measure_level(c, input, &mesh, io, r, row, err);
+            rc = sl_export_measure_level(c, input, &mesh, io, r, row, err);
         sl_json_object_end(r);
         sl_lod_mesh_release(&mesh);
     }

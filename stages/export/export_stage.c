@@ -74,9 +74,21 @@ sl_export_config sl_export_default_config(void)
     return c;
 }
 
-static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
+/* The input surface the levels are measured against, when [export] fidelity asks and
+ * the input has one: 1 with *input filled, else 0. The range stage already validated the
+ * input; a point cloud has nothing to compare surfaces with. */
+static int read_input(const sl_export_config *c, const sl_stage_io *io, sl_mesh *input)
 {
-    const sl_export_config *c = config;
+    sl_error ierr;
+    sl_error_init(&ierr);
+    return c->fidelity && sl_ply_read(io->source_path, NULL, input, NULL, NULL, &ierr) == 0 &&
+           input->triangle_count && sl_mesh_check_surface(input, NULL, &ierr) == 0;
+}
+
+/* The octree path: the LOD model is published and its levels cut. */
+static int export_model(const sl_export_config *c, const sl_mesh *input, const sl_stage_io *io,
+                        sl_error *err)
+{
     char model_path[PATH_MAX], published[PATH_MAX];
     sl_lod_model model;
     int rc = sl_stage_path(model_path, io->in_dir, SL_MODEL_FILE, err);
@@ -86,23 +98,24 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
         rc = sl_lod_model_read(model_path, &model, err);
     if (rc)
         return rc;
-    sl_mesh input;
-    sl_mesh_init(&input);
-    int measure = c->fidelity;
-    if (measure) {
-        sl_error ierr;
-        sl_error_init(&ierr);
-        /* The range stage already validated the input; a point cloud has nothing to
-         * compare surfaces with. */
-        if (sl_ply_read(io->source_path, NULL, &input, NULL, NULL, &ierr) != 0 ||
-            input.triangle_count == 0 || sl_mesh_check_surface(&input, NULL, &ierr) != 0)
-            measure = 0;
-    }
     rc = sl_link_or_copy(model_path, published, err);
     if (rc == 0)
-        rc = sl_export_levels(c, &model, measure ? &input : NULL, io, err);
-    sl_mesh_release(&input);
+        rc = sl_export_levels(c, &model, input, io, err);
     sl_lod_model_release(&model);
+    return rc;
+}
+
+static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
+{
+    const sl_export_config *c = config;
+    sl_mesh input;
+    sl_mesh_init(&input);
+    int measure = read_input(c, io, &input);
+    const char *cluster_dir = sl_stage_dir(io, "cluster"); /* [lod] method = cluster */
+    int rc = cluster_dir ? sl_export_level_list(c, cluster_dir, sl_stage_dir(io, "range"),
+                                                measure ? &input : NULL, io, err)
+                         : export_model(c, measure ? &input : NULL, io, err);
+    sl_mesh_release(&input);
     return rc;
 }
 
