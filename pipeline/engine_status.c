@@ -123,12 +123,8 @@ int sl_engine_status(sl_engine *e, FILE *out, sl_error *err)
             if (sl_queue_list(e->work, e->stages[s]->name, listed[l], &names, &count, err))
                 return err->code;
             for (int i = 0; i < count; i++) {
-                char path[PATH_MAX];
                 sl_ticket t;
-                sl_error terr;
-                sl_error_init(&terr);
-                sl_queue_path(path, sizeof path, e->work, e->stages[s]->name, listed[l], names[i]);
-                if (sl_ticket_read(path, &t, &terr) != 0)
+                if (sl_queue_get(e->work, e->stages[s]->name, listed[l], names[i], &t) != 0)
                     continue;
                 if (listed[l] == SL_STATE_CLAIMED)
                     fprintf(out, "%s %s: claimed by %s pid %ld%s%s, lease epoch %llu\n",

@@ -2,7 +2,8 @@
  * models (stages/cluster/cluster.h, levels.sllev) written, measured and reported like the
  * octree's levels. Normals and colours come from the range stage's points (each level
  * vertex names the point it is, or was moved from): the input's shading on every level.
- * Thumbnails are rendered for the levels, not for the intermediate models. */
+ * Thumbnails are rendered for the levels, not for the intermediate models; atlases are
+ * baked for both when the input is textured. */
 #include <errno.h>
 #include <limits.h>
 #include <stdio.h>
@@ -106,10 +107,11 @@ static int write_summary(const sl_cluster_list *list, const level_row *rows, int
     return rc;
 }
 
-/* Writes, measures and reports list mesh i. */
+/* Writes, measures and reports one list mesh. */
 static int one_mesh(const sl_export_config *c, const sl_cluster_list_mesh *m,
-                    const sl_pointset *ps, const sl_mesh *input, const sl_stage_io *io,
-                    level_row *row, sl_error *err)
+                    const sl_pointset *ps, const sl_mesh *input, const sl_export_frame *frame,
+                    const sl_export_texture *texture, const sl_stage_io *io, level_row *row,
+                    sl_error *err)
 {
     sl_lod_mesh mesh;
     if (view_of(m, ps, &mesh)) {
@@ -130,12 +132,8 @@ static int one_mesh(const sl_export_config *c, const sl_cluster_list_mesh *m,
     sl_json *r = io->report;
     sl_json_object_begin(r, NULL);
     report_mesh(m, r);
-    row->triangles = m->triangle_count;
-    row->vertices = m->vertex_count;
-    row->thumbnail = m->triangle_count && files.thumbnail_size > 0;
-    int rc = m->triangle_count ? sl_export_write_files(&files, &lv, &mesh, extras, io, err) : 0;
-    if (rc == 0)
-        rc = sl_export_measure_level(c, input, &mesh, io, r, row, err);
+    int rc = sl_export_write_level(&files, &lv, &mesh, extras, m->bound, input, frame, texture,
+                                   io, row, err);
     if (rc == 0 && row->measured) /* the proven bound, checked by the measure (whose own
                                      closest points round at 1e-16 of the diagonal) */
         sl_json_bool(r, "bound_holds", row->hausdorff <= m->bound_fraction + 1e-12);
@@ -146,8 +144,9 @@ static int one_mesh(const sl_export_config *c, const sl_cluster_list_mesh *m,
 }
 
 int sl_export_level_list(const sl_export_config *c, const char *cluster_dir,
-                         const char *range_dir, const sl_mesh *input, const sl_stage_io *io,
-                         sl_error *err)
+                         const char *range_dir, const sl_mesh *input,
+                         const sl_export_frame *frame, const sl_export_texture *texture,
+                         const sl_stage_io *io, sl_error *err)
 {
     char list_path[PATH_MAX], points_path[PATH_MAX];
     if (!range_dir)
@@ -183,7 +182,7 @@ int sl_export_level_list(const sl_export_config *c, const char *cluster_dir,
         for (uint32_t i = 0; i < list.count && rc == 0; i++) {
             rc = sl_stage_step(io, "export", (double)i / list.count, err);
             if (rc == 0)
-                rc = one_mesh(c, &list.meshes[i], &ps, input, io, &rows[i], err);
+                rc = one_mesh(c, &list.meshes[i], &ps, input, frame, texture, io, &rows[i], err);
         }
         sl_json_array_end(r);
     }
