@@ -201,12 +201,11 @@ static void push_neighbours(grower *g, uint32_t t, const double *frame, double m
         if (g->of_triangle[f] != CL_NONE || g->stamp[f] == g->attempt)
             continue;
         g->stamp[f] = g->attempt;
-        double h[3], key = 0.0;
+        double key = 0.0;
         for (int i = 0; i < 3; i++) {
-            double uv[2];
-            cl_project(frame, g->positions + 3 * (uint64_t)g->adj->triangles[3 * (uint64_t)f + i],
-                       uv, &h[i]);
-            double d = fabs(h[i] - mid);
+            double d = fabs(cl_height(frame, g->positions +
+                                                 3 * (uint64_t)g->adj->triangles[3 * (uint64_t)f + i]) -
+                            mid);
             key = d > key ? d : key;
         }
         heap_push(g->heap, &g->heap_size, (heap_entry){key, g->seq++, f});

@@ -46,6 +46,13 @@ static inline void cl_project(const double *frame, const float *p, double uv[2],
         *height = d[0] * frame[0] + d[1] * frame[1] + d[2] * frame[2];
 }
 
+/* The height n . (p - o) alone. */
+static inline double cl_height(const double *frame, const float *p)
+{
+    return ((double)p[0] - frame[9]) * frame[0] + ((double)p[1] - frame[10]) * frame[1] +
+           ((double)p[2] - frame[11]) * frame[2];
+}
+
 enum cl_border_flags {
     CL_BORDER_CLOSED = 1u << 0,   /* starts and ends at the same vertex (one or no corner) */
     CL_BORDER_FROZEN = 1u << 1,   /* never straightened (a kept cluster's, an input edge) */

@@ -30,6 +30,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry/predicates.h"
 #include "stages/cluster/cluster_internal.h"
 
 void cl_intermediate_release(sl_cluster_intermediate *m)
@@ -329,17 +330,73 @@ static int copy_destination(const morph *mo, uint32_t k, cl_triangulation *t)
     return 0;
 }
 
-/* Triangulates intermediate j into t; refused clusters make their borders fall back. */
-static int intermediate(morph *mo, uint32_t j, cl_triangulation *t, uint8_t *dirty,
-                        uint8_t *failed, sl_error *err)
+/* A hash of cluster k's polygon's vertex sequence in the current state. */
+static uint64_t polygon_signature(const morph *mo, uint32_t k)
+{
+    const cl_borders *b = mo->in->borders;
+    uint64_t h = 0x9e3779b97f4a7c15ull;
+    for (uint32_t l = b->cluster_loop[k]; l < b->cluster_loop[k + 1]; l++) {
+        h = (h ^ 0xffffffffull) * 0x100000001b3ull;
+        for (uint32_t p = b->loop_piece[l]; p < b->loop_piece[l + 1]; p++) {
+            uint32_t br = b->pieces[p] >> 1, rev = b->pieces[p] & 1u;
+            uint32_t first = b->start[br], last = b->start[br + 1] - 1;
+            for (uint32_t i = 0; i < last - first; i++) {
+                uint32_t e = rev ? last - i : first + i;
+                if (mo->keep[e])
+                    h = (h ^ b->verts[e]) * 0x100000001b3ull;
+            }
+        }
+    }
+    return h;
+}
+
+/* Cluster k keeps the previous intermediate's triangles when its polygon has the same
+ * vertices and every triangle is still strictly counter-clockwise at the moved positions
+ * (a set of such triangles bounded by the polygon covers each point as often as the polygon
+ * winds around it, all the proof of the bound needs; docs/clustering.md). 1 when reused. */
+static int reuse_previous(const morph *mo, uint32_t k, const cl_triangulation *prev,
+                          cl_triangulation *t)
+{
+    uint32_t n = prev->count[k];
+    if (!n || !prev->tri[k])
+        return 0;
+    const double *frame = mo->in->clusters->frame + 12 * (uint64_t)k;
+    for (uint32_t i = 0; i < n; i++) {
+        double uv[3][2];
+        for (int c = 0; c < 3; c++)
+            cl_project(frame, mo->pos + 3 * (uint64_t)prev->tri[k][3 * i + c], uv[c], NULL);
+        if (sl_orient2d(uv[0], uv[1], uv[2]) <= 0)
+            return 0;
+    }
+    uint32_t *tri = malloc(3 * (size_t)n * sizeof *tri);
+    if (!tri)
+        return 0;
+    memcpy(tri, prev->tri[k], 3 * (size_t)n * sizeof *tri);
+    free(t->tri[k]);
+    t->tri[k] = tri;
+    t->count[k] = n;
+    return 1;
+}
+
+/* Triangulates intermediate j into t (prev: intermediate j - 1's, with the polygon
+ * signatures sig); refused clusters make their borders fall back. */
+static int intermediate(morph *mo, uint32_t j, cl_triangulation *t, const cl_triangulation *prev,
+                        uint64_t *sig, uint8_t *dirty, uint8_t *failed, sl_error *err)
 {
     const cl_clusters *c = mo->in->clusters;
     const cl_borders *b = mo->in->borders;
     double tj = (double)j / (mo->in->m + 1);
+    state_of(mo, j, tj);
     for (uint32_t k = 0; k < c->count; k++) { /* a cluster whose borders never move: M''s */
-        dirty[k] = mo->moves[k];
+        dirty[k] = mo->moves[k] && !c->kept[k];
         if (!mo->moves[k] && !c->kept[k] && copy_destination(mo, k, t))
             return sl_error_set(err, SL_E_NOMEM, 0, NULL, "intermediate %u", j);
+        if (dirty[k]) {
+            uint64_t now = polygon_signature(mo, k);
+            if (j > 1 && now == sig[k] && reuse_previous(mo, k, prev, t))
+                dirty[k] = 0;
+            sig[k] = now;
+        }
     }
     for (int round = 0;; round++) {
         state_of(mo, j, tj);
@@ -366,6 +423,7 @@ static int intermediate(morph *mo, uint32_t j, cl_triangulation *t, uint8_t *dir
                 }
             if (!changed && copy_destination(mo, k, t)) /* M''s own polygon */
                 return sl_error_set(err, SL_E_NOMEM, 0, NULL, "intermediate %u", j);
+            sig[k] = 0; /* its state changed: no reuse next time */
             any = 1;
         }
         if (!any)
@@ -404,6 +462,11 @@ int cl_morph(const cl_morph_input *in, sl_cluster_intermediate *out, sl_progress
                     mo.moves[b->right[br]] = 1;
                 break;
             }
+    cl_triangulation prev;
+    memset(&prev, 0, sizeof prev);
+    uint64_t *sig = calloc(nc ? nc : 1, sizeof *sig);
+    if (rc == 0 && (cl_triangulation_init(&prev, nc) || !sig))
+        rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "intermediate models");
     for (uint32_t j = 1; j <= in->m && rc == 0; j++) {
         if (sl_progress_interrupted(progress)) {
             rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
@@ -414,14 +477,17 @@ int cl_morph(const cl_morph_input *in, sl_cluster_intermediate *out, sl_progress
             rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "intermediate %u", j);
             break;
         }
-        rc = intermediate(&mo, j, &t, dirty, failed, err);
+        rc = intermediate(&mo, j, &t, &prev, sig, dirty, failed, err);
         if (rc == 0) {
             state_of(&mo, j, (double)j / (in->m + 1)); /* the final state's positions */
             if (assemble(&mo, &t, j, (double)j / (in->m + 1), &out[j - 1]))
                 rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "intermediate %u", j);
         }
-        cl_triangulation_release(&t, nc);
+        cl_triangulation_release(&prev, nc);
+        prev = t;
     }
+    cl_triangulation_release(&prev, nc);
+    free(sig);
     if (rc)
         for (uint32_t j = 0; j < in->m; j++)
             cl_intermediate_release(&out[j]);
