@@ -174,12 +174,15 @@ void sl_export_resolve_frame(const sl_export_config *c, const sl_mesh *input,
 static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
 {
     const sl_export_config *c = config;
+    /* [lod] method = cluster: the cluster stage's level list instead of an LOD model. */
+    const char *cluster_dir = sl_stage_dir(io, "cluster");
     char model_path[PATH_MAX], published[PATH_MAX];
     sl_lod_model model;
-    int rc = sl_stage_path(model_path, io->in_dir, SL_MODEL_FILE, err);
-    if (rc == 0)
+    sl_lod_model_init(&model);
+    int rc = cluster_dir ? 0 : sl_stage_path(model_path, io->in_dir, SL_MODEL_FILE, err);
+    if (rc == 0 && !cluster_dir)
         rc = sl_stage_path(published, io->out_dir, SL_MODEL_FILE, err);
-    if (rc == 0)
+    if (rc == 0 && !cluster_dir)
         rc = sl_lod_model_read(model_path, &model, err);
     if (rc)
         return rc;
@@ -225,10 +228,16 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
         }
         sl_json_object_end(io->report);
     }
-    rc = sl_link_or_copy(model_path, published, err);
-    if (rc == 0)
-        rc = sl_export_levels(c, &model, measure ? &input : NULL, &frame,
-                              texture.input ? &texture : NULL, io, err);
+    if (cluster_dir) {
+        rc = sl_export_level_list(c, cluster_dir, sl_stage_dir(io, "range"),
+                                  measure ? &input : NULL, &frame,
+                                  texture.input ? &texture : NULL, io, err);
+    } else {
+        rc = sl_link_or_copy(model_path, published, err);
+        if (rc == 0)
+            rc = sl_export_levels(c, &model, measure ? &input : NULL, &frame,
+                                  texture.input ? &texture : NULL, io, err);
+    }
     sl_export_texture_close(&texture);
     sl_mesh_release(&input);
     sl_lod_model_release(&model);
