@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # [export] morph = true (docs/morphing.md) on the octree method's levels of the bundled
-# bunny (lod30, lod60, lod100), for every GLB encoding (none float, none quantised,
+# bunny (lod30, lod60, lod100) for every GLB encoding (none float, none quantised, meshopt,
+# draco), and on the cluster method's levels of the cow (thumb, lod40, lod100; float,
 # meshopt, draco):
-#   - lod100 morphs to lod60, lod60 to lod30, the coarsest (lod30) has no target;
+#   - each level morphs to the next coarser one (the report says so), the coarsest level
+#     and the cluster method's intermediate models have no target (the same file as with
+#     morph = false);
 #   - every GLB passes the Khronos validator with 0 errors;
 #   - weight 1 lies on the coarser level: each vertex of the GLB decoded by the tests' own
 #     reader with the target at weight 1 is within 1e-5 of the diagonal of lod30's / lod60's
@@ -30,41 +33,25 @@ run_mode() { # run_mode NAME compression quantize morph
 }
 ratio_of() { sed -n 's/.* ratio \([^ ]*\)$/\1/p' <<<"$1"; }
 within() { python3 -c "import sys; sys.exit(0 if '$1' and float('$1') <= float('$2') else 1)"; }
-for mode in float:none:false quantized:none:true meshopt:meshopt:true draco:draco:true; do
-  IFS=: read -r name comp quant <<<"$mode"
-  run_mode "$name" "$comp" "$quant" true
-  run_mode "$name-plain" "$comp" "$quant" false
-  dir="$TMP/out-$name/$item"
-  targets=$(python3 -c "
-import json, struct
-for n in ('lod100', 'lod60', 'lod30'):
-    d = open('$dir/' + n + '.glb', 'rb').read(); k = struct.unpack('<I', d[12:16])[0]
-    print(n, len(json.loads(d[20:20 + k])['meshes'][0]['primitives'][0].get('targets', [])))" | tr '\n' ' ')
-  check "$name: lod100 and lod60 have one target, lod30 none ($targets)" [ "$targets" = "lod100 1 lod60 1 lod30 0 " ]
-  morph_to=$(grep -o '"morph_to": *"[a-z0-9]*"' "$dir/report.json" | tr -d ' "' | tr '\n' ' ')
-  check "$name: the report says lod60 and lod100 morph to lod30 and lod60 ($morph_to)" \
-    [ "$morph_to" = "morph_to:lod30 morph_to:lod60 " ]
+# check_levels NAME ITEM "FINE:COARSER ..." COARSEST: the checks above on one run's levels.
+check_levels() {
+  local name=$1 item=$2 pairs=$3 coarsest=$4
+  local dir="$TMP/out-$name/$item" plain="$TMP/out-$name-plain/$item" pair fine coarse
+  local glbs; glbs=$(ls "$dir"/*.glb | wc -l)
   set +e
   node "$gltf/validate.mjs" "$dir"/*.glb >"$TMP/$name.jsonl" 2>&1
   vrc=$?
   set -e
-  check "$name: validator 0 errors on every GLB ($(head -c 300 "$TMP/$name.jsonl"))" \
-    [ "$vrc" -eq 0 -a "$(grep -c '"numErrors":0,' "$TMP/$name.jsonl")" -eq 3 ]
-  for pair in lod100:lod60 lod60:lod30; do
+  check "$name: validator 0 errors on every GLB ($glbs; $(head -c 300 "$TMP/$name.jsonl"))" \
+    [ "$vrc" -eq 0 -a "$(grep -c '"numErrors":0,' "$TMP/$name.jsonl")" -eq "$glbs" ]
+  for pair in $pairs; do
     IFS=: read -r fine coarse <<<"$pair"
+    check "$name $fine: the report says it morphs to $coarse" python3 -c "
+import json, sys; r = json.load(open('$dir/report.json'))
+sys.exit(0 if any(l['name'] == '$fine' and l.get('morph_to') == '$coarse' for l in r['stages']['export']['levels']) else 1)"
     bound=$(python3 -c "
 import json; r = json.load(open('$dir/report.json'))
-def find(o):
-    if isinstance(o, dict):
-        if o.get('name') == '$fine' and 'glb' in o: return o['glb']
-        for v in o.values():
-            f = find(v)
-            if f: return f
-    if isinstance(o, list):
-        for v in o:
-            f = find(v)
-            if f: return f
-print(find(r)['quantization_bound_world'])")
+print([l for l in r['stages']['export']['levels'] if l['name'] == '$fine'][0]['glb']['quantization_bound_world'])")
     out1=$("$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 1 2>&1) || true
     out0=$("$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 0 2>&1) || true
     outh=$("$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 0.5 2>&1) || true
@@ -73,13 +60,38 @@ import re; m = re.search(r'diagonal (\S+)', '''$out1''')
 print((1e-5 * float(m.group(1)) + $bound) / float(m.group(1)) if m else -1)")
     check "$name $fine: weight 1 on $coarse ($out1; limit $limit of the diagonal)" within "$(ratio_of "$out1")" "$limit"
     r0=$(ratio_of "$out0") rh=$(ratio_of "$outh")
-    check "$name $fine: weight 0 is off $coarse ($(ratio_of "$out0")), 0.5 half way ($(ratio_of "$outh"))" \
+    check "$name $fine: weight 0 is off $coarse ($r0), 0.5 half way ($rh)" \
       python3 -c "import sys; a, h = ${r0:-0}, ${rh:-0}; sys.exit(0 if a > 1e-3 and 0.3 * a < h < 0.7 * a else 1)"
-    n=$(python3 "$views" "$TMP/out-$name-plain/$item/$fine.glb" "$dir/$fine.glb") && same=0 || same=1
+    n=$(python3 "$views" "$plain/$fine.glb" "$dir/$fine.glb") && same=0 || same=1
     check "$name $fine: weight 0 is the level byte for byte ($n views)" [ "$same" -eq 0 ]
   done
-  n=$(python3 "$views" "$TMP/out-$name-plain/$item/lod30.glb" "$dir/lod30.glb") && same=0 || same=1
-  check "$name lod30: the coarsest level is written as without morph" cmp -s "$TMP/out-$name-plain/$item/lod30.glb" "$dir/lod30.glb"
+  check "$name $coarsest: the coarsest level has no target, written as without morph" \
+    cmp -s "$plain/$coarsest.glb" "$dir/$coarsest.glb"
+}
+for mode in float:none:false quantized:none:true meshopt:meshopt:true draco:draco:true; do
+  IFS=: read -r name comp quant <<<"$mode"
+  run_mode "$name" "$comp" "$quant" true
+  run_mode "$name-plain" "$comp" "$quant" false
+  check_levels "$name" "$item" "lod100:lod60 lod60:lod30" lod30
+done
+# The cluster method's levels (its stage's level list): cow, lod100 > lod40 > thumb, with
+# the paper's intermediate models beside them (their own morph: no target).
+mkdir -p "$TMP/in-cluster"
+cp "$SCANS/cow.ply" "$TMP/in-cluster/"
+for mode in cluster-float:none:false cluster-meshopt:meshopt:true cluster-draco:draco:true; do
+  IFS=: read -r name comp quant <<<"$mode"
+  for morph in true false; do
+    suffix=$([ "$morph" = true ] && echo "" || echo "-plain")
+    write_config "$TMP/$name$suffix.ini" "$TMP/in-cluster" "$TMP/work-$name$suffix" "$TMP/out-$name$suffix" \
+      "[cluster]" "intermediates = 1" "[export]" "lod_percents = 40,100" "budgets = thumb:1000" \
+      "formats = ply,glb" "thumbnail_size = 0" "fidelity = false" "compression = $comp" \
+      "quantize = $quant" "morph = $morph"
+    run_scanlod run "$TMP/$name$suffix.ini" -q -s lod.method=cluster
+    check "$name$suffix: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
+  done
+  check_levels "$name" cow.ply "lod100:lod40 lod40:thumb" thumb
+  check "$name: an intermediate model has no target" \
+    cmp -s "$TMP/out-$name-plain/cow.ply/lod40.morph1.glb" "$TMP/out-$name/cow.ply/lod40.morph1.glb"
 done
 
 # scanlod extract --morph-to on the published model.
