@@ -85,12 +85,22 @@ static int segment_parse(void *opts, int argc, char **argv, int *i)
                   : !strcmp(arg, "--delta-b") ? &c->delta_b
                   : !strcmp(arg, "--alpha") ? &c->alpha
                   : !strcmp(arg, "--max-deviation") ? &c->max_normal_deviation
+                  : !strcmp(arg, "--merge-ratio") ? &c->merge_ratio
                                                     : NULL;
     if (dst) {
         if (*i + 1 >= argc || parse_double(argv[++*i], dst)) {
             fprintf(stderr, "scanlod simplify: %s needs a number\n", arg);
             return -1;
         }
+        return 1;
+    }
+    if (!strcmp(arg, "--search-samples")) {
+        double v;
+        if (*i + 1 >= argc || parse_double(argv[++*i], &v) || v < 0 || v > 1e9 || v != floor(v)) {
+            fprintf(stderr, "scanlod simplify: --search-samples needs a whole number >= 0\n");
+            return -1;
+        }
+        c->search_samples = (uint64_t)v;
         return 1;
     }
     if (!strcmp(arg, "--segments")) {
@@ -136,6 +146,8 @@ static void segment_figures(sl_json *j, const sl_segment_stats *s)
     sl_json_u64(j, "repairs", s->repairs);
     sl_json_u64(j, "search_passes", s->search_passes);
     sl_json_double(j, "max_error", s->max_error);
+    sl_json_double(j, "estimated_rms", s->estimate);
+    sl_json_bool(j, "over_budget", s->over_budget);
     sl_json_u64(j, "nonmanifold_edges_kept", s->nonmanifold_edges_kept);
     sl_json_i64(j, "euler_characteristic", s->euler_characteristic);
     sl_json_bool(j, "watertight", s->watertight);
@@ -180,13 +192,16 @@ static int segment_run(void *opts, const simplify_job *job, simplify_output *out
 static simplify_method methods[] = {
     {"segment",
      "  segment (paper 3; docs/segmentation.md):\n"
-     "    --delta-seg D      largest angle between two triangles of a segment, degrees (30)\n"
+     "    --delta-seg D      largest angle between two triangles of a segment, degrees (20)\n"
      "    --segments K       instead: the smallest delta-seg giving at most K segments\n"
      "    --delta-b D        boundary vertices within D degrees of straight may go (60)\n"
      "    --rule R           interior vertices: error (far from the new patch stay; the\n"
      "                       default), near (near the plane go), paper (equation 8 as printed)\n"
      "    --alpha A          equation 8's control parameter, rules near and paper (-1.5)\n"
-     "    --max-deviation D  a new triangle's normal within D degrees of the input's (90)\n",
+     "    --max-deviation D  a new triangle's normal within D degrees of the input's (90)\n"
+     "    --merge-ratio R    budgets: merge segments down to budget / R (25; 0: never)\n"
+     "    --search-samples N budgets: samples of the RMS the search minimises (50000; 0:\n"
+     "                       estimate it from the removed vertices, faster)\n",
      segment_parse, &segment_opts, segment_run, NULL},
 };
 

@@ -40,7 +40,7 @@ enum sl_segment_rule {
 
 typedef struct sl_segment_config {
     double delta_seg;          /* eq. 1: the largest angle between two triangles of a
-                                  segment, degrees, (0, 89]; default 30 */
+                                  segment, degrees, (0, 89]; default 20 */
     uint32_t target_segments;  /* > 0: Min-delta, the smallest delta_seg giving at most this
                                   many segments (delta_seg is then ignored); default 0 */
     double delta_b;            /* eq. 2: a two-segment boundary vertex may go when its
@@ -52,8 +52,15 @@ typedef struct sl_segment_config {
                                   the new surface, as a fraction of the bounding-box
                                   diagonal (also bounds boundary trimming); default 0.001 */
     double max_normal_deviation; /* degrees: a new triangle whose normal is farther than this
-                                  from the input normal at one of its corners is refused
-                                  (a vertex is put back, or the segment kept); default 90 */
+                                  from the mean input normal at its corners is refused (a
+                                  vertex is put back, or the segment kept); default 90 */
+    double merge_ratio;        /* budgets: segments are merged down to budget / merge_ratio
+                                  (segment_merge.c; 0: never); default 25 */
+    double merge_angle;        /* merging keeps every triangle of a segment within this many
+                                  degrees of its mean normal, (0, 89]; default 80 */
+    uint64_t search_samples;   /* budgets: area samples per surface of the RMS the search of
+                                  the trimming bound minimises (0: an estimate from the removed
+                                  vertices' distances, faster, less faithful); default 50000 */
 } sl_segment_config;
 
 sl_segment_config sl_segment_default_config(void);
@@ -95,6 +102,10 @@ typedef struct sl_segment_stats {
     uint32_t repairs;             /* rounds of the whole-mesh check that kept segments */
     uint32_t search_passes;       /* passes run to reach the target */
     double max_error;             /* the bound used, fraction of the diagonal */
+    double tau;                   /* rule error: the score threshold used, world^2 */
+    double estimate;              /* RMS distance of the removed vertices to the level,
+                                     over all input vertices, fraction of the diagonal */
+    int over_budget;              /* the segments' boundaries alone exceed the budget */
     double diagonal;              /* of the input's bounding box, world */
     uint64_t nonmanifold_edges_kept; /* input edges in 3+ triangles, kept as they were */
     int64_t euler_characteristic; /* of the level (equal to the input's) */

@@ -69,10 +69,11 @@ int seg_model_relabel(const sl_segment_model *base, uint32_t *labels, uint32_t c
 
 /* segment_merge.c: merges adjacent segments of `m`, the cheapest first (see there), until
  * at most `target` remain or no merge keeps every normal of a segment within max_angle
- * degrees of its mean. OUT: *labels (malloc'd, per triangle), *count. Returns 0 or
+ * degrees of its mean; only segments with allowed[k] (NULL: all) take part. OUT: *labels
+ * (malloc'd, per triangle, renumbered by first triangle), *count. Returns 0 or
  * SL_E_NOMEM. */
-int seg_merge(const sl_segment_model *m, uint32_t target, double max_angle, uint32_t **labels,
-              uint32_t *count, sl_error *err);
+int seg_merge(const sl_segment_model *m, uint32_t target, double max_angle,
+              const uint8_t *allowed, uint32_t **labels, uint32_t *count, sl_error *err);
 
 /* segment_trim.c: kept[v] = 1 for every two-segment vertex a pass keeps, given which
  * segments may be trimmed (trimmable[k]) and each chain's level (0: max_error, 1 and 2:
@@ -87,11 +88,17 @@ typedef struct seg_trim_params {
 void seg_trim_chains(const sl_segment_model *m, const seg_trim_params *p,
                      const uint8_t *trimmable, const uint8_t *chain_level, uint8_t *kept);
 
+/* The sum of squared distances of the chain vertices `kept` leaves out to the chords
+ * that replace them (world^2). */
+double seg_chain_residual(const sl_segment_model *m, const uint8_t *kept);
+
 /* segment_patch.c */
 typedef struct seg_patch_params {
     int rule;                 /* enum sl_segment_rule */
     double alpha;
-    double max_error;         /* world units */
+    double max_error;         /* world units: the flips' bound (rule error) */
+    double tau;               /* rule error: insert while a triangle's score exceeds it (world^2) */
+    int record;               /* rule error: record the insertions' scores */
     double cos_max_deviation; /* cos of max_normal_deviation */
 } seg_patch_params;
 
@@ -110,6 +117,11 @@ typedef struct seg_patch_result {
     uint32_t interior;         /* interior vertices of the segment */
     uint32_t problem[4];       /* SEG_PATCH_REFUSED: the global vertices the triangulation
                                   named (crossing edges, a folded triangle), or SEG_NONE */
+    uint32_t base_triangles;   /* rule error: triangles before any insertion */
+    double residual;           /* rule error: sum of squared distances of the removed
+                                  interior vertices to their triangles (world^2) */
+    double *record;            /* rule error with record: each insertion's score (owned) */
+    uint32_t record_count;
 } seg_patch_result;
 
 /* Per-thread scratch for seg_patch_run. */
@@ -122,27 +134,40 @@ void seg_scratch_free(seg_scratch *s);
 void seg_patch_run(const sl_segment_model *m, uint32_t k, const uint8_t *kept,
                    const seg_patch_params *p, seg_scratch *s, seg_patch_result *out);
 
-/* segment_flip.c: data-dependent edge flips of one patch's triangulation. */
-typedef struct seg_flip_input {
-    const double *uv;           /* per point: 2, the projection */
-    const double *pos;          /* per point: 3, world (any common origin) */
-    const double *h;            /* per point: height along the projection direction */
-    const double *point_normal; /* per point: 3, input normal; NULL: no check */
+/* segment_refine.c: greedy insertion with data-dependent flips (see there). Slots are
+ * the patch's vertex indices; positions relative to the segment's frame origin. */
+typedef struct seg_refine seg_refine;
+typedef struct seg_refine_input {
+    const double *uv, *pos, *h, *normal; /* per slot: 2, 3, 1, 3 (input normal) */
     double cos_max_deviation;
-    double max_error;           /* a flip keeps every vertex within max(this, its distance before) */
-    uint32_t loop_count;        /* the constrained edges: loops over point ids */
-    const uint32_t *loop_start, *loop_points;
-    uint32_t cand_count;        /* removed vertices under the triangles */
-    const double *cand_uv, *cand_pos;
-    const uint32_t *cand_tri;   /* the triangle each lies in, or SEG_NONE */
-} seg_flip_input;
-/* Flips `triangles` (point ids, counter-clockwise) in place. Returns 0, -1 out of memory. */
-int seg_flip_optimize(const seg_flip_input *in, uint32_t *triangles, uint32_t triangle_count,
-                      uint64_t *flips);
+    double flip_height;        /* a flip moves the surface by at most this (world) */
+    uint32_t slot_count;
+    uint32_t triangle_count;   /* the initial triangulation, in slots, counter-clockwise */
+    const uint32_t *triangles;
+    uint32_t candidate_count;  /* the removed vertices (slots) and the triangle each is in */
+    const uint32_t *candidates, *candidate_tri;
+} seg_refine_input;
+seg_refine *seg_refine_new(void);
+void seg_refine_free(seg_refine *r);
+int seg_refine_start(seg_refine *r, const seg_refine_input *in); /* 0, -1 out of memory */
+/* Inserts until the worst score is at most tau. record (may be NULL, room for every
+ * candidate): the score of each insertion's triangle, in order. inserted (may be NULL):
+ * the slots put back. Returns 0 or -1. */
+int seg_refine_run(seg_refine *r, double tau, double *record, uint32_t *record_count,
+                   uint32_t *inserted, uint32_t *inserted_count);
+uint32_t seg_refine_triangles(const seg_refine *r, const uint32_t **triangles);
+double seg_refine_residual(const seg_refine *r); /* sum of the triangles' scores */
+/* Consistency (for the tests): triangles not counter-clockwise, twins that do not match,
+ * vertices outside the triangle that holds them. 0 when all is well. */
+uint64_t seg_refine_check(const seg_refine *r);
+/* A triangle failing the normal check (no vertex was left to fix it): its corners. */
+int seg_refine_turned(const seg_refine *r, uint32_t corners[3]);
 
 /* segment_pass.c: one pass over the whole mesh with these parameters, checked and
- * repaired (see there). OUT: *level (stats filled but for search_passes, max_error). */
+ * repaired (see there). With a budget (rule error), patch->tau is where the insertions
+ * are first recorded down to, and the pass picks the tau that fits the budget.
+ * OUT: *level (stats filled but for search_passes, max_error). */
 int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_patch_params *patch,
-                 sl_segment_level *level, sl_progress *progress, sl_error *err);
+                 uint64_t budget, sl_segment_level *level, sl_progress *progress, sl_error *err);
 
 #endif

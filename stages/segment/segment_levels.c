@@ -1,44 +1,51 @@
 /* Levels of the segment method: a triangle budget or an error bound (segment.h).
  *
  * The paper gives no way to ask for a size: its parameters (delta_b, alpha) change the
- * count only indirectly. With rule error the count falls monotonically (nearly: the
- * retriangulation is greedy) as max_error grows, roughly as 1 / max_error, so a budget is
- * met by a secant search on log(max_error) against log(count), bracketing the budget from
- * both sides, keeping the largest level within it; it stops within 3 % under the budget
- * or after SEARCH_PASSES passes. Every pass starts from the input (not from the previous
- * level), so levels are independent and any budget can be asked in any order.
+ * count only indirectly. With rule error a pass records, for every segment, the scores at
+ * which its greedy insertion puts vertices back; since a run to a threshold tau stops at
+ * the first score at or below it, those records give the level's exact triangle count for
+ * any tau, and the pass replays the insertion to the tau that fits the budget best
+ * (segment_pass.c). What the records cannot foresee is the boundary: trimming uses
+ * max_error, which should match the interior's sqrt(tau) (a removed boundary vertex and
+ * a removed interior vertex then cost alike), so the pass is repeated with the tau found
+ * until the two agree within 25 % (two or three passes). Every pass starts from the
+ * input, so levels are independent and can be asked in any order.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry/mesh_distance.h"
 #include "stages/segment/segment_internal.h"
 
-#define SEARCH_PASSES 12
-#define SEARCH_CLOSE 0.97 /* stop once a level holds this fraction of the budget */
+#define LADDER_STEPS 6 /* trimming bounds tried: the first that fits x 2^(k/2) */
 #define ERROR_MIN 1e-7
-#define ERROR_MAX 0.5
+#define RECORD_BELOW 16.0 /* a pass records insertions down to max_error / this */
 
-static void params_for(const sl_segment_model *m, const sl_segment_config *cfg, double error,
-                       seg_trim_params *t, seg_patch_params *p)
+/* Parameters for a pass at max_error `error` (world units). */
+static void params_for(const sl_segment_config *cfg, double error, seg_trim_params *t,
+                       seg_patch_params *p)
 {
     t->paper = cfg->rule != SL_SEGMENT_RULE_ERROR;
     t->delta_b = cfg->delta_b;
-    t->max_error = error * m->diagonal * (getenv("SEG_TRIM") ? atof(getenv("SEG_TRIM")) : 1.0);
+    t->max_error = error;
     p->rule = cfg->rule;
     p->alpha = cfg->alpha;
-    p->max_error = error * m->diagonal;
+    p->max_error = error;
+    p->tau = error * error;
+    p->record = 0;
     p->cos_max_deviation = cos(cfg->max_normal_deviation * (M_PI / 180.0));
 }
 
+/* One pass at max_error `error` (world units), no budget. */
 static int pass_at(sl_segment_model *m, const sl_segment_config *cfg, double error,
                    sl_segment_level *lv, sl_progress *progress, sl_error *err)
 {
     seg_trim_params t;
     seg_patch_params p;
-    params_for(m, cfg, error, &t, &p);
-    int rc = seg_run_pass(m, &t, &p, lv, progress, err);
-    lv->stats.max_error = error;
+    params_for(cfg, error, &t, &p);
+    int rc = seg_run_pass(m, &t, &p, 0, lv, progress, err);
+    lv->stats.max_error = error / m->diagonal;
     return rc;
 }
 
@@ -47,7 +54,7 @@ static int copy_input(sl_segment_model *m, const sl_segment_config *cfg, sl_segm
                       sl_progress *progress, sl_error *err)
 {
     /* a pass with the smallest bound keeps the stats consistent; its triangles are replaced */
-    int rc = pass_at(m, cfg, ERROR_MIN, lv, progress, err);
+    int rc = pass_at(m, cfg, ERROR_MIN * m->diagonal, lv, progress, err);
     if (rc)
         return rc;
     uint32_t *t = malloc(3 * (size_t)m->triangle_count * sizeof *t);
@@ -63,148 +70,231 @@ static int copy_input(sl_segment_model *m, const sl_segment_config *cfg, sl_segm
     return SL_OK;
 }
 
+/* The symmetric RMS distance between the input and the level, as a fraction of the
+ * diagonal, by the project's own fidelity measure (geometry/mesh_distance.h) with fewer
+ * samples and another seed than the benchmark's. */
+static double level_rms(const sl_segment_model *m, const sl_segment_level *lv, uint64_t samples,
+                        sl_error *err, int *rc)
+{
+    sl_mesh a, b;
+    sl_mesh_init(&a);
+    sl_mesh_init(&b);
+    a.vertex_count = b.vertex_count = m->vertex_count;
+    a.positions = b.positions = (float *)m->positions;
+    a.triangle_count = m->triangle_count;
+    a.triangles = (uint32_t *)m->triangles;
+    b.triangle_count = lv->triangle_count;
+    b.triangles = lv->triangles;
+    sl_mesh_distance_config dc = sl_mesh_distance_default_config();
+    dc.samples = samples;
+    dc.seed = 7;
+    sl_mesh_distance d;
+    *rc = sl_mesh_distance_compute(&a, &b, &dc, &d, NULL, err);
+    return *rc ? INFINITY : d.fraction.rms;
+}
+
+/* One pass for a budget with boundary trimming bound `chain` (world): its level and the
+ * estimate to minimise (infinite when it does not fit). */
+static double budget_pass(sl_segment_model *m, const sl_segment_config *cfg, double chain,
+                          uint64_t budget, sl_segment_level *lv, sl_progress *progress,
+                          sl_error *err, int *rc)
+{
+    seg_trim_params t;
+    seg_patch_params p;
+    params_for(cfg, chain, &t, &p);
+    p.tau = (chain / RECORD_BELOW) * (chain / RECORD_BELOW);
+    *rc = seg_run_pass(m, &t, &p, budget, lv, progress, err);
+    if (*rc)
+        return INFINITY;
+    lv->stats.max_error = (lv->stats.tau > 0 && isfinite(lv->stats.tau) ? sqrt(lv->stats.tau) : 0) /
+                          m->diagonal;
+    int fits = !lv->stats.over_budget && lv->triangle_count <= budget;
+    if (fits && cfg->search_samples) { /* the objective: the fidelity the project reports */
+        double rms = level_rms(m, lv, cfg->search_samples, err, rc);
+        if (*rc)
+            return INFINITY;
+        lv->stats.estimate = rms;
+    }
+    return fits ? lv->stats.estimate : INFINITY;
+}
+
+/* A budget: the trimming bound with the smallest RMS (each pass picks the interior's
+ * threshold that fits the budget): from the smallest bound whose boundaries fit, up by
+ * factors of sqrt(2) while the RMS improves. */
 static int search_budget(sl_segment_model *m, const sl_segment_config *cfg, uint64_t budget,
                          sl_segment_level *out, sl_progress *progress, sl_error *err)
 {
-    double lo = 0, hi = 0, error = cfg->max_error; /* lo: too many triangles, hi: within */
-    uint64_t n_lo = 0, n_hi = 0;
+    double guess = m->diagonal / (8.0 * sqrt((double)budget));
     sl_segment_level best;
     memset(&best, 0, sizeof best);
-    int have_best = 0, passes = 0, rc = SL_OK;
-    sl_segment_level smallest; /* if no level fits: the smallest seen */
-    memset(&smallest, 0, sizeof smallest);
-    while (passes < SEARCH_PASSES) {
+    double best_f = INFINITY;
+    int rc = SL_OK, passes = 0;
+    /* first a bound whose boundaries fit the budget: doubled until they do */
+    for (; passes < 12 && !rc; passes++) {
         sl_segment_level lv;
-        rc = pass_at(m, cfg, error, &lv, progress, err);
+        double f = budget_pass(m, cfg, guess, budget, &lv, progress, err, &rc);
         if (rc)
             break;
-        passes++;
-        uint64_t n = lv.triangle_count;
-        if (n <= budget) {
-            if (!have_best || n > best.triangle_count) {
+        sl_segment_level_release(&best);
+        best = lv;
+        best_f = f;
+        if (isfinite(f) || guess >= m->diagonal)
+            break;
+        guess *= 2;
+    }
+    /* then a ladder by factors of sqrt(2), up while the RMS improves, and, when the first
+     * step up was no better, down while it improves and the boundaries still fit */
+    double at = guess, step = sqrt(2.0);
+    for (int dir = 0; dir < 2 && !rc && isfinite(best_f); dir++) {
+        double factor = dir ? 1 / step : step, x = at;
+        for (int k = 0; k < LADDER_STEPS && !rc; k++, passes++) {
+            x *= factor;
+            sl_segment_level lv;
+            double f = budget_pass(m, cfg, x, budget, &lv, progress, err, &rc);
+            if (rc)
+                break;
+            int better = f < best_f;
+            if (better) {
                 sl_segment_level_release(&best);
                 best = lv;
-                have_best = 1;
+                best_f = f;
+                at = x;
             } else {
                 sl_segment_level_release(&lv);
             }
-            if (hi == 0 || error < hi) {
-                hi = error;
-                n_hi = n;
-            }
-        } else {
-            if (!smallest.triangles || n < smallest.triangle_count) {
-                sl_segment_level_release(&smallest);
-                smallest = lv;
-            } else {
-                sl_segment_level_release(&lv);
-            }
-            if (error > lo) {
-                lo = error;
-                n_lo = n;
-            }
-        }
-        if (have_best && best.triangle_count >= SEARCH_CLOSE * budget)
-            break;
-        if (sl_progress_step(progress, "segment", 0.5)) {
-            rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "segment method interrupted");
-            break;
-        }
-        double goal = log((1 + SEARCH_CLOSE) / 2 * budget), next;
-        if (lo > 0 && hi > 0) { /* secant in log-log between the brackets */
-            double x0 = log(lo), x1 = log(hi), y0 = log((double)n_lo), y1 = log((double)(n_hi ? n_hi : 1));
-            next = y0 != y1 ? exp(x0 + (goal - y0) * (x1 - x0) / (y1 - y0)) : sqrt(lo * hi);
-            if (!(next > lo && next < hi)) /* keep strictly inside the bracket */
-                next = sqrt(lo * hi);
-        } else if (lo > 0) { /* still too many: count ~ 1 / error, overshoot a little */
-            if (lo >= ERROR_MAX)
-                break; /* the coarsest level the method reaches */
-            next = fmin(ERROR_MAX, lo * pow((double)n_lo / exp(goal), 1.2));
-            next = fmax(next, lo * 1.05);
-        } else {
-            if (hi <= ERROR_MIN)
+            if (sl_progress_step(progress, "segment", 0.5))
+                rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "segment method interrupted");
+            if (!better)
                 break;
-            next = fmax(ERROR_MIN, hi * pow((double)(n_hi ? n_hi : 1) / exp(goal), 1.0));
-            next = fmin(next, hi / 1.05);
         }
-        error = next;
+        if (dir == 0 && at != guess)
+            break; /* going up helped: the minimum is not below */
     }
     if (rc) {
         sl_segment_level_release(&best);
-        sl_segment_level_release(&smallest);
         return rc;
     }
-    if (have_best) {
-        sl_segment_level_release(&smallest);
-        *out = best;
-    } else {
-        *out = smallest; /* the budget is below what the method reaches */
-    }
+    *out = best;
     out->stats.search_passes = (uint32_t)passes;
     return SL_OK;
 }
 
-/* The model of `m` with its segments merged down to `target` (segment_merge.c). A
- * merged segment that cannot be retriangulated (its union is not a disc with holes, or
- * folds) is split back into the segments it was made of. */
-static int merged_model(sl_segment_model *m, uint32_t target, sl_segment_model **out,
-                        sl_error *err)
+/* Is merged segment k one the retriangulation cannot take (not a disc with holes, or
+ * not one-to-one in its plane)? */
+static int unfit_union(const sl_segment_model *m, uint32_t k)
 {
-    uint32_t *labels, count;
-    double angle = getenv("SEG_MERGE_ANGLE") ? atof(getenv("SEG_MERGE_ANGLE")) : 80;
-    int rc = seg_merge(m, target, angle, &labels, &count, err);
-    uint32_t *keep = rc ? NULL : malloc(((size_t)count + 1) * sizeof *keep);
-    if (!rc && !keep) {
+    return m->unfit[k] == SEG_UNFIT_TOPOLOGY || m->unfit[k] == SEG_UNFIT_FOLD ||
+           m->unfit[k] == SEG_UNFIT_OVERLAP || m->unfit[k] == SEG_UNFIT_NO_OUTER;
+}
+
+/* Triangle labels from one label per base segment (first-appearance order). */
+static uint32_t *labels_of(const sl_segment_model *m, const uint32_t *group, uint32_t *count)
+{
+    uint32_t ns = m->seg.segment_count, top = 0;
+    for (uint32_t k = 0; k < ns; k++)
+        top = group[k] > top ? group[k] : top;
+    uint32_t *map = malloc(((size_t)top + 1) * sizeof *map);
+    uint32_t *labels = malloc((size_t)(m->triangle_count ? m->triangle_count : 1) * sizeof *labels);
+    if (!map || !labels) {
+        free(map);
         free(labels);
-        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "merging segments");
+        return NULL;
     }
-    if (!rc) {
-        uint32_t *copy = malloc((size_t)m->triangle_count * sizeof *copy);
-        if (!copy)
-            rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "merging segments");
-        else
-            memcpy(copy, labels, (size_t)m->triangle_count * sizeof *copy);
-        if (!rc)
-            rc = seg_model_relabel(m, copy, count, out, err);
-    }
-    if (rc) {
-        free(labels);
-        free(keep);
-        return rc;
-    }
-    uint32_t split = 0;
-    for (uint32_t k = 0; k < count; k++) {
-        int bad = (*out)->unfit[k] == SEG_UNFIT_TOPOLOGY || (*out)->unfit[k] == SEG_UNFIT_FOLD ||
-                  (*out)->unfit[k] == SEG_UNFIT_OVERLAP ||
-                  (*out)->unfit[k] == SEG_UNFIT_NO_OUTER;
-        keep[k] = bad ? SEG_NONE : k;
-        split += bad;
-    }
-    if (!split) {
-        free(labels);
-        free(keep);
-        return SL_OK;
-    }
-    /* the unfit unions: their triangles go back to their segments of equation 1 */
-    uint32_t *map = malloc(((size_t)count + m->seg.segment_count) * sizeof *map);
-    if (!map) {
-        free(labels);
-        free(keep);
-        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "merging segments");
-    }
-    memset(map, 0xff, ((size_t)count + m->seg.segment_count) * sizeof *map);
+    memset(map, 0xff, ((size_t)top + 1) * sizeof *map);
     uint32_t next = 0;
     for (uint32_t t = 0; t < m->triangle_count; t++) {
-        uint32_t key = keep[labels[t]] != SEG_NONE ? labels[t] : count + m->seg.segment[t];
-        if (map[key] == SEG_NONE)
-            map[key] = next++;
-        labels[t] = map[key];
+        uint32_t g = group[m->seg.segment[t]];
+        if (map[g] == SEG_NONE)
+            map[g] = next++;
+        labels[t] = map[g];
     }
     free(map);
-    free(keep);
-    sl_segment_model_free(*out);
+    *count = next;
+    return labels;
+}
+
+/* The model of `m` with its segments merged down to `target` (segment_merge.c). A union
+ * the retriangulation cannot take (its loops overlap in its plane, it is not a disc with
+ * holes) is merged again from its pieces with a smaller angle (20 degrees less, twice),
+ * the unions that work staying as they are; what still fails keeps its pieces. */
+static int merged_model(sl_segment_model *m, const sl_segment_config *cfg, uint32_t target,
+                        sl_segment_model **out, sl_error *err)
+{
     *out = NULL;
-    return seg_model_relabel(m, labels, next, out, err);
+    uint32_t ns = m->seg.segment_count;
+    uint32_t *group = malloc(((size_t)ns + 1) * sizeof *group); /* base segment -> union */
+    uint8_t *allowed = malloc(ns ? ns : 1);
+    if (!group || !allowed) {
+        free(group);
+        free(allowed);
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "merging segments");
+    }
+    for (uint32_t k = 0; k < ns; k++) {
+        group[k] = k; /* unmerged: its own */
+        allowed[k] = 1;
+    }
+    uint32_t next_group = ns; /* union ids above the base ids */
+    int rc = SL_OK;
+    for (int round = 0; round < 3 && !rc; round++) {
+        double angle = cfg->merge_angle - 20.0 * round;
+        uint64_t free_triangles = 0;
+        for (uint32_t k = 0; k < ns; k++)
+            if (allowed[k])
+                free_triangles += m->seg_tri_start[k + 1] - m->seg_tri_start[k];
+        if (angle < 10 || !free_triangles)
+            break;
+        uint32_t part = (uint32_t)fmax(1, (double)target * (double)free_triangles / m->triangle_count);
+        uint32_t *lab, count;
+        rc = seg_merge(m, part, angle, allowed, &lab, &count, err);
+        if (rc)
+            break;
+        uint32_t *trial = malloc(((size_t)ns + 1) * sizeof *trial);
+        if (!trial) {
+            free(lab);
+            rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "merging segments");
+            break;
+        }
+        for (uint32_t k = 0; k < ns; k++) /* a union takes whole base segments */
+            trial[k] = allowed[k] ? next_group + lab[m->seg_tris[m->seg_tri_start[k]]] : group[k];
+        free(lab);
+        uint32_t n;
+        uint32_t *labels = labels_of(m, trial, &n);
+        sl_segment_model *mm = NULL;
+        rc = labels ? seg_model_relabel(m, labels, n, &mm, err)
+                    : sl_error_set(err, SL_E_NOMEM, 0, NULL, "merging segments");
+        if (rc) {
+            free(trial);
+            break;
+        }
+        int failed = 0;
+        for (uint32_t k = 0; k < ns; k++) {
+            if (!allowed[k])
+                continue;
+            uint32_t merged = mm->seg.segment[m->seg_tris[m->seg_tri_start[k]]];
+            if (unfit_union(mm, merged)) {
+                failed = 1; /* stays allowed: merged again next round */
+            } else {
+                group[k] = trial[k];
+                allowed[k] = 0;
+            }
+        }
+        next_group += count;
+        free(trial);
+        if (!failed) {
+            *out = mm;
+            break;
+        }
+        sl_segment_model_free(mm);
+    }
+    if (!rc && !*out) { /* what still fails keeps its own pieces */
+        uint32_t n;
+        uint32_t *labels = labels_of(m, group, &n);
+        rc = labels ? seg_model_relabel(m, labels, n, out, err)
+                    : sl_error_set(err, SL_E_NOMEM, 0, NULL, "merging segments");
+    }
+    free(group);
+    free(allowed);
+    return rc;
 }
 
 int sl_segment_model_level(sl_segment_model *m, const sl_segment_config *cfg,
@@ -227,12 +317,11 @@ int sl_segment_model_level(sl_segment_model *m, const sl_segment_config *cfg,
                                 "take no size: give their alpha instead)");
         if (budget >= m->triangle_count)
             return copy_input(m, cfg, out, progress, err);
-        double ratio = getenv("SEG_MERGE_RATIO") ? atof(getenv("SEG_MERGE_RATIO")) : 12;
-        uint32_t target_segments = (uint32_t)fmax(1, budget / ratio);
-        if (ratio <= 0 || m->seg.segment_count <= target_segments)
+        uint32_t target_segments = (uint32_t)fmax(1, budget / fmax(cfg->merge_ratio, 1));
+        if (cfg->merge_ratio <= 0 || m->seg.segment_count <= target_segments)
             return search_budget(m, cfg, budget, out, progress, err);
         sl_segment_model *merged = NULL;
-        rc = merged_model(m, target_segments, &merged, err);
+        rc = merged_model(m, cfg, target_segments, &merged, err);
         if (!rc)
             rc = search_budget(merged, cfg, budget, out, progress, err);
         sl_segment_model_free(merged);
@@ -242,7 +331,7 @@ int sl_segment_model_level(sl_segment_model *m, const sl_segment_config *cfg,
     if (!(error > 0 && error <= 1))
         return sl_error_set(err, SL_E_USAGE, 0, NULL,
                             "max_error %g is outside (0, 1] (a fraction of the diagonal)", error);
-    rc = pass_at(m, cfg, error, out, progress, err);
+    rc = pass_at(m, cfg, error * m->diagonal, out, progress, err);
     out->stats.search_passes = 1;
     return rc;
 }

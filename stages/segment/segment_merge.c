@@ -165,7 +165,8 @@ static void remove_neighbour(mseg *s, uint32_t c)
 }
 
 /* Per segment: normal sum, extreme normals, neighbours. */
-static int init_segments(const sl_segment_model *m, mseg *segs, double *normals)
+static int init_segments(const sl_segment_model *m, const uint8_t *allowed, mseg *segs,
+                         double *normals)
 {
     uint32_t ns = m->seg.segment_count;
     sl_face_normals(&m->adj, m->positions, normals);
@@ -205,7 +206,8 @@ static int init_segments(const sl_segment_model *m, mseg *segs, double *normals)
                     memcpy(buf + 3 * (size_t)n++, fn, 3 * sizeof *buf);
             }
             double len = norm3(s->N);
-            s->mergeable = len > 0 && n == e - b && m->unfit[k] != SEG_UNFIT_NO_NORMAL;
+            s->mergeable = len > 0 && n == e - b && m->unfit[k] != SEG_UNFIT_NO_NORMAL &&
+                           (!allowed || allowed[k]);
             if (!s->mergeable)
                 continue;
             double mean[3] = {s->N[0] / len, s->N[1] / len, s->N[2] / len};
@@ -281,8 +283,8 @@ static int merge_into(mseg *segs, uint32_t a, uint32_t b, sl_normal_hull *h)
     return 0;
 }
 
-int seg_merge(const sl_segment_model *m, uint32_t target, double max_angle, uint32_t **labels,
-              uint32_t *count, sl_error *err)
+int seg_merge(const sl_segment_model *m, uint32_t target, double max_angle,
+              const uint8_t *allowed, uint32_t **labels, uint32_t *count, sl_error *err)
 {
     uint32_t ns = m->seg.segment_count;
     *labels = NULL;
@@ -300,7 +302,7 @@ int seg_merge(const sl_segment_model *m, uint32_t target, double max_angle, uint
         segs[k].parent = k;
     }
     if (!rc)
-        rc = init_segments(m, segs, normals);
+        rc = init_segments(m, allowed, segs, normals);
     double cos_max = cos(max_angle * (M_PI / 180.0));
     for (uint32_t a = 0; !rc && a < ns; a++)
         if (segs[a].mergeable)

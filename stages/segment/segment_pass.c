@@ -19,7 +19,6 @@
  * whole rounds; the level is assembled in segment order.
  */
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,13 +30,16 @@ sl_segment_config sl_segment_default_config(void)
 {
     sl_segment_config c;
     memset(&c, 0, sizeof c);
-    c.delta_seg = 30.0;
+    c.delta_seg = 20.0;
     c.target_segments = 0;
     c.delta_b = 60.0;
     c.rule = SL_SEGMENT_RULE_ERROR;
     c.alpha = -1.5;
     c.max_error = 0.001;
     c.max_normal_deviation = 90.0;
+    c.merge_ratio = 25.0;
+    c.merge_angle = 80.0;
+    c.search_samples = 50000;
     return c;
 }
 
@@ -61,6 +63,12 @@ int sl_segment_check_config(const sl_segment_config *c, sl_error *err)
         return sl_error_set(err, SL_E_USAGE, 0, NULL,
                             "max_normal_deviation %g is outside (0, 180] degrees",
                             c->max_normal_deviation);
+    if (!(c->merge_ratio >= 0 && isfinite(c->merge_ratio)))
+        return sl_error_set(err, SL_E_USAGE, 0, NULL, "merge_ratio %g must be >= 0",
+                            c->merge_ratio);
+    if (!(c->merge_angle > 0 && c->merge_angle <= SL_REGION_GROW_MAX_DELTA))
+        return sl_error_set(err, SL_E_USAGE, 0, NULL, "merge_angle %g is outside (0, %g] degrees",
+                            c->merge_angle, SL_REGION_GROW_MAX_DELTA);
     return SL_OK;
 }
 
@@ -83,13 +91,22 @@ typedef struct pass {
     uint64_t *signature;      /* per segment: of the kept flags its result was made with */
     seg_patch_result *result; /* per segment */
     uint32_t repairs;
+    double tau_used;          /* the threshold a budget picked */
+    int over_budget;          /* the bases alone exceed the budget */
 } pass;
+
+static void clear_result(seg_patch_result *r)
+{
+    free(r->triangles);
+    free(r->record);
+    memset(r, 0, sizeof *r);
+}
 
 static void pass_release(pass *p)
 {
     if (p->result)
         for (uint32_t k = 0; k < p->m->seg.segment_count; k++)
-            free(p->result[k].triangles);
+            clear_result(&p->result[k]);
     free(p->state);
     free(p->kept);
     free(p->trimmable);
@@ -172,17 +189,13 @@ static int64_t retriangulate(pass *p)
             uint64_t sig = loop_signature(m, p->kept, (uint32_t)k);
             if (p->result[k].triangles && p->signature[k] == sig)
                 continue;
-            free(p->result[k].triangles);
+            clear_result(&p->result[k]);
             seg_patch_run(m, (uint32_t)k, p->kept, &p->patch, s, &p->result[k]);
             p->signature[k] = sig;
             if (p->result[k].status == SEG_PATCH_NOMEM) {
 #pragma omp atomic write
                 nomem = 1;
             } else if (p->result[k].status != SEG_PATCH_OK) {
-                if (getenv("SEG_DEBUG"))
-                    fprintf(stderr, "segment %lld (%u triangles) state %d refused: %d\n", (long long)k,
-                            m->seg_tri_start[k + 1] - m->seg_tri_start[k], p->state[k],
-                            p->result[k].status);
                 free(p->result[k].triangles);
                 p->result[k].triangles = NULL;
                 refused++;
@@ -241,6 +254,12 @@ static int assemble(const pass *p, sl_segment_level *out, uint32_t **tri_segment
 }
 
 /* --- the whole-mesh check ------------------------------------------------------------ */
+
+static int cmp_double_desc(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? 1 : x > y ? -1 : 0;
+}
 
 static int cmp_u64(const void *a, const void *b)
 {
@@ -337,11 +356,6 @@ static int check_level(pass *p, sl_segment_level *lv, const uint32_t *ts, sl_err
     lv->stats.euler_characteristic = r->euler_characteristic;
     lv->stats.watertight = r->edges > 0 && r->boundary_edges == 0 && r->nonmanifold_edges == 0 &&
                            r->inconsistent_edges == 0;
-    if (getenv("SEG_DEBUG"))
-        fprintf(stderr, "check: bnd %llu nme %llu inc %llu nmv %llu deg %llu euler %lld\n",
-                (unsigned long long)r->boundary_edges, (unsigned long long)r->nonmanifold_edges,
-                (unsigned long long)r->inconsistent_edges, (unsigned long long)r->nonmanifold_vertices,
-                (unsigned long long)r->degenerate_triangles, (long long)r->euler_characteristic);
     if (same) {
         sl_mesh_adjacency_release(&a);
         return 0;
@@ -411,8 +425,57 @@ static void fill_stats(const pass *p, sl_segment_level *lv)
     s->repairs = p->repairs;
 }
 
+/* The threshold for a budget (rule error): the level's triangles at tau are the kept
+ * segments' plus, for each other one, its base triangulation and two per insertion whose
+ * running minimum of scores exceeds tau (the greedy run to tau stops at the first score
+ * at or below it). Returns the largest count's tau within the budget: >= 0; -1 when the
+ * records stop before it (record further), -2 when the bases alone exceed the budget,
+ * -3 out of memory. */
+static double pick_tau(const pass *p, uint64_t budget, double recorded_to)
+{
+    const sl_segment_model *m = p->m;
+    uint64_t base = 0, values = 0;
+    for (uint32_t k = 0; k < m->seg.segment_count; k++) {
+        if (p->state[k] == STATE_KEEP)
+            base += m->seg_tri_start[k + 1] - m->seg_tri_start[k];
+        else
+            base += p->result[k].base_triangles, values += p->result[k].record_count;
+    }
+    if (base > budget)
+        return -2;
+    uint64_t room = (budget - base) / 2; /* insertions the budget allows */
+    double *v = malloc((values ? values : 1) * sizeof *v);
+    if (!v)
+        return -3;
+    uint64_t n = 0;
+    for (uint32_t k = 0; k < m->seg.segment_count; k++) {
+        if (p->state[k] == STATE_KEEP)
+            continue;
+        double low = INFINITY;
+        for (uint32_t i = 0; i < p->result[k].record_count; i++) {
+            low = fmin(low, p->result[k].record[i]);
+            v[n++] = low;
+        }
+    }
+    double tau;
+    if (room >= n) {
+        tau = recorded_to > 0 ? -1 : 0; /* every vertex is back: the finest level fits */
+    } else {
+        qsort(v, n, sizeof *v, cmp_double_desc);
+        tau = v[room]; /* #{v > tau} <= room */
+    }
+    free(v);
+    return tau;
+}
+
+static void clear_all(pass *p)
+{
+    for (uint32_t k = 0; k < p->m->seg.segment_count; k++)
+        clear_result(&p->result[k]);
+}
+
 int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_patch_params *patch,
-                    sl_segment_level *lv, sl_progress *progress, sl_error *err)
+                 uint64_t budget, sl_segment_level *lv, sl_progress *progress, sl_error *err)
 {
     memset(lv, 0, sizeof *lv);
     pass p;
@@ -433,6 +496,13 @@ int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_pat
         rc = SL_E_NOMEM;
     for (uint32_t k = 0; !rc && k < ns; k++)
         p.state[k] = m->unfit[k] == SEG_FIT ? STATE_TRIM : STATE_KEEP;
+    /* budget: record the insertions down to tau_min, pick tau, then replay to it */
+    int search = budget > 0 && patch->rule == SL_SEGMENT_RULE_ERROR, replaying = 0;
+    double tau_min = patch->tau;
+    if (search) {
+        p.patch.record = 1;
+        p.patch.tau = tau_min;
+    }
     uint32_t *ts = NULL;
     while (!rc) {
         for (uint32_t k = 0; k < ns; k++)
@@ -443,8 +513,39 @@ int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_pat
             rc = SL_E_NOMEM;
         else if (sl_progress_interrupted(progress))
             rc = SL_E_INTERRUPTED;
-        if (rc || refused > 0)
+        if (rc)
+            break;
+        if (refused > 0) {
+            if (replaying) { /* the records no longer hold: record again */
+                replaying = 0;
+                p.patch.record = 1;
+                p.patch.tau = tau_min;
+                clear_all(&p);
+            }
             continue;
+        }
+        if (search && !replaying) {
+            double tau = pick_tau(&p, budget, tau_min);
+            if (tau == -3) {
+                rc = SL_E_NOMEM;
+                break;
+            }
+            if (tau == -1 && tau_min > 1e-300) { /* record further down */
+                tau_min = tau_min > 0 ? tau_min / 64 : 0;
+                p.patch.tau = tau_min;
+                clear_all(&p);
+                continue;
+            }
+            p.over_budget = tau == -2;
+            p.patch.tau = tau == -2 ? INFINITY : tau < 0 ? 0 : tau;
+            p.patch.record = 0;
+            if (p.patch.tau > 0 && isfinite(p.patch.tau))
+                p.patch.max_error = sqrt(p.patch.tau); /* the final flips' bound */
+            p.tau_used = p.patch.tau;
+            replaying = 1;
+            clear_all(&p);
+            continue;
+        }
         sl_segment_level_release(lv);
         free(ts);
         ts = NULL;
@@ -459,13 +560,28 @@ int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_pat
             rc = SL_E_NOMEM;
         else if (c == -2)
             rc = SL_E_INTERNAL;
-        else
+        else {
             p.repairs++;
+            if (search) { /* kept segments change the count: pick tau again */
+                replaying = 0;
+                p.patch.record = 1;
+                p.patch.tau = tau_min;
+                clear_all(&p);
+            }
+        }
     }
     free(ts);
-    if (!rc)
+    if (!rc) {
         fill_stats(&p, lv);
-    else {
+        double residual = seg_chain_residual(m, p.kept);
+        for (uint32_t k = 0; k < ns; k++)
+            if (p.state[k] != STATE_KEEP)
+                residual += p.result[k].residual;
+        lv->stats.estimate = m->used_vertices
+                                 ? sqrt(residual / (double)m->used_vertices) / m->diagonal : 0;
+        lv->stats.tau = p.tau_used;
+        lv->stats.over_budget = p.over_budget;
+    } else {
         sl_segment_level_release(lv);
         if (rc == SL_E_NOMEM)
             sl_error_set(err, SL_E_NOMEM, 0, NULL, "segment method: a pass over %u segments", ns);

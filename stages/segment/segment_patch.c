@@ -49,6 +49,8 @@ struct seg_scratch {
     uint32_t *best;   /* per triangle: worst candidate slot */
     double *tri_normal; /* per triangle: 3 */
     double *tri_sum;    /* per triangle: sum of squared distances of its candidates */
+    uint32_t *cand_tri; /* per candidate (in cands order): its triangle */
+    seg_refine *refine;
     uint8_t *bad;     /* per triangle: normal deviation too large */
 };
 
@@ -89,6 +91,8 @@ void seg_scratch_free(seg_scratch *s)
     free(s->best);
     free(s->tri_normal);
     free(s->tri_sum);
+    free(s->cand_tri);
+    seg_refine_free(s->refine);
     free(s->bad);
     free(s);
 }
@@ -106,6 +110,7 @@ static int reserve_slots(seg_scratch *s, uint32_t n)
         !GROW(s->normal, 3 * (size_t)cap) || !GROW(s->pos, 3 * (size_t)cap) ||
         !GROW(s->role, cap) || !GROW(s->cdt_index, cap) || !GROW(s->located_in, cap) ||
         !GROW(s->error, cap) || !GROW(s->cands, cap) || !GROW(s->cell_items, cap) ||
+        !GROW(s->cand_tri, cap) ||
         !GROW(s->point_slot, cap) || !GROW(s->points, 2 * (size_t)cap))
         return -1;
     s->cap = cap;
@@ -459,128 +464,68 @@ static void emit(patch *p, const sl_cdt_result *res, seg_patch_result *out)
     out->status = SEG_PATCH_OK;
 }
 
-/* Data-dependent flips of the final triangulation (segment_flip.c), with the removed
- * vertices located in it by the last round. Returns 0 or -1 (out of memory). */
-static int flip_patch(patch *p, sl_cdt_result *res, const seg_patch_params *prm)
-{
-    seg_scratch *s = p->s;
-    uint32_t np = 0, nc = 0;
-    for (uint32_t i = 0; i < p->slots; i++) {
-        np += s->cdt_index[i] != SEG_NONE;
-        nc += s->role[i] == ROLE_CANDIDATE && s->located_in[i] != SEG_NONE;
-    }
-    if (!nc || getenv("SEG_NOFLIP"))
-        return 0;
-    double *uv = malloc(2 * (size_t)np * sizeof *uv), *pos = malloc(3 * (size_t)np * sizeof *pos);
-    double *nrm = malloc(3 * (size_t)np * sizeof *nrm), *cuv = malloc(2 * (size_t)nc * sizeof *cuv);
-    double *hh = malloc((size_t)np * sizeof *hh);
-    double *cpos = malloc(3 * (size_t)nc * sizeof *cpos);
-    uint32_t *ctri = malloc((size_t)nc * sizeof *ctri);
-    int rc = -1;
-    if (uv && pos && nrm && cuv && cpos && ctri && hh) {
-        for (uint32_t i = 0; i < np; i++) {
-            uint32_t sl = s->point_slot[i];
-            memcpy(uv + 2 * (size_t)i, s->uv + 2 * (size_t)sl, 2 * sizeof *uv);
-            memcpy(pos + 3 * (size_t)i, s->pos + 3 * (size_t)sl, 3 * sizeof *pos);
-            memcpy(nrm + 3 * (size_t)i, s->normal + 3 * (size_t)sl, 3 * sizeof *nrm);
-            hh[i] = s->h[sl];
-        }
-        uint32_t c = 0;
-        for (uint32_t i = 0; i < p->slots; i++)
-            if (s->role[i] == ROLE_CANDIDATE && s->located_in[i] != SEG_NONE) {
-                memcpy(cuv + 2 * (size_t)c, s->uv + 2 * (size_t)i, 2 * sizeof *cuv);
-                memcpy(cpos + 3 * (size_t)c, s->pos + 3 * (size_t)i, 3 * sizeof *cpos);
-                ctri[c++] = s->located_in[i];
-            }
-        seg_flip_input in = {uv, pos, hh, nrm, prm->cos_max_deviation, prm->max_error, p->loop_count, s->loop_start,
-                             s->loop_points, nc, cuv, cpos, ctri};
-        uint64_t flips;
-        rc = seg_flip_optimize(&in, res->triangles, (uint32_t)res->triangle_count, &flips);
-    }
-    free(uv);
-    free(pos);
-    free(nrm);
-    free(cuv);
-    free(cpos);
-    free(ctri);
-    free(hh);
-    return rc;
-}
-
-/* Rule error: greedy insertion in rounds. */
+/* Rule error: the trimmed polygon's CDT, then greedy insertion (segment_refine.c). */
 static void run_error(patch *p, const seg_patch_params *prm, seg_patch_result *out)
 {
     seg_scratch *s = p->s;
     grid g;
     memset(&g, 0, sizeof g);
-    if (p->candidates && build_grid(p, &g)) {
+    sl_cdt_result *res = NULL;
+    int st = triangulate(p, p->loop_slots, &res);
+    if (st != SEG_PATCH_OK) {
+        out->status = st;
+        return;
+    }
+    uint32_t nt = (uint32_t)res->triangle_count;
+    out->base_triangles = nt;
+    if (reserve_triangles(s, nt) || (p->candidates && build_grid(p, &g))) {
+        sl_cdt_free(res);
         out->status = SEG_PATCH_NOMEM;
         return;
     }
-    uint32_t points = p->loop_slots;
-    for (;;) {
-        sl_cdt_result *res = NULL;
-        int st = triangulate(p, points, &res);
-        if (st != SEG_PATCH_OK) {
-            out->status = st;
-            return;
-        }
-        if (reserve_triangles(s, (uint32_t)res->triangle_count)) {
-            sl_cdt_free(res);
-            out->status = SEG_PATCH_NOMEM;
-            return;
-        }
-        uint32_t bad = measure_round(p, res, &g, prm->cos_max_deviation);
-        if (getenv("SEG_ROUNDFLIP") && p->candidates) { /* flip, then measure the flipped one */
-            if (flip_patch(p, res, prm)) {
-                sl_cdt_free(res);
-                out->status = SEG_PATCH_NOMEM;
-                return;
-            }
-            bad = measure_round(p, res, &g, prm->cos_max_deviation);
-        }
-        uint32_t added = 0, bad_left = 0;
-        double worst = 0, theta = getenv("SEG_THETA") ? atof(getenv("SEG_THETA")) : 0;
-        int l2 = getenv("SEG_L2") != NULL;
-#define SCORE(t) (l2 ? s->tri_sum[t] : s->error[s->best[t]] * s->error[s->best[t]])
-        for (uint32_t t = 0; t < res->triangle_count; t++)
-            if (s->best[t] != SEG_NONE && SCORE(t) > worst)
-                worst = SCORE(t);
-        double threshold = fmax(prm->max_error * prm->max_error, theta * worst);
-        for (uint32_t t = 0; t < res->triangle_count; t++) {
-            uint32_t c = s->best[t];
-            int want = c != SEG_NONE && (SCORE(t) > threshold || s->bad[t]);
-            if (s->bad[t] && c == SEG_NONE)
-                bad_left++;
-            if (!want)
-                continue;
-            s->role[c] = ROLE_INSERTED;
-            s->cdt_index[c] = points;
-            s->point_slot[points++] = c;
-            added++;
-        }
-        if (!added) {
-            if (bad_left || bad) { /* name the first turned triangle's corners */
-                for (uint32_t t = 0; t < res->triangle_count; t++)
-                    if (s->bad[t]) {
-                        for (int q = 0; q < 3; q++)
-                            p->problem[q] = s->vertex[s->point_slot[res->triangles[3 * (size_t)t + q]]];
-                        break;
-                    }
-                sl_cdt_free(res);
-                out->status = SEG_PATCH_TURNED;
-                return;
-            }
-            out->kept_interior = points - p->loop_slots;
-            if (flip_patch(p, res, prm))
-                out->status = SEG_PATCH_NOMEM;
-            else
-                emit(p, res, out);
-            sl_cdt_free(res);
-            return;
-        }
-        sl_cdt_free(res);
+    measure_round(p, res, &g, prm->cos_max_deviation); /* locates the candidates */
+    for (uint64_t i = 0; i < 3 * (uint64_t)nt; i++) /* CDT points -> slots */
+        res->triangles[i] = s->point_slot[res->triangles[i]];
+    for (uint32_t i = 0; i < p->candidates; i++) /* outside (cut off by a chord): dropped */
+        s->cand_tri[i] = s->located_in[s->cands[i]];
+    if (!s->refine)
+        s->refine = seg_refine_new();
+    seg_refine_input in = {s->uv, s->pos, s->h, s->normal, prm->cos_max_deviation,
+                           prm->max_error, p->slots, nt, res->triangles, p->candidates,
+                           s->cands, s->cand_tri};
+    int rc = s->refine ? seg_refine_start(s->refine, &in) : -1;
+    sl_cdt_free(res);
+    if (!rc && prm->record) {
+        out->record = malloc((p->candidates ? p->candidates : 1) * sizeof *out->record);
+        rc = out->record ? 0 : -1;
     }
+    uint32_t inserted = 0;
+    if (!rc)
+        rc = seg_refine_run(s->refine, prm->tau, out->record, &out->record_count, NULL, &inserted);
+    if (rc) {
+        out->status = SEG_PATCH_NOMEM;
+        return;
+    }
+    uint32_t corners[3];
+    if (seg_refine_turned(s->refine, corners)) {
+        for (int q = 0; q < 3; q++)
+            p->problem[q] = s->vertex[corners[q]];
+        out->status = SEG_PATCH_TURNED;
+        return;
+    }
+    const uint32_t *tri;
+    uint32_t count = seg_refine_triangles(s->refine, &tri);
+    out->triangles = malloc(3 * (size_t)(count ? count : 1) * sizeof *out->triangles);
+    if (!out->triangles) {
+        out->status = SEG_PATCH_NOMEM;
+        return;
+    }
+    for (uint64_t i = 0; i < 3 * (uint64_t)count; i++)
+        out->triangles[i] = s->vertex[tri[i]];
+    out->triangle_count = count;
+    out->kept_interior = inserted;
+    out->residual = seg_refine_residual(s->refine);
+    out->status = SEG_PATCH_OK;
 }
 
 /* Rules near and paper: equations 3-8 once, then one triangulation. */

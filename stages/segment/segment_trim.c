@@ -10,11 +10,12 @@
  *
  * Error mode (the levels): a chain between two fixed vertices is simplified like a
  * Douglas-Peucker polyline: a stretch a..b of the chain is replaced by the segment a-b
- * when every vertex between lies within max_error of it and passes equation 2 measured
- * against a and b (the vertices it is then between); otherwise it is split at its
- * farthest vertex (or, if all are near, at the one furthest from straight) and both
- * halves are tried again. So a removed vertex is both near the new boundary and on a
- * nearly straight stretch of it, whatever the spacing of the vertices.
+ * when the squared distances of the vertices between to it sum to at most max_error^2
+ * (a sum, like the interior's scores, segment_refine.c: what counts is the RMS) and each
+ * passes equation 2 measured against a and b (the vertices it is then between);
+ * otherwise it is split at its farthest vertex (or, if only the angles fail, at the one
+ * furthest from straight) and both halves are tried again. So a removed vertex is both
+ * near the new boundary and on a nearly straight stretch of it, whatever the spacing.
  *
  * Both sides of a chain see the same decision: a chain is trimmed once, and only when
  * both of its segments may be (a kept segment keeps its triangles, so its boundary must
@@ -22,7 +23,6 @@
  */
 #include <math.h>
 #include <stdlib.h>
-#include <stdio.h>
 
 #include "stages/segment/segment_internal.h"
 
@@ -71,18 +71,13 @@ static void trim_error(const sl_segment_model *m, const uint32_t *v, uint32_t n,
         if (b - a < 2)
             continue;
         const float *pa = m->positions + 3 * (uint64_t)v[a], *pb = m->positions + 3 * (uint64_t)v[b];
-        uint32_t far = SEG_NONE, bent = SEG_NONE, far_any = SEG_NONE;
-        double far_d = e2, bent_a = p->delta_b, sum = 0, far_any_d = -1;
-        int l2 = getenv("SEG_TRIML2") != NULL;
+        uint32_t far = SEG_NONE, bent = SEG_NONE;
+        double bent_a = p->delta_b, sum = 0, far_d = -1;
         for (uint32_t i = a + 1; i < b; i++) {
             double d2, angle;
             measure(pa, pb, m->positions + 3 * (uint64_t)v[i], &d2, &angle);
             sum += d2;
-            if (d2 > far_any_d) {
-                far_any_d = d2;
-                far_any = i;
-            }
-            if (!l2 && d2 > far_d) {
+            if (d2 > far_d) {
                 far_d = d2;
                 far = i;
             }
@@ -91,9 +86,7 @@ static void trim_error(const sl_segment_model *m, const uint32_t *v, uint32_t n,
                 bent = i;
             }
         }
-        if (l2 && sum > e2)
-            far = far_any;
-        uint32_t split = far != SEG_NONE ? far : bent;
+        uint32_t split = sum > e2 ? far : bent; /* too far in sum, or too bent */
         if (split == SEG_NONE)
             continue;
         kept[v[split]] = 1;
@@ -142,4 +135,40 @@ void seg_trim_chains(const sl_segment_model *m, const seg_trim_params *p,
         }
         free(stack);
     }
+}
+
+double seg_chain_residual(const sl_segment_model *m, const uint8_t *kept)
+{
+    int64_t nc = m->chain_count;
+    double total = 0;
+    /* per chain in parallel, summed in chain order (fixed blocks: deterministic) */
+    enum { BLOCK = 256 };
+    int64_t blocks = (nc + BLOCK - 1) / BLOCK;
+    double *sums = calloc(blocks ? (size_t)blocks : 1, sizeof *sums);
+    if (!sums)
+        return 0;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int64_t b = 0; b < blocks; b++) {
+        double sum = 0;
+        for (int64_t c = b * BLOCK; c < nc && c < (b + 1) * BLOCK; c++) {
+            const uint32_t *v = m->chain_vertices + m->chain_start[c];
+            uint32_t n = m->chain_start[c + 1] - m->chain_start[c], a = 0;
+            for (uint32_t i = 1; i < n; i++) {
+                if (i + 1 < n && !kept[v[i]])
+                    continue;
+                for (uint32_t j = a + 1; j < i; j++) { /* removed between kept a and i */
+                    double d2, angle;
+                    measure(m->positions + 3 * (uint64_t)v[a], m->positions + 3 * (uint64_t)v[i],
+                            m->positions + 3 * (uint64_t)v[j], &d2, &angle);
+                    sum += d2;
+                }
+                a = i;
+            }
+        }
+        sums[b] = sum;
+    }
+    for (int64_t b = 0; b < blocks; b++)
+        total += sums[b];
+    free(sums);
+    return total;
 }
