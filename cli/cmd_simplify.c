@@ -35,6 +35,7 @@ static double seconds_now(void)
 
 /* What every method gets: the cleaned mesh and the size asked for. */
 typedef struct simplify_job {
+    const char *input;   /* for messages */
     const sl_pointset *mesh;
     uint64_t triangles;  /* > 0: budget */
     double ratio;        /* > 0: budget as a fraction of the input */
@@ -86,6 +87,7 @@ static int segment_parse(void *opts, int argc, char **argv, int *i)
                   : !strcmp(arg, "--alpha") ? &c->alpha
                   : !strcmp(arg, "--max-deviation") ? &c->max_normal_deviation
                   : !strcmp(arg, "--merge-ratio") ? &c->merge_ratio
+                  : !strcmp(arg, "--merge-angle") ? &c->merge_angle
                                                     : NULL;
     if (dst) {
         if (*i + 1 >= argc || parse_double(argv[++*i], dst)) {
@@ -169,6 +171,16 @@ static int segment_run(void *opts, const simplify_job *job, simplify_output *out
     if (!rc)
         rc = sl_segment_model_level(model, cfg, &target, &level, progress, err);
     double t2 = seconds_now();
+    if (!rc && level.stats.nonmanifold_edges_kept)
+        fprintf(stderr,
+                "scanlod simplify: %s: %llu non-manifold edges (in three or more triangles) "
+                "kept as they are, with the segments around them\n",
+                job->input, (unsigned long long)level.stats.nonmanifold_edges_kept);
+    if (!rc && level.stats.over_budget)
+        fprintf(stderr,
+                "scanlod simplify: %s: the budget is below what the segments' corners need: "
+                "%llu triangles, the fewest the method reaches here\n",
+                job->input, (unsigned long long)level.triangle_count);
     if (!rc) {
         uint32_t count;
         const uint32_t *map = sl_segment_model_map(model, &count);
@@ -200,6 +212,8 @@ static simplify_method methods[] = {
      "    --alpha A          equation 8's control parameter, rules near and paper (-1.5)\n"
      "    --max-deviation D  a new triangle's normal within D degrees of the input's (90)\n"
      "    --merge-ratio R    budgets: merge segments down to budget / R (25; 0: never)\n"
+     "    --merge-angle A    merged segments keep their triangles within A degrees of\n"
+     "                       their mean normal, parts only merge that close (60)\n"
      "    --search-samples N budgets: samples of the RMS the search minimises (50000; 0:\n"
      "                       estimate it from the removed vertices, faster)\n",
      segment_parse, &segment_opts, segment_run, NULL},
@@ -480,6 +494,7 @@ int sl_cmd_simplify(int argc, char **argv)
     sl_json_init(&out.figures, 0);
     sl_json_object_begin(&out.figures, NULL);
     a.job.mesh = &ps;
+    a.job.input = a.input;
     t = seconds_now();
     if (ps.triangle_count == 0)
         rc = sl_error_set(&err, SL_E_BADINPUT, 0, a.input,

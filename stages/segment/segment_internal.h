@@ -48,6 +48,7 @@ struct sl_segment_model {
     seg_frame *frame;         /* per segment */
     uint8_t *unfit;           /* per segment: enum seg_unfit */
     uint8_t *fixed;           /* per vertex: never removed (corner, anchor, unused) */
+    double *vertex_normal;    /* per vertex: 3, the input's unit area-weighted normal */
     uint32_t *chain_start;    /* chain_count + 1, into chain_vertices */
     uint32_t *chain_vertices; /* each chain: fixed vertex, two-segment vertices, fixed vertex */
     uint32_t (*chain_segments)[2]; /* the two segments (lower id first) */

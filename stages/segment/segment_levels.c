@@ -317,8 +317,13 @@ int sl_segment_model_level(sl_segment_model *m, const sl_segment_config *cfg,
                                 "take no size: give their alpha instead)");
         if (budget >= m->triangle_count)
             return copy_input(m, cfg, out, progress, err);
+        /* merge only when the corners would take more than a tenth of the budget */
+        uint64_t fixed = 0;
+        for (uint32_t v = 0; v < m->vertex_count; v++)
+            fixed += m->fixed[v] && m->loops.vertex_kind[v] != SL_SEGMENT_VERTEX_UNUSED;
         uint32_t target_segments = (uint32_t)fmax(1, budget / fmax(cfg->merge_ratio, 1));
-        if (cfg->merge_ratio <= 0 || m->seg.segment_count <= target_segments)
+        if (cfg->merge_ratio <= 0 || m->seg.segment_count <= target_segments ||
+            10 * fixed <= budget)
             return search_budget(m, cfg, budget, out, progress, err);
         sl_segment_model *merged = NULL;
         rc = merged_model(m, cfg, target_segments, &merged, err);

@@ -117,6 +117,13 @@ static double merge_cost(const mseg *a, const mseg *b, double cos_max)
     double m[3] = {N[0] / len, N[1] / len, N[2] / len};
     if (min_dot(a, m) < cos_max || min_dot(b, m) < cos_max)
         return -1;
+    /* and the two parts' own mean normals within the angle of each other: two large
+     * segments meeting at a crease of more than merge_angle stay apart however flat
+     * each is (a cube's faces, a cylinder's caps and side) */
+    double la = norm3(a->N), lb = norm3(b->N);
+    if (la > 0 && lb > 0 &&
+        (a->N[0] * b->N[0] + a->N[1] * b->N[1] + a->N[2] * b->N[2]) < cos_max * la * lb)
+        return -1;
     return norm3(a->N) + norm3(b->N) - len;
 }
 

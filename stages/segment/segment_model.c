@@ -47,6 +47,8 @@ void sl_segment_model_free(sl_segment_model *m)
         return;
     if (!m->borrowed_adjacency)
         sl_mesh_adjacency_release(&m->adj);
+    else
+        m->vertex_normal = NULL; /* the base's */
     sl_segmentation_release(&m->seg);
     sl_segment_loops_release(&m->loops);
     free(m->seg_tri_start);
@@ -54,6 +56,7 @@ void sl_segment_model_free(sl_segment_model *m)
     free(m->frame);
     free(m->unfit);
     free(m->fixed);
+    free(m->vertex_normal);
     free(m->chain_start);
     free(m->chain_vertices);
     free(m->chain_segments);
@@ -390,6 +393,33 @@ static void mark_trivial(sl_segment_model *m)
     free(has);
 }
 
+/* Area-weighted unit vertex normals of the input (serial sums: a fixed order). */
+static int vertex_normals(sl_segment_model *m)
+{
+    m->vertex_normal = calloc(3 * (size_t)(m->vertex_count ? m->vertex_count : 1), sizeof(double));
+    if (!m->vertex_normal)
+        return -1;
+    for (uint32_t t = 0; t < m->triangle_count; t++) {
+        if (m->adj.degenerate[t])
+            continue;
+        const uint32_t *c = m->triangles + 3 * (uint64_t)t;
+        double u[3], w[3], x[3];
+        seg_sub(m->positions + 3 * (uint64_t)c[1], m->positions + 3 * (uint64_t)c[0], u);
+        seg_sub(m->positions + 3 * (uint64_t)c[2], m->positions + 3 * (uint64_t)c[0], w);
+        cross(u, w, x);
+        for (int q = 0; q < 3; q++)
+            for (int j = 0; j < 3; j++)
+                m->vertex_normal[3 * (size_t)c[q] + j] += x[j];
+    }
+    for (uint32_t v = 0; v < m->vertex_count; v++) {
+        double *n = m->vertex_normal + 3 * (size_t)v;
+        double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int j = 0; j < 3; j++)
+            n[j] = len > 0 ? n[j] / len : 0;
+    }
+    return 0;
+}
+
 /* The adjacency and the segmentation of equation 1. */
 static int build_base(sl_segment_model *m, const sl_segment_config *cfg, sl_error *err)
 {
@@ -472,6 +502,8 @@ int sl_segment_model_build(const sl_segment_config *cfg, const sl_segment_input 
     m->triangles = in->triangles;
     m->diagonal = diagonal;
     rc = build_base(m, cfg, err);
+    if (!rc && vertex_normals(m))
+        rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "vertex normals of %u vertices", m->vertex_count);
     if (!rc && sl_progress_step(progress, "segment", 0.2))
         rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "segmentation interrupted");
     if (!rc)
@@ -500,6 +532,7 @@ int seg_model_relabel(const sl_segment_model *base, uint32_t *labels, uint32_t c
     m->diagonal = base->diagonal;
     m->adj = base->adj;
     m->borrowed_adjacency = 1;
+    m->vertex_normal = base->vertex_normal; /* borrowed too */
     m->used_vertices = base->used_vertices;
     m->input_boundary_edges = base->input_boundary_edges;
     m->input_nonmanifold_edges = base->input_nonmanifold_edges;

@@ -38,7 +38,7 @@ sl_segment_config sl_segment_default_config(void)
     c.max_error = 0.001;
     c.max_normal_deviation = 90.0;
     c.merge_ratio = 25.0;
-    c.merge_angle = 80.0;
+    c.merge_angle = 60.0;
     c.search_samples = 50000;
     return c;
 }
@@ -347,15 +347,16 @@ static int check_level(pass *p, sl_segment_level *lv, const uint32_t *ts, sl_err
     if (sl_mesh_adjacency_build(lv->triangles, lv->triangle_count, m->vertex_count, NULL, 0, &a,
                                 &scratch))
         return -1;
-    const sl_adjacency_report *r = &a.report;
-    int same = r->boundary_edges == m->input_boundary_edges &&
-               r->nonmanifold_edges == m->input_nonmanifold_edges &&
-               r->inconsistent_edges == m->input_inconsistent_edges &&
-               r->nonmanifold_vertices == m->input_nonmanifold_vertices &&
-               r->degenerate_triangles == 0 && r->euler_characteristic == m->input_euler;
-    lv->stats.euler_characteristic = r->euler_characteristic;
-    lv->stats.watertight = r->edges > 0 && r->boundary_edges == 0 && r->nonmanifold_edges == 0 &&
-                           r->inconsistent_edges == 0;
+    sl_adjacency_report r = a.report; /* a copy: `a` is released below */
+    int same = r.boundary_edges == m->input_boundary_edges &&
+               r.nonmanifold_edges == m->input_nonmanifold_edges &&
+               r.inconsistent_edges == m->input_inconsistent_edges &&
+               r.nonmanifold_vertices == m->input_nonmanifold_vertices &&
+               r.degenerate_triangles == m->adj.report.degenerate_triangles &&
+               r.euler_characteristic == m->input_euler;
+    lv->stats.euler_characteristic = r.euler_characteristic;
+    lv->stats.watertight = r.edges > 0 && r.boundary_edges == 0 && r.nonmanifold_edges == 0 &&
+                           r.inconsistent_edges == 0;
     if (same) {
         sl_mesh_adjacency_release(&a);
         return 0;
@@ -378,8 +379,8 @@ static int check_level(pass *p, sl_segment_level *lv, const uint32_t *ts, sl_err
     sl_error_set(err, SL_E_INTERNAL, 0, NULL,
                  "segment method: the level's topology differs from the input's with every "
                  "segment kept (boundary edges %llu vs %llu, Euler %lld vs %lld)",
-                 (unsigned long long)r->boundary_edges,
-                 (unsigned long long)m->input_boundary_edges, (long long)r->euler_characteristic,
+                 (unsigned long long)r.boundary_edges,
+                 (unsigned long long)m->input_boundary_edges, (long long)r.euler_characteristic,
                  (long long)m->input_euler);
     return -2;
 }
@@ -530,14 +531,17 @@ int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_pat
                 rc = SL_E_NOMEM;
                 break;
             }
-            if (tau == -1 && tau_min > 1e-300) { /* record further down */
+            if (tau == -1 && tau_min > 1e-18 * m->diagonal * m->diagonal) { /* record further */
                 tau_min = tau_min > 0 ? tau_min / 64 : 0;
                 p.patch.tau = tau_min;
                 clear_all(&p);
                 continue;
             }
             p.over_budget = tau == -2;
-            p.patch.tau = tau == -2 ? INFINITY : tau < 0 ? 0 : tau;
+            /* a vertex within a billionth of the diagonal never comes back: it would only
+             * be rounding noise on a flat patch */
+            double floor2 = 1e-18 * m->diagonal * m->diagonal;
+            p.patch.tau = tau == -2 ? INFINITY : fmax(tau, floor2);
             p.patch.record = 0;
             if (p.patch.tau > 0 && isfinite(p.patch.tau))
                 p.patch.max_error = sqrt(p.patch.tau); /* the final flips' bound */

@@ -184,25 +184,14 @@ static int gather(patch *p, const uint8_t *kept)
     p->slots = 0;
     for (uint32_t i = b; i < e; i++) {
         const uint32_t *c = m->triangles + 3 * (uint64_t)m->seg_tris[i];
-        uint32_t sl[3];
         for (int q = 0; q < 3; q++)
-            sl[q] = slot_of(p, c[q]);
-        double u[3], w[3], x[3];
-        for (int j = 0; j < 3; j++) {
-            u[j] = s->pos[3 * (size_t)sl[1] + j] - s->pos[3 * (size_t)sl[0] + j];
-            w[j] = s->pos[3 * (size_t)sl[2] + j] - s->pos[3 * (size_t)sl[0] + j];
-        }
-        cross3(u, w, x);
-        for (int q = 0; q < 3; q++)
-            for (int j = 0; j < 3; j++)
-                s->normal[3 * (size_t)sl[q] + j] += x[j];
+            slot_of(p, c[q]);
     }
     p->candidates = 0;
     for (uint32_t i = 0; i < p->slots; i++) {
-        double *n = s->normal + 3 * (size_t)i;
-        double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        for (int j = 0; j < 3; j++)
-            n[j] = len > 0 ? n[j] / len : 0;
+        /* the input's normal there, what a new triangle is checked against */
+        memcpy(s->normal + 3 * (size_t)i, m->vertex_normal + 3 * (size_t)s->vertex[i],
+               3 * sizeof *s->normal);
         if (m->loops.vertex_kind[s->vertex[i]] == SL_SEGMENT_VERTEX_INTERIOR) {
             s->role[i] = ROLE_CANDIDATE;
             s->cands[p->candidates++] = i;
