@@ -130,7 +130,7 @@ static int search_budget(sl_segment_model *m, const sl_segment_config *cfg, uint
     double best_f = INFINITY;
     int rc = SL_OK, passes = 0;
     /* first a bound whose boundaries fit the budget: doubled until they do */
-    for (; passes < 12 && !rc; passes++) {
+    for (; passes < 8 && !rc; passes++) {
         sl_segment_level lv;
         double f = budget_pass(m, cfg, guess, budget, &lv, progress, err, &rc);
         if (rc)
@@ -297,6 +297,69 @@ static int merged_model(sl_segment_model *m, const sl_segment_config *cfg, uint3
     return rc;
 }
 
+/* Is level a better answer to the budget than level b (which may be empty)? One within
+ * the budget beats one over it; then the lower RMS; over budget, the fewer triangles. */
+static int better(const sl_segment_level *a, const sl_segment_level *b, uint64_t budget)
+{
+    if (!b->triangles)
+        return 1;
+    int fa = !a->stats.over_budget && a->triangle_count <= budget;
+    int fb = !b->stats.over_budget && b->triangle_count <= budget;
+    if (fa != fb)
+        return fa;
+    return fa ? a->stats.estimate < b->stats.estimate : a->triangle_count < b->triangle_count;
+}
+
+/* A budget: with the segments of equation 1 when their corners take at most a tenth of
+ * the budget; else merged down to budget / merge_ratio and, searching, to half that
+ * (the lower RMS wins); when even that is over the budget, merged harder (a quarter and
+ * an eighth, with a merge angle of 80 degrees) until one fits. */
+static int merged_levels(sl_segment_model *m, const sl_segment_config *cfg, uint64_t budget,
+                         sl_segment_level *out, sl_progress *progress, sl_error *err)
+{
+    uint64_t fixed = 0;
+    for (uint32_t v = 0; v < m->vertex_count; v++)
+        fixed += m->fixed[v] && m->loops.vertex_kind[v] != SL_SEGMENT_VERTEX_UNUSED;
+    double ratio = cfg->merge_ratio;
+    if (ratio <= 0 || m->seg.segment_count <= fmax(1, budget / fmax(ratio, 1)) ||
+        10 * fixed <= budget)
+        return search_budget(m, cfg, budget, out, progress, err);
+    const double scale[4] = {1, 2, 4, 8};
+    sl_segment_level best;
+    memset(&best, 0, sizeof best);
+    int rc = SL_OK;
+    for (int i = 0; i < 4 && !rc; i++) {
+        int fits = best.triangles && !best.stats.over_budget && best.triangle_count <= budget;
+        if (fits && (i >= 2 || !cfg->search_samples))
+            break; /* harder merging only while nothing fits; the second try only searching */
+        sl_segment_config c = *cfg;
+        if (i >= 2)
+            c.merge_angle = fmax(c.merge_angle, 80);
+        uint32_t target = (uint32_t)fmax(1, budget / (ratio * scale[i]));
+        if (target >= m->seg.segment_count)
+            continue;
+        sl_segment_model *merged = NULL;
+        sl_segment_level lv;
+        memset(&lv, 0, sizeof lv);
+        rc = merged_model(m, &c, target, &merged, err);
+        if (!rc)
+            rc = search_budget(merged, &c, budget, &lv, progress, err);
+        sl_segment_model_free(merged);
+        if (!rc && better(&lv, &best, budget)) {
+            sl_segment_level_release(&best);
+            best = lv;
+        } else {
+            sl_segment_level_release(&lv);
+        }
+    }
+    if (rc) {
+        sl_segment_level_release(&best);
+        return rc;
+    }
+    *out = best;
+    return SL_OK;
+}
+
 int sl_segment_model_level(sl_segment_model *m, const sl_segment_config *cfg,
                            const sl_segment_target *target, sl_segment_level *out,
                            sl_progress *progress, sl_error *err)
@@ -317,20 +380,7 @@ int sl_segment_model_level(sl_segment_model *m, const sl_segment_config *cfg,
                                 "take no size: give their alpha instead)");
         if (budget >= m->triangle_count)
             return copy_input(m, cfg, out, progress, err);
-        /* merge only when the corners would take more than a tenth of the budget */
-        uint64_t fixed = 0;
-        for (uint32_t v = 0; v < m->vertex_count; v++)
-            fixed += m->fixed[v] && m->loops.vertex_kind[v] != SL_SEGMENT_VERTEX_UNUSED;
-        uint32_t target_segments = (uint32_t)fmax(1, budget / fmax(cfg->merge_ratio, 1));
-        if (cfg->merge_ratio <= 0 || m->seg.segment_count <= target_segments ||
-            10 * fixed <= budget)
-            return search_budget(m, cfg, budget, out, progress, err);
-        sl_segment_model *merged = NULL;
-        rc = merged_model(m, cfg, target_segments, &merged, err);
-        if (!rc)
-            rc = search_budget(merged, cfg, budget, out, progress, err);
-        sl_segment_model_free(merged);
-        return rc;
+        return merged_levels(m, cfg, budget, out, progress, err);
     }
     double error = target->max_error > 0 ? target->max_error : cfg->max_error;
     if (!(error > 0 && error <= 1))
