@@ -11,13 +11,16 @@
 #include "cli/commands.h"
 #include "core/error.h"
 #include "geometry/ply.h"
+#include "runtime/lod_io.h"
 
 static void usage(FILE *f)
 {
-    fputs("usage: scanlod inspect FILE.ply\n"
-          "Reads the whole file, validates it and prints what it holds: format, elements and\n"
-          "properties, counts, normals/colours/texture coordinates/range grid, texture file,\n"
-          "viewpoint, bounding box, non-finite vertices, faces triangulated.\n"
+    fputs("usage: scanlod inspect FILE.ply|MODEL.slod\n"
+          "Reads the whole file, validates it and prints what it holds. A PLY: format, elements\n"
+          "and properties, counts, normals/colours/texture coordinates/range grid, texture\n"
+          "file, viewpoint, bounding box, non-finite vertices, faces triangulated. A LOD model\n"
+          "(.slod, checked as `extract` checks it): its grid, octree levels, crossings, LOD\n"
+          "array, triangles and error from the coarsest to the finest cut.\n"
           "Exit status: 0 valid; 65 the file is malformed or unreadable; 75 out of memory\n"
           "or interrupted (try again); 64 usage.\n", f);
 }
@@ -107,11 +110,44 @@ static int inspect_ply(const char *path, sl_error *err)
     return rc;
 }
 
+static int inspect_slod(const char *path, sl_error *err)
+{
+    sl_lod_model m;
+    sl_lod_model_init(&m);
+    int rc = sl_lod_model_read(path, &m, err); /* every structure check of the readers */
+    if (rc == 0) {
+        const sl_octree *t = &m.tree;
+        uint32_t e = m.expansion_count;
+        printf("file: %s\n", path);
+        printf("kind: scanlod LOD model (octree, LOD array, accumulation table, crack "
+               "transitions)\n");
+        printf("grid: leaf %.9g, origin %.9g %.9g %.9g, depth %u\n", t->leaf_size,
+               t->origin[0], t->origin[1], t->origin[2], t->depth);
+        printf("nodes: %u (", t->node_count);
+        for (uint32_t l = 0; l <= t->depth && l < SL_OCTREE_MAX_LEVELS; l++)
+            printf("%slevel %u: %u", l ? ", " : "", l, t->level_count[l]);
+        printf(")\n");
+        printf("crossings: %u, colours: %s\n", t->crossing_count,
+               yes_no(t->crossing_color != NULL));
+        printf("lod array: %u expansions\n", e);
+        printf("triangles: %llu at the root, %llu at the finest cut\n",
+               (unsigned long long)m.accumulation[0], (unsigned long long)m.accumulation[e]);
+        if (m.error_after)
+            printf("error: %.9g at the root, %.9g at the finest cut (world units)\n",
+                   m.error_after[0], m.error_after[e]);
+        printf("transition records: %llu\n", (unsigned long long)m.transitions.count);
+        printf("neighbour links: %llu\n", (unsigned long long)m.neighbours.count);
+    }
+    sl_lod_model_release(&m);
+    return rc;
+}
+
 static const struct inspector {
     const char *suffix; /* NULL: the default */
     int (*inspect)(const char *path, sl_error *err);
 } inspectors[] = {
     {NULL, inspect_ply},
+    {".slod", inspect_slod},
 };
 
 static const struct inspector *inspector_for(const char *path)

@@ -112,22 +112,45 @@ static int stderr_columns(void)
     return ws.ws_col > BAR_MAX_COLUMNS ? BAR_MAX_COLUMNS : ws.ws_col;
 }
 
-/* "[###.......] 12/40 items  bunny/bun000 range 45%", cut to fit the terminal (one
- * column short of it, so the cursor never wraps) on a UTF-8 character boundary. */
-static size_t format_bar(char *buf, size_t size, uint64_t done, uint64_t total,
-                         const char *label, double item_fraction)
+void sl_log_duration(double seconds, char *buf, size_t size)
 {
-    double part = item_fraction >= 0 && item_fraction <= 1 ? item_fraction : 0;
-    double fraction = total ? ((double)done + part) / (double)total : 0;
-    int filled = fraction >= 1 ? BAR_CELLS : fraction > 0 ? (int)(fraction * BAR_CELLS) : 0;
-    char cells[BAR_CELLS + 1];
+    long long s = seconds > 0 && seconds < 1e9 ? (long long)(seconds + 0.5) : 0;
+    long long d = s / 86400, h = s / 3600 % 24, m = s / 60 % 60;
+    if (d)
+        snprintf(buf, size, "%lldd %lld:%02lld:%02lld", d, h, m, s % 60);
+    else if (h)
+        snprintf(buf, size, "%lld:%02lld:%02lld", h, m, s % 60);
+    else
+        snprintf(buf, size, "%lld:%02lld", m, s % 60);
+}
+
+/* "[###.......] 12/40 items 31%  1:02 ETA 2:15  bunny/bun000.ply range 45%", cut to fit
+ * the terminal (one column short of it, so the cursor never wraps) on a UTF-8 character
+ * boundary. */
+static size_t format_bar(char *buf, size_t size, const sl_log_bar *bar)
+{
+    double fraction = bar->fraction >= 0 ? (bar->fraction > 1 ? 1 : bar->fraction) : 0;
+    int filled = fraction >= 1 ? BAR_CELLS : (int)(fraction * BAR_CELLS);
+    char cells[BAR_CELLS + 1], total[32] = "", percent[16] = "", times[64] = "";
     memset(cells, '#', (size_t)filled);
     memset(cells + filled, '.', (size_t)(BAR_CELLS - filled));
     cells[BAR_CELLS] = '\0';
-    int n = snprintf(buf, size, "[%s] %llu/%llu items%s%s", cells, (unsigned long long)done,
-                     (unsigned long long)total, label ? "  " : "", label ? label : "");
-    if (n >= 0 && (size_t)n < size && item_fraction >= 0 && item_fraction <= 1)
-        n += snprintf(buf + n, size - (size_t)n, " %d%%", (int)(item_fraction * 100));
+    if (bar->total)
+        snprintf(total, sizeof total, "/%llu", (unsigned long long)bar->total);
+    if (bar->fraction >= 0)
+        snprintf(percent, sizeof percent, " %d%%", (int)(fraction * 100));
+    if (bar->elapsed_s >= 0) {
+        char elapsed[24], eta[24];
+        sl_log_duration(bar->elapsed_s, elapsed, sizeof elapsed);
+        sl_log_duration(bar->eta_s, eta, sizeof eta);
+        snprintf(times, sizeof times, "  %s%s%s", elapsed, bar->eta_s >= 0 ? " ETA " : "",
+                 bar->eta_s >= 0 ? eta : "");
+    }
+    int n = snprintf(buf, size, "[%s] %llu%s items%s%s%s%s", cells,
+                     (unsigned long long)bar->done, total, percent, times,
+                     bar->label ? "  " : "", bar->label ? bar->label : "");
+    if (n >= 0 && (size_t)n < size && bar->stage_fraction >= 0 && bar->stage_fraction <= 1)
+        n += snprintf(buf + n, size - (size_t)n, " %d%%", (int)(bar->stage_fraction * 100));
     size_t len = n < 0 ? 0 : (size_t)n < size ? (size_t)n : size - 1;
     size_t width = (size_t)stderr_columns() - 1;
     if (len > width) {
@@ -139,7 +162,7 @@ static size_t format_bar(char *buf, size_t size, uint64_t done, uint64_t total,
     return len;
 }
 
-void sl_log_progress(uint64_t done, uint64_t total, const char *label, double item_fraction)
+void sl_log_progress(const sl_log_bar *bar)
 {
     double now = monotonic_seconds();
     if (state.last_draw >= 0 && now - state.last_draw < BAR_INTERVAL_S)
@@ -148,7 +171,7 @@ void sl_log_progress(uint64_t done, uint64_t total, const char *label, double it
         return;
     state.last_draw = now;
     char text[BAR_MAX_COLUMNS + 1], buf[2 * BAR_MAX_COLUMNS + 2];
-    size_t len = format_bar(text, sizeof text, done, total, label, item_fraction);
+    size_t len = format_bar(text, sizeof text, bar);
     int old = atomic_exchange(&bar_bytes, (int)len);
     buf[0] = '\r';
     memcpy(buf + 1, text, len);
@@ -188,8 +211,15 @@ void sl_log_write(int level, const char *stage, const char *item, const char *fm
     if (state.human_fd >= 0)
         write_all(state.human_fd, line, len);
     if (level <= state.stderr_level) {
-        char out[LINE_MAX_BYTES + BAR_MAX_COLUMNS + 2];
+        char out[LINE_MAX_BYTES + BAR_MAX_COLUMNS + 8];
         size_t k = take_bar_clear(out);
+        /* A bar drawn by another process on this terminal (the engine's, above a stage's
+         * child) is not in bar_bytes here: "\r" + erase-line clears whatever line we are
+         * on, so no message is ever glued onto a bar. */
+        if (k == 0 && isatty(STDERR_FILENO)) {
+            memcpy(out, "\r\033[K", 4);
+            k = 4;
+        }
         memcpy(out + k, line, len);
         write_all(STDERR_FILENO, out, k + len);
     }

@@ -50,11 +50,27 @@ void sl_log_write(int level, const char *stage, const char *item, const char *fm
 void sl_log_event(const char *event, const char *stage, const char *item, double duration_s,
                   const sl_error *err, const char *extra_json);
 
+/* What the progress bar shows. */
+typedef struct sl_log_bar {
+    uint64_t done, total;  /* items settled / items in the collection (total 0: unknown) */
+    double fraction;       /* of the whole collection's work, 0..1 (the caller keeps it
+                              monotone); < 0: not known */
+    double elapsed_s;      /* since the work began */
+    double eta_s;          /* time left; < 0: not known yet */
+    const char *label;     /* "ITEM STAGE", or NULL */
+    double stage_fraction; /* of the running stage, 0..1; < 0 leaves it out */
+} sl_log_bar;
+
 /* Progress bar on stderr when it is a TTY (no-op otherwise), redrawn with "\r" at most
- * 10 times a second (calls in between are dropped): "[###.......] 12/40 items  LABEL 45%"
- * with the bar filled by (done + item_fraction) / total; item_fraction < 0 leaves the
- * percentage out; label may be NULL. Cut to the terminal width. Call from one thread. */
-void sl_log_progress(uint64_t done, uint64_t total, const char *label, double item_fraction);
+ * 10 times a second (calls in between are dropped):
+ *   "[###.......] 12/40 items 31%  1:02 ETA 2:15  bunny.ply samples 45%"
+ * the cells filled by `fraction`; cut to the terminal width, never wrapping. Log lines
+ * written meanwhile (by this process or a child sharing the terminal) start with "\r" and
+ * an erase-line, so they never sit on the bar's line; the next call draws the bar again
+ * below them. Call from one thread. */
+void sl_log_progress(const sl_log_bar *bar);
 void sl_log_progress_clear(void);
+/* "1:02", "1:02:03" or "3d 4:05:06": a duration for people (size >= 16). */
+void sl_log_duration(double seconds, char *buf, size_t size);
 
 #endif

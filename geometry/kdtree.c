@@ -4,11 +4,11 @@
  * Method: the points are copied into one array of {x, y, z, index} records and reordered
  * in place while building, so every leaf is a contiguous run of at most LEAF_SIZE records
  * (cache friendly queries, no per-point pointers). Each split is at the median of the
- * node's widest axis, found by quickselect on the key (coordinate, index): all keys are
- * distinct, so the tree shape is a pure function of the input. Queries keep the k best
- * candidates sorted by (squared distance, index), which makes equal distances resolve to
- * the lower index, and prune a far child only when its splitting plane is strictly
- * farther than the current k-th candidate.
+ * node's widest axis, found by quickselect on the key (coordinate, index;
+ * geometry/axis_select.h): all keys are distinct, so the tree shape is a pure function of
+ * the input. Queries keep the k best candidates sorted by (squared distance, index), which
+ * makes equal distances resolve to the lower index, and prune a far child only when its
+ * splitting plane is strictly farther than the current k-th candidate.
  *
  * A uniform grid hash was the other candidate; on scans whose density varies by orders
  * of magnitude (range scans: dense near the scanner, sparse at grazing angles) a grid
@@ -19,13 +19,13 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry/axis_select.h"
+
 enum { LEAF_SIZE = 8, AXIS_LEAF = 3, STACK_RESULTS = 256 };
 #define PARALLEL_RECORDS 65536u /* subtrees at least this big are built as tasks */
 
-typedef struct kd_point {
-    float p[3];
-    uint32_t index; /* the caller's point index */
-} kd_point;
+/* The records: {x, y, z, the caller's point index}. */
+typedef sl_axis_record kd_point;
 
 typedef struct kd_node {
     float split;        /* inner: left has key <= split, right >= split on `axis` */
@@ -40,77 +40,6 @@ struct sl_kdtree {
     kd_node *nodes;
     uint32_t node_capacity; /* slots; unused ones are never reached */
 };
-
-/* Lexicographic (coordinate, index) order: a strict total order on the records. */
-static int key_less(const kd_point *a, const kd_point *b, int axis)
-{
-    if (a->p[axis] != b->p[axis])
-        return a->p[axis] < b->p[axis];
-    return a->index < b->index;
-}
-
-static void swap_points(kd_point *a, kd_point *b)
-{
-    kd_point t = *a;
-    *a = *b;
-    *b = t;
-}
-
-/* Rearranges pts[0..n) so that pts[m] is the record of rank m and everything before it is
- * smaller (Hoare's FIND with a median-of-three pivot, deterministic). */
-static void select_rank(kd_point *pts, uint32_t n, uint32_t m, int axis)
-{
-    uint32_t lo = 0, hi = n - 1;
-    while (hi > lo) {
-        uint32_t mid = lo + (hi - lo) / 2;
-        if (key_less(&pts[mid], &pts[lo], axis))
-            swap_points(&pts[mid], &pts[lo]);
-        if (key_less(&pts[hi], &pts[lo], axis))
-            swap_points(&pts[hi], &pts[lo]);
-        if (key_less(&pts[hi], &pts[mid], axis))
-            swap_points(&pts[hi], &pts[mid]);
-        kd_point pivot = pts[mid];
-        uint32_t i = lo, j = hi;
-        while (i <= j) {
-            while (key_less(&pts[i], &pivot, axis))
-                i++;
-            while (key_less(&pivot, &pts[j], axis))
-                j--;
-            if (i <= j) {
-                swap_points(&pts[i], &pts[j]);
-                i++;
-                if (j == 0)
-                    break;
-                j--;
-            }
-        }
-        if (m <= j)
-            hi = j;
-        else if (m >= i)
-            lo = i;
-        else
-            return;
-    }
-}
-
-static int widest_axis(const kd_point *pts, uint32_t n)
-{
-    float lo[3], hi[3];
-    memcpy(lo, pts[0].p, sizeof lo);
-    memcpy(hi, pts[0].p, sizeof hi);
-    for (uint32_t i = 1; i < n; i++)
-        for (int a = 0; a < 3; a++) {
-            if (pts[i].p[a] < lo[a])
-                lo[a] = pts[i].p[a];
-            if (pts[i].p[a] > hi[a])
-                hi[a] = pts[i].p[a];
-        }
-    int axis = 0;
-    for (int a = 1; a < 3; a++)
-        if (hi[a] - lo[a] > hi[axis] - lo[axis])
-            axis = a;
-    return axis;
-}
 
 /* Node slots reserved below the root of a subtree of n records: B(n) = n/2 - 2. It
  * covers the subtree because B(n) >= 2 + B(n/2) + B(n - n/2) (the two children and their
@@ -137,8 +66,8 @@ static void build_node(sl_kdtree *t, uint32_t at, uint32_t begin, uint32_t end, 
         return;
     }
     uint32_t n = end - begin, half = n / 2;
-    int axis = widest_axis(t->points + begin, n);
-    select_rank(t->points + begin, n, half, axis);
+    int axis = sl_axis_widest(t->points + begin, n);
+    sl_axis_select(t->points + begin, n, half, axis);
     uint32_t child = (uint32_t)region;
     uint64_t left_region = region + 2, right_region = left_region + descendants_bound(half);
     nd->axis = (uint32_t)axis;

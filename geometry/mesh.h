@@ -33,6 +33,8 @@ typedef struct sl_mesh {
     int64_t *grid_index;
 
     char texture_file[256];  /* from `comment TextureFile NAME`, "" if none */
+    char units[4];           /* `comment units NAME`: "mm", "cm", "m", "in", "ft"; "" if none */
+    char up_axis;            /* `comment up AXIS`: 'y' or 'z'; 0 if none */
     int has_viewpoint;       /* the file states where the scanner was */
     double viewpoint[3];     /* world */
 
@@ -41,5 +43,12 @@ typedef struct sl_mesh {
 
 void sl_mesh_init(sl_mesh *m);
 void sl_mesh_release(sl_mesh *m); /* frees every array and re-inits */
+
+/* A view of arrays someone else owns, as an sl_mesh (normals and colours may be NULL;
+ * every other optional array is NULL): the one way to hand generated or borrowed
+ * geometry to what reads an sl_mesh (writers, topology, BVH, distances). Nothing is
+ * copied; never sl_mesh_release() a view. */
+sl_mesh sl_mesh_view(uint64_t vertex_count, float *positions, float *normals, uint8_t *colors,
+                     uint64_t triangle_count, uint32_t *triangles);
 
 #endif

@@ -25,7 +25,7 @@ static void put_numbers(char *line, size_t *len, size_t cap, const float *v, int
     }
 }
 
-static int write_vertices(sl_atomic_file *f, const sl_glb_mesh *m, sl_error *err)
+static int write_vertices(sl_atomic_file *f, const sl_mesh *m, sl_error *err)
 {
     int rc = 0;
     for (uint64_t i = 0; i < m->vertex_count && !rc; i++) {
@@ -56,12 +56,12 @@ static int write_vertices(sl_atomic_file *f, const sl_glb_mesh *m, sl_error *err
     return rc;
 }
 
-static int write_faces(sl_atomic_file *f, const sl_glb_mesh *m, sl_error *err)
+static int write_faces(sl_atomic_file *f, const sl_mesh *m, sl_error *err)
 {
     int rc = 0;
     for (uint64_t t = 0; t < m->triangle_count && !rc; t++) {
-        unsigned long long a = m->indices[3 * t] + 1ull, b = m->indices[3 * t + 1] + 1ull,
-                           c = m->indices[3 * t + 2] + 1ull;
+        unsigned long long a = m->triangles[3 * t] + 1ull, b = m->triangles[3 * t + 1] + 1ull,
+                           c = m->triangles[3 * t + 2] + 1ull;
         if (m->normals)
             rc = sl_atomic_printf(f, err, "f %llu//%llu %llu//%llu %llu//%llu\n", a, a, b, b, c, c);
         else
@@ -70,9 +70,9 @@ static int write_faces(sl_atomic_file *f, const sl_glb_mesh *m, sl_error *err)
     return rc;
 }
 
-int sl_obj_write(const char *path, const sl_glb_mesh *m, sl_error *err)
+int sl_obj_write(const char *path, const sl_mesh *m, const char *extras_json, sl_error *err)
 {
-    int rc = sl_glb_mesh_check(m, path, err);
+    int rc = sl_mesh_check_writable(m, path, err);
     if (rc)
         return rc;
     sl_atomic_file f;
@@ -81,8 +81,8 @@ int sl_obj_write(const char *path, const sl_glb_mesh *m, sl_error *err)
     rc = sl_atomic_printf(&f, err, "# scanlod\n# %llu vertices, %llu triangles\n",
                           (unsigned long long)m->vertex_count,
                           (unsigned long long)m->triangle_count);
-    if (!rc && m->extras_json && !strpbrk(m->extras_json, "\r\n"))
-        rc = sl_atomic_printf(&f, err, "# extras %s\n", m->extras_json);
+    if (!rc && extras_json && !strpbrk(extras_json, "\r\n"))
+        rc = sl_atomic_printf(&f, err, "# extras %s\n", extras_json);
     rc = rc ? rc : write_vertices(&f, m, err);
     rc = rc ? rc : write_faces(&f, m, err);
     rc = rc ? rc : sl_atomic_commit(&f, err);

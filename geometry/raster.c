@@ -70,7 +70,7 @@ static float linear_to_srgb(float c)
 /* Camera basis from the fixed direction, then the orthographic fit: the projected extent
  * of the vertices that triangles use (stray unreferenced vertices do not shrink the
  * object) is centred and scaled into the grid less the margin. */
-static void fit_camera(const sl_glb_mesh *m, int width, int height, camera *c)
+static void fit_camera(const sl_mesh *m, int width, int height, camera *c)
 {
     const double pi = 3.14159265358979323846;
     double az = AZIMUTH_DEG * pi / 180, el = ELEVATION_DEG * pi / 180;
@@ -86,7 +86,7 @@ static void fit_camera(const sl_glb_mesh *m, int width, int height, camera *c)
 
     double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX};
     for (uint64_t i = 0; i < 3 * m->triangle_count; i++) {
-        const float *p = m->positions + 3 * (uint64_t)m->indices[i];
+        const float *p = m->positions + 3 * (uint64_t)m->triangles[i];
         double q[3] = {p[0], p[1], p[2]}, r = dot3(q, right), u = dot3(q, up);
         lo[0] = r < lo[0] ? r : lo[0];
         hi[0] = r > hi[0] ? r : hi[0];
@@ -105,7 +105,7 @@ static void fit_camera(const sl_glb_mesh *m, int width, int height, camera *c)
 }
 
 /* Grid coordinates (x right, y down, in samples) and depth of every vertex. */
-static void project(const sl_glb_mesh *m, const camera *c, float *screen)
+static void project(const sl_mesh *m, const camera *c, float *screen)
 {
     for (uint64_t i = 0; i < m->vertex_count; i++) {
         const float *p = m->positions + 3 * i;
@@ -122,13 +122,13 @@ static float edge(const float *a, const float *b, float px, float py)
 }
 
 /* Pass 1 over the rows [row0, row1) of the grid: nearest triangle per sample. */
-static void scan_convert_rows(const sl_glb_mesh *m, const float *screen, sample_grid *g,
+static void scan_convert_rows(const sl_mesh *m, const float *screen, sample_grid *g,
                               int row0, int row1)
 {
     for (uint64_t t = 0; t < m->triangle_count; t++) {
-        const float *a = screen + 3 * (uint64_t)m->indices[3 * t];
-        const float *b = screen + 3 * (uint64_t)m->indices[3 * t + 1];
-        const float *c = screen + 3 * (uint64_t)m->indices[3 * t + 2];
+        const float *a = screen + 3 * (uint64_t)m->triangles[3 * t];
+        const float *b = screen + 3 * (uint64_t)m->triangles[3 * t + 1];
+        const float *c = screen + 3 * (uint64_t)m->triangles[3 * t + 2];
         float y0 = fminf(a[1], fminf(b[1], c[1])), y1 = fmaxf(a[1], fmaxf(b[1], c[1]));
         if (y1 < row0 || y0 >= row1)
             continue; /* outside this band: the cheap test first */
@@ -161,7 +161,7 @@ static void scan_convert_rows(const sl_glb_mesh *m, const float *screen, sample_
  * whatever the thread count. A fixed band count keeps the work the same too. */
 #define SCAN_BANDS 16
 
-static void scan_convert(const sl_glb_mesh *m, const float *screen, sample_grid *g)
+static void scan_convert(const sl_mesh *m, const float *screen, sample_grid *g)
 {
 #pragma omp parallel for schedule(dynamic, 1)
     for (int band = 0; band < SCAN_BANDS; band++)
@@ -171,7 +171,7 @@ static void scan_convert(const sl_glb_mesh *m, const float *screen, sample_grid 
 
 /* What pass 2 needs besides the mesh. */
 typedef struct shader {
-    const sl_glb_mesh *m;
+    const sl_mesh *m;
     const camera *cam;
     const float *screen;
     double light[3];          /* world direction towards the key light */
@@ -190,8 +190,8 @@ static void vertex_normal(const float *n, double out[3])
 /* Linear RGB of triangle t seen at sample centre (px, py). */
 static void shade(const shader *sh, uint64_t t, float px, float py, float rgb[3])
 {
-    const sl_glb_mesh *m = sh->m;
-    const uint32_t *v = m->indices + 3 * t;
+    const sl_mesh *m = sh->m;
+    const uint32_t *v = m->triangles + 3 * t;
     const float *a = sh->screen + 3 * (uint64_t)v[0], *b = sh->screen + 3 * (uint64_t)v[1];
     const float *c = sh->screen + 3 * (uint64_t)v[2];
     float area = edge(a, b, c[0], c[1]);
@@ -275,7 +275,7 @@ static void resolve_pixel(const shader *sh, const sample_grid *g, int ox, int oy
     out[3] = 1.0f;
 }
 
-static void init_shader(shader *sh, const sl_glb_mesh *m, const camera *cam, const float *screen)
+static void init_shader(shader *sh, const sl_mesh *m, const camera *cam, const float *screen)
 {
     sh->m = m;
     sh->cam = cam;
@@ -300,10 +300,10 @@ static int supersampling(int width, int height)
 }
 
 /* `path` only names the file in messages (may be NULL). */
-static int render(const sl_glb_mesh *m, int width, int height, float *rgba, const char *path,
+static int render(const sl_mesh *m, int width, int height, float *rgba, const char *path,
                   sl_error *err)
 {
-    int rc = sl_glb_mesh_check(m, path, err);
+    int rc = sl_mesh_check_writable(m, path, err);
     if (rc)
         return rc;
     if (width < 1 || height < 1 || width > SL_THUMBNAIL_MAX_SIDE ||
@@ -349,13 +349,13 @@ done:
     return rc;
 }
 
-int sl_render_thumbnail(const sl_glb_mesh *m, int width, int height, float *rgba,
+int sl_render_thumbnail(const sl_mesh *m, int width, int height, float *rgba,
                         sl_error *err)
 {
     return render(m, width, height, rgba, NULL, err);
 }
 
-int sl_write_thumbnail(const char *path, const sl_glb_mesh *m, int size, sl_error *err)
+int sl_write_thumbnail(const char *path, const sl_mesh *m, int size, sl_error *err)
 {
     if (size < 1 || size > SL_THUMBNAIL_MAX_SIDE)
         return sl_error_set(err, SL_E_INTERNAL, 0, path, "thumbnail size %d outside 1..%d", size,

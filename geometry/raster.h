@@ -25,13 +25,13 @@
 
 /* Renders `m` into `rgba` (OUT: width * height * 4 floats, sRGB-encoded in [0, 1], row 0
  * at the top, alpha 1). Sides in [1, SL_THUMBNAIL_MAX_SIDE]. Rejects what
- * sl_glb_mesh_check() rejects; SL_E_NOMEM when the sample buffers cannot be allocated. */
-int sl_render_thumbnail(const sl_glb_mesh *m, int width, int height, float *rgba,
+ * sl_mesh_check_writable() (geometry/glb.h) rejects; SL_E_NOMEM when the sample buffers cannot be allocated. */
+int sl_render_thumbnail(const sl_mesh *m, int width, int height, float *rgba,
                         sl_error *err);
 
 /* Renders a `size` x `size` thumbnail and writes it to `path` through OpenImageIO
  * (shim/oiio_shim.h: the format follows the extension, PNG as 8-bit RGBA; written
  * atomically). */
-int sl_write_thumbnail(const char *path, const sl_glb_mesh *m, int size, sl_error *err);
+int sl_write_thumbnail(const char *path, const sl_mesh *m, int size, sl_error *err);
 
 #endif

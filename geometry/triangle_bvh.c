@@ -1,25 +1,24 @@
 /* Triangle BVH and exact point-triangle distance (see triangle_bvh.h).
  *
  * Build: items {centroid, triangle} are partitioned in place by quickselect around the
- * median of the widest centroid axis, top-down; a range of at most SL_BVH_LEAF_SIZE
- * items becomes a leaf. Then the corners are copied out in leaf order and the bounds
+ * median of the widest centroid axis (geometry/axis_select.h), top-down; a range of at
+ * most SL_BVH_LEAF_SIZE items becomes a leaf. Then the corners are copied out in leaf order and the bounds
  * computed bottom-up in one reverse sweep over the nodes.
  * Subtrees above PARALLEL_CUTOFF triangles run as OpenMP tasks; offsets come from
  * subtree_nodes(), so the layout does not depend on the schedule.
  */
 #include "geometry/triangle_bvh.h"
 
-#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry/axis_select.h"
+
 #define PARALLEL_CUTOFF 65536
 
-typedef struct bvh_item {
-    float centroid[3];
-    uint32_t triangle;
-} bvh_item;
+/* The records: {centroid, triangle index}. */
+typedef sl_axis_record bvh_item;
 
 /* Plain comparisons: fminf/fmaxf are out-of-line calls (NaN rules), and the inputs are
  * finite. */
@@ -65,56 +64,6 @@ static uint64_t subtree_nodes(uint64_t n)
     return 2 * leaves - 1;
 }
 
-/* Total order on items along an axis; the triangle index breaks ties so the partition
- * is the same whatever the input order of equal keys. */
-static int item_less(const bvh_item *x, const bvh_item *y, int axis)
-{
-    if (x->centroid[axis] != y->centroid[axis])
-        return x->centroid[axis] < y->centroid[axis];
-    return x->triangle < y->triangle;
-}
-
-static void item_swap(bvh_item *x, bvh_item *y)
-{
-    bvh_item t = *x;
-    *x = *y;
-    *y = t;
-}
-
-/* Rearranges items[0..n) so that items[k] is the k-th smallest along `axis`, smaller
- * ones before it and larger ones after (Hoare's selection, median-of-three pivot). */
-static void select_kth(bvh_item *items, uint64_t n, uint64_t k, int axis)
-{
-    uint64_t lo = 0, hi = n - 1;
-    while (hi > lo) {
-        uint64_t mid = lo + (hi - lo) / 2;
-        if (item_less(&items[mid], &items[lo], axis))
-            item_swap(&items[mid], &items[lo]);
-        if (item_less(&items[hi], &items[lo], axis))
-            item_swap(&items[hi], &items[lo]);
-        if (item_less(&items[hi], &items[mid], axis))
-            item_swap(&items[hi], &items[mid]);
-        bvh_item pivot = items[mid];
-        uint64_t i = lo, j = hi;
-        for (;;) {
-            while (item_less(&items[i], &pivot, axis))
-                i++;
-            while (item_less(&pivot, &items[j], axis))
-                j--;
-            if (i >= j)
-                break;
-            item_swap(&items[i], &items[j]);
-            i++;
-            j--;
-        }
-        /* items[lo..j] <= pivot <= items[j+1..hi] */
-        if (k <= j)
-            hi = j;
-        else
-            lo = j + 1;
-    }
-}
-
 /* Leaves only record their range here; corners and bounds are filled afterwards by
  * fill_corners() and fill_bounds(), which stream through memory instead of chasing
  * mesh indices inside the recursion. */
@@ -122,7 +71,7 @@ static void make_leaf(bvh_build *b, uint64_t node_index, uint64_t begin, uint64_
 {
     sl_bvh_node *node = &b->bvh->nodes[node_index];
     for (uint64_t i = begin; i < begin + count; i++)
-        b->bvh->source[i] = b->items[i].triangle;
+        b->bvh->source[i] = b->items[i].index;
     node->first = (uint32_t)begin;
     node->count = (uint32_t)count;
 }
@@ -163,21 +112,6 @@ static void fill_bounds(sl_triangle_bvh *bvh)
     }
 }
 
-static int widest_centroid_axis(const bvh_item *items, uint64_t count)
-{
-    float lo[3] = {FLT_MAX, FLT_MAX, FLT_MAX}, hi[3] = {-FLT_MAX, -FLT_MAX, -FLT_MAX};
-    for (uint64_t i = 0; i < count; i++)
-        for (int a = 0; a < 3; a++) {
-            lo[a] = min_f(lo[a], items[i].centroid[a]);
-            hi[a] = max_f(hi[a], items[i].centroid[a]);
-        }
-    int axis = 0;
-    for (int a = 1; a < 3; a++)
-        if (hi[a] - lo[a] > hi[axis] - lo[axis])
-            axis = a;
-    return axis;
-}
-
 static void build_node(bvh_build *b, uint64_t node_index, uint64_t begin, uint64_t count)
 {
     if (count <= SL_BVH_LEAF_SIZE) {
@@ -185,8 +119,8 @@ static void build_node(bvh_build *b, uint64_t node_index, uint64_t begin, uint64
         return;
     }
     uint64_t left_count = count / 2;
-    int axis = widest_centroid_axis(b->items + begin, count);
-    select_kth(b->items + begin, count, left_count, axis);
+    int axis = sl_axis_widest(b->items + begin, count);
+    sl_axis_select(b->items + begin, count, left_count, axis);
 
     uint64_t left = node_index + 1, right = left + subtree_nodes(left_count);
     if (count > PARALLEL_CUTOFF) {
@@ -229,10 +163,10 @@ int sl_triangle_bvh_build(sl_triangle_bvh *bvh, const sl_mesh *mesh, sl_error *e
     for (uint64_t t = 0; t < n; t++) {
         const uint32_t *tri = &mesh->triangles[3 * t];
         for (int a = 0; a < 3; a++)
-            items[t].centroid[a] = (mesh->positions[3 * (uint64_t)tri[0] + a] +
+            items[t].p[a] = (mesh->positions[3 * (uint64_t)tri[0] + a] +
                                     mesh->positions[3 * (uint64_t)tri[1] + a] +
                                     mesh->positions[3 * (uint64_t)tri[2] + a]) / 3.0f;
-        items[t].triangle = (uint32_t)t;
+        items[t].index = (uint32_t)t;
     }
 
     bvh_build b = {bvh, mesh, items};

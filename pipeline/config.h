@@ -95,7 +95,7 @@ void sl_config_write_reference(FILE *out, const sl_option *const *tables);
 /* Every option table of the program ([run], [queue], then each of `stages`' in order),
  * NULL-terminated, in `tables` (room for SL_MAX_OPTION_TABLES + 1). Defined by the engine
  * (pipeline/engine_options.c); `stages` is a NULL-terminated sl_stage list. */
-#define SL_MAX_OPTION_TABLES 34
+#define SL_MAX_OPTION_TABLES 35
 struct sl_stage;
 void sl_all_option_tables(const struct sl_stage *const *stages,
                           const sl_option *tables[SL_MAX_OPTION_TABLES + 1]);

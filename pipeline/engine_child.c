@@ -189,9 +189,7 @@ static void supervise(sl_engine *e, int s, const char *name, sl_ticket *t, pid_t
             }
             last_renew = now;
         }
-        char label[300];
-        snprintf(label, sizeof label, "%.200s %.32s", t->item, e->stages[s]->name);
-        sl_log_progress(e->items_settled, e->items_total, label, sp->fraction);
+        sl_engine_progress(e, s, t->item, sp->fraction);
     }
     close(fd);
     while (waitpid(pid, &out->status, 0) < 0 && errno == EINTR)
@@ -206,6 +204,8 @@ static int move_with_reason(sl_engine *e, int s, const char *name, sl_ticket *t,
     const char *stage = e->stages[s]->name;
     snprintf(t->cls, sizeof t->cls, "%s", cls);
     snprintf(t->reason, sizeof t->reason, "%s", reason);
+    if (to == SL_STATE_QUARANTINE)
+        e->items_settled++; /* nothing more to do for it until it changes */
     sl_error werr;
     sl_error_init(&werr);
     /* Without space to rewrite the ticket, the rename alone still records the state. */
@@ -342,7 +342,7 @@ static int advance(sl_engine *e, int from, const sl_ticket *t, sl_error *err)
 {
     sl_error aerr;
     sl_error_init(&aerr);
-    int rc = sl_engine_reconcile(e, t->item, t->source, from, &aerr);
+    int rc = sl_engine_reconcile(e, t->item, t->source, from, NULL, &aerr);
     if (rc == 0)
         return 0;
     char line[1500];
@@ -397,7 +397,7 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
     sl_engine_path(record, sizeof record, "%s/%s", out_dir, SL_RECORD_FILE);
     sl_error verr;
     sl_error_init(&verr);
-    if (sl_record_verify(record, out_dir, &key, NULL, &verr) == 0) {
+    if (sl_record_check(record, out_dir, &key, NULL, &verr) == 0) {
         e->counts.reused++; /* someone finished it meanwhile */
         sl_hash_hex(key, t->key);
         sl_queue_put(e->work, stage->name, SL_STATE_CLAIMED, name, t, err);

@@ -6,6 +6,7 @@
 #include <stdint.h>
 
 #include "core/hash.h"
+#include "core/clock.h"
 #include "pipeline/config.h"
 #include "pipeline/engine.h"
 #include "pipeline/queue.h"
@@ -42,55 +43,32 @@ struct sl_engine {
     int64_t memory_limit_mb, item_timeout_s, lease_seconds;
     int64_t scan_mark_expires;    /* this process's scan mark (engine_work.c); 0 = none */
     int max_crashes;
-    const sl_stage *stages[SL_MAX_STAGES];
+    unsigned method;         /* [lod] method (sl_lod_method bit) */
+    const sl_stage *stages[SL_MAX_STAGES]; /* the method's path, in order */
     uint64_t config_hash[SL_MAX_STAGES];
     int stage_count;
     sl_identity self;
     sl_engine_counts counts;
     int stop;                /* storage failure: stop claiming */
     sl_error storage_error;  /* why */
-    uint64_t items_total, items_settled; /* progress bar */
+    /* Progress (engine_status.c): items in the collection and those needing nothing more
+     * (published, quarantined), the settled count and the time when the work began, and
+     * the bar's last fraction (it never goes back). */
+    uint64_t items_total, items_settled, settled_at_start;
+    double work_start, bar_fraction;
     char **items;            /* item ids found by the scan (for the collection summary) */
     uint64_t item_count, item_capacity;
 };
 
-/* engine.c */
+/* engine_lease.c: who owns what. */
 void sl_identity_self(sl_identity *id);
 int sl_identity_alive(const sl_identity *self, const sl_ticket *t); /* 1 alive, 0 dead, -1 unknown */
-int sl_engine_path(char *buf, size_t size, const char *fmt, ...)
-    __attribute__((format(printf, 3, 4)));
-int sl_artifact_dir(const sl_engine *e, int stage, const char *ticket, char *buf, size_t size);
-int sl_input_hash(sl_engine *e, const char *ticket, const char *source_rel, sl_hash *out,
-                  sl_error *err);
-/* The upstream chain stage s is keyed on: the input's content hash, then the outputs
- * digest of every earlier stage in order (chain = H(chain, digest)), so a change anywhere
- * upstream reruns it, and identical upstream outputs never do. SL_E_CORRUPT when an
- * earlier record is missing; `verify_last` re-hashes stage s-1's outputs. */
-int sl_upstream_chain(sl_engine *e, const char *ticket, const char *source_rel, int s,
-                      int verify_last, sl_hash *out, sl_error *err);
-sl_hash sl_chain_hash(sl_hash chain, sl_hash digest);
-int sl_remove_dir_contents(const char *dir, sl_error *err);
-double sl_now_seconds(void);
-
-/* engine_gc.c: items whose last stage is done but that have no publication (each named
- * on `out`); their number. */
-uint64_t sl_engine_unpublished(sl_engine *e, FILE *out);
-
-/* engine_trees.c: the run's folders. [run] input must be a folder; input, work, output
- * and logs must not contain one another (SL_E_CONFIG naming FILE:LINE); work and output
- * must take a new file (SL_E_STORAGE if they cannot: read-only, permissions). */
-int sl_engine_check_input(sl_engine *e, sl_error *err);
-int sl_engine_check_trees(sl_engine *e, sl_error *err);
-int sl_engine_check_writable(sl_engine *e, sl_error *err);
-
-/* engine_scan.c: bring one item's tickets in line with its keys from stage `from` on. */
-int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
-                        sl_error *err);
-
-/* engine_child.c: runs stage `s` for the claimed ticket; moves the ticket on. */
-int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_error *err);
-
-/* engine_work.c: leases of claimed tickets. */
+void sl_random_nonce(char out[33]);
+/* Stamps this process's identity and a lease of [queue] lease_seconds from now on `t`. */
+void sl_engine_stamp_lease(const sl_engine *e, sl_ticket *t);
+/* The owner of a leased ticket is gone: its lease expired (wherever it runs), or, on this
+ * host, its pid died (or was reused). One rule for claims and scan marks. */
+int sl_lease_owner_gone(const sl_engine *e, const sl_ticket *t, int64_t now);
 int sl_engine_lease_renew(sl_engine *e, const char *stage, const char *name, sl_ticket *t,
                           sl_error *err);
 int sl_engine_lease_check(sl_engine *e, const char *stage, const char *name,
@@ -102,16 +80,65 @@ void sl_engine_scan_mark(sl_engine *e, int mark);
 /* A finished scan leaves its stamp (WORK/queue/_scan/done/last: host, pid, job, end time),
  * so a worker started before any scan can tell it has to wait (sl_engine_wait_for_scan). */
 void sl_engine_scan_stamp(sl_engine *e);
+/* Scans announced by other live processes (the marks of dead ones are removed). */
+int sl_engine_scans_elsewhere(const sl_engine *e);
 
-/* engine_summary.c: OUTPUT/summary.json and summary.md over the scanned items. */
-int sl_engine_write_summary(sl_engine *e, sl_error *err);
+/* engine_layout.c: where things live, and the run's folders. */
+int sl_engine_path(char *buf, size_t size, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+int sl_artifact_dir(const sl_engine *e, int stage, const char *ticket, char *buf, size_t size);
+/* Empties an artifact folder, its record first (without it nothing left is trusted). */
+int sl_remove_dir_contents(const char *dir, sl_error *err);
+int sl_engine_make_work_layout(sl_engine *e, sl_error *err);
+/* [run] input must be a folder; input, work, output and logs must not contain one another
+ * (SL_E_CONFIG naming FILE:LINE); work and output must take a new file (SL_E_STORAGE if
+ * they cannot: read-only, permissions). */
+int sl_engine_check_input(sl_engine *e, sl_error *err);
+int sl_engine_check_trees(sl_engine *e, sl_error *err);
+int sl_engine_check_writable(sl_engine *e, sl_error *err);
 
-/* engine_gc.c */
-void sl_engine_gc(sl_engine *e);
+/* engine_keys.c: what results are trusted under. */
+int sl_input_hash(sl_engine *e, const char *ticket, const char *source_rel, sl_hash *out,
+                  sl_error *err);
+/* The upstream chain stage s is keyed on: the input's content hash, then the outputs
+ * digest of every earlier stage in order (chain = H(chain, digest)), so a change anywhere
+ * upstream reruns it, and identical upstream outputs never do. SL_E_CORRUPT when an
+ * earlier record is missing; `verify_last` re-hashes stage s-1's outputs. */
+int sl_upstream_chain(sl_engine *e, const char *ticket, const char *source_rel, int s,
+                      int verify_last, sl_hash *out, sl_error *err);
+sl_hash sl_chain_hash(sl_hash chain, sl_hash digest);
+/* Hash of every config section the stage reads (its own by default), in order. */
+uint64_t sl_stage_config_hash(const sl_config *cfg, const sl_stage *stage);
+
+/* engine_reconcile.c: bring one item's tickets in line with its keys from stage `from`
+ * on (publishing it when every stage is done). */
+void sl_ticket_for(sl_ticket *t, const char *item, const char *source_rel, sl_hash key);
+int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
+                        int *settled, sl_error *err); /* settled (may be NULL): 1 when the
+                                                         item needs nothing more */
+
+/* engine_child.c: runs stage `s` for the claimed ticket; moves the ticket on. */
+int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_error *err);
 
 /* engine_publish.c */
 int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const char *source_rel,
                       int force, sl_error *err);
 int sl_engine_publish_valid(sl_engine *e, const char *item, const char *ticket);
+
+/* engine_summary.c: OUTPUT/summary.json and summary.md over the scanned items. */
+int sl_engine_write_summary(sl_engine *e, sl_error *err);
+
+/* engine_gc.c: temp files and staged folders of dead processes. */
+void sl_engine_gc(sl_engine *e);
+
+/* engine_status.c: the progress bar for stage `s` of `item` at `stage_fraction` of it
+ * (TTY only), and the same facts as text for log lines ("12/40 items, 31 %, 1:02
+ * elapsed, ETA 2:15"). */
+void sl_engine_progress(sl_engine *e, int s, const char *item, double stage_fraction);
+void sl_engine_progress_text(sl_engine *e, char *buf, size_t size);
+
+/* engine_verify.c: items whose last stage is done but that have no publication (each named
+ * on `out`); their number. */
+uint64_t sl_engine_unpublished(sl_engine *e, FILE *out);
 
 #endif

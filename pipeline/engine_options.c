@@ -29,6 +29,16 @@ static const sl_option run_options[] = {
     SL_OPTION_END,
 };
 
+static const sl_option lod_options[] = {
+    {"lod", "method", SL_OPT_ENUM, "octree", 0, 0, SL_METHOD_NAMES,
+     "How the levels are made: octree = the marching-cube octree of paper 1 (any cut in "
+     "O(m) from one model file, watertight, crack-free); segment = paper 3's segmentation "
+     "(planes kept exactly, the scan's own vertices); cluster = paper 2's clustering "
+     "passes with a bounded error. Each method is its own path of stages after range; "
+     "switching reruns the stages of the new path only."},
+    SL_OPTION_END,
+};
+
 static const sl_option queue_options[] = {
     {"queue", "lease_seconds", SL_OPT_INT, "600", 2, 7 * 86400, NULL,
      "Lease of a claimed item; renewed every fifth of it while the item runs. Another host "
@@ -45,6 +55,7 @@ void sl_all_option_tables(const sl_stage *const *stages,
 {
     int n = 0;
     tables[n++] = run_options;
+    tables[n++] = lod_options;
     tables[n++] = queue_options;
     for (const sl_stage *const *s = stages; *s && n < SL_MAX_OPTION_TABLES; s++)
         if ((*s)->options)

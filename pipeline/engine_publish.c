@@ -24,13 +24,17 @@
 #include <unistd.h>
 
 #include "core/atomicfile.h"
+#include "core/dirs.h"
 #include "core/io.h"
 #include "core/json.h"
 #include "core/log.h"
 
 static int publish_key(sl_engine *e, const char *ticket, sl_hash *key, sl_error *err)
 {
-    char text[SL_MAX_STAGES * 40 + 32] = "scanlod-publish 1\n";
+    /* The version names what the engine itself writes into a publication (report.json's
+     * shape): bumped when that changes, so every item is published again once. 2: the
+     * item id keeps its suffix, report.json names the method. */
+    char text[SL_MAX_STAGES * 40 + 32] = "scanlod-publish 2\n";
     for (int s = 0; s < e->stage_count; s++) {
         char dir[PATH_MAX], path[PATH_MAX];
         sl_artifact_dir(e, s, ticket, dir, sizeof dir);
@@ -64,7 +68,7 @@ int sl_engine_publish_valid(sl_engine *e, const char *item, const char *ticket)
     sl_error err;
     sl_error_init(&err);
     return publish_key(e, ticket, &key, &err) == 0 &&
-           sl_record_verify(record, final_dir, &key, NULL, &err) == 0;
+           sl_record_check(record, final_dir, &key, NULL, &err) == 0;
 }
 
 /* report.json: every stage's report fragment under "stages"; timings.json likewise. */
@@ -77,6 +81,7 @@ static int write_reports(sl_engine *e, const char *item, const char *ticket,
     sl_json_object_begin(&report, NULL);
     sl_json_string(&report, "item", item);
     sl_json_string(&report, "source", source_rel);
+    sl_json_string(&report, "method", sl_config_string(e->cfg, "lod", "method"));
     sl_json_object_begin(&report, "stages");
     sl_json_object_begin(&timings, NULL);
     sl_json_string(&timings, "item", item);
@@ -116,28 +121,6 @@ static int write_reports(sl_engine *e, const char *item, const char *ticket,
     sl_json_release(&report);
     sl_json_release(&timings);
     return rc;
-}
-
-static int remove_tree(const char *dir)
-{
-    DIR *d = opendir(dir);
-    if (!d)
-        return errno == ENOENT ? 0 : -1;
-    struct dirent *de;
-    while ((de = readdir(d))) {
-        if (!strcmp(de->d_name, ".") || !strcmp(de->d_name, ".."))
-            continue;
-        char path[PATH_MAX];
-        if (sl_engine_path(path, sizeof path, "%s/%s", dir, de->d_name))
-            continue;
-        struct stat st;
-        if (lstat(path, &st) == 0 && S_ISDIR(st.st_mode))
-            remove_tree(path);
-        else
-            unlink(path);
-    }
-    closedir(d);
-    return rmdir(dir);
 }
 
 /* The files of every publishing stage, by the names in its record; their names are
@@ -182,7 +165,9 @@ static int swap_in(const char *staged, const char *final_dir, const char *parent
     if (renameat2(AT_FDCWD, staged, AT_FDCWD, final_dir, RENAME_EXCHANGE) != 0)
         return sl_error_errno(err, errno, final_dir, "rename (exchange)");
     int rc = sl_fsync_dir(parent, err);
-    remove_tree(staged); /* now the previous publication */
+    sl_error ignored;
+    sl_error_init(&ignored);
+    sl_remove_tree(staged, 0, &ignored); /* now the previous publication */
     return rc;
 }
 
@@ -207,7 +192,9 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
     if (rc == 0)
         rc = sl_mkdirs(parent, err);
     if (rc == 0) {
-        remove_tree(staged); /* leftovers of a killed attempt by this pid */
+        sl_error ignored;
+        sl_error_init(&ignored);
+        sl_remove_tree(staged, 0, &ignored); /* leftovers of a killed attempt by this pid */
         rc = sl_mkdirs(staged, err);
     }
     if (rc == 0)
@@ -228,7 +215,9 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
     if (rc == 0)
         rc = swap_in(staged, final_dir, parent, err);
     if (rc) {
-        remove_tree(staged);
+        sl_error ignored;
+        sl_error_init(&ignored);
+        sl_remove_tree(staged, 0, &ignored);
         return rc;
     }
     rc = sl_mkdirs(record_dir, err);
@@ -237,7 +226,11 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
     if (rc == 0) {
         e->counts.published++;
         e->items_settled++;
-        SL_LOG(SL_LOG_INFO, "publish", item, "published %s", final_dir);
+        char progress[160];
+        sl_engine_progress_text(e, progress, sizeof progress);
+        /* The progress rides on this line: in a cron log (no terminal, no bar) it is what
+         * says how far the night has come. */
+        SL_LOG(SL_LOG_INFO, "publish", item, "published %s (%s)", final_dir, progress);
         sl_log_event("published", "publish", item, 0, NULL, NULL);
     }
     return rc;

@@ -1,11 +1,5 @@
-/* Collection scan and reconciliation: make each item's tickets match its current keys.
- *
- * For every stage in order, the stage key is computed from the config section hash, the
- * stage version and the upstream chain (the input's content hash, then every earlier
- * stage's outputs digest: sl_upstream_chain). A stage whose record verifies under
- * that key is done; the first stage that is not gets a ready ticket (or keeps its
- * quarantine, when the key is the one it was quarantined under). Items whose every stage
- * is done are published if their publication is missing or stale.
+/* The collection scan: walk [run] input (docs/engine.md, "The input tree") and reconcile
+ * every item it finds (engine_reconcile.c).
  */
 #include "pipeline/engine_internal.h"
 
@@ -21,95 +15,6 @@
 #include "core/progress.h"
 
 #define MAX_TREE_DEPTH 64
-
-static void ticket_for(sl_ticket *t, const char *item, const char *source_rel, sl_hash key)
-{
-    sl_ticket_init(t);
-    snprintf(t->item, sizeof t->item, "%s", item);
-    snprintf(t->source, sizeof t->source, "%s", source_rel);
-    sl_hash_hex(key, t->key);
-}
-
-/* Rewrites a ticket in its current state with a new key, then moves it. */
-static int requeue(sl_engine *e, const char *stage, const char *name, int from, sl_ticket *t,
-                   sl_hash key, int reset, sl_error *err)
-{
-    sl_hash_hex(key, t->key);
-    if (reset) {
-        t->attempt = 0;
-        t->crashes = 0;
-        t->cls[0] = t->reason[0] = '\0';
-    }
-    int rc = sl_queue_put(e->work, stage, from, name, t, err);
-    if (rc == 0 && from != SL_STATE_READY)
-        rc = sl_queue_move(e->work, stage, name, from, SL_STATE_READY, err);
-    return rc == SL_E_BUSY ? 0 : rc;
-}
-
-int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
-                        sl_error *err)
-{
-    char name[SL_TICKET_NAME_MAX + 1];
-    int rc = sl_ticket_name(item, name, sizeof name, err);
-    if (rc)
-        return rc;
-    sl_hash upstream;
-    rc = sl_upstream_chain(e, name, source_rel, from, 0, &upstream, err);
-    if (rc == SL_E_CORRUPT && from > 0)
-        return sl_engine_reconcile(e, item, source_rel, 0, err);
-    if (rc)
-        return rc;
-    for (int s = from; s < e->stage_count; s++) {
-        const char *stage = e->stages[s]->name;
-        sl_hash key = sl_stage_key(stage, e->stages[s]->version, e->config_hash[s], upstream);
-        int state = sl_queue_find(e->work, stage, name);
-        if (state == SL_STATE_CLAIMED)
-            return 0; /* a worker holds it; its lease decides */
-        char dir[PATH_MAX], record_path[PATH_MAX], ticket_path[PATH_MAX];
-        sl_artifact_dir(e, s, name, dir, sizeof dir);
-        sl_engine_path(record_path, sizeof record_path, "%s/%s", dir, SL_RECORD_FILE);
-        sl_record rec;
-        sl_error verr;
-        sl_error_init(&verr);
-        sl_ticket t;
-        if (sl_record_verify(record_path, dir, &key, &rec, &verr) == 0) {
-            if (state != SL_STATE_DONE) {
-                ticket_for(&t, item, source_rel, key);
-                rc = sl_queue_put(e->work, stage, SL_STATE_DONE, name, &t, err);
-                if (rc == 0 && state != SL_STATE_NONE) {
-                    sl_queue_path(ticket_path, sizeof ticket_path, e->work, stage, state, name);
-                    unlink(ticket_path);
-                }
-                if (rc)
-                    return rc;
-            }
-            e->counts.reused++;
-            upstream = sl_chain_hash(upstream, rec.outputs_digest);
-            continue;
-        }
-        if (state == SL_STATE_NONE) {
-            ticket_for(&t, item, source_rel, key);
-            return sl_queue_put(e->work, stage, SL_STATE_READY, name, &t, err);
-        }
-        sl_queue_path(ticket_path, sizeof ticket_path, e->work, stage, state, name);
-        sl_error terr;
-        sl_error_init(&terr);
-        if (sl_ticket_read(ticket_path, &t, &terr) != 0)
-            ticket_for(&t, item, source_rel, key); /* torn ticket: start over */
-        char key_hex[SL_HASH_HEX_SIZE];
-        sl_hash_hex(key, key_hex);
-        int same_key = strcmp(t.key, key_hex) == 0;
-        snprintf(t.source, sizeof t.source, "%s", source_rel);
-        if (state == SL_STATE_QUARANTINE && same_key)
-            return 0; /* stays quarantined until its input, config or code changes */
-        if (state == SL_STATE_READY && same_key)
-            return 0;
-        return requeue(e, stage, name, state, &t, key, !same_key || state == SL_STATE_DONE, err);
-    }
-    if (sl_engine_publish_valid(e, item, name))
-        return 0;
-    return sl_engine_publish(e, item, name, source_rel, 1, err);
-}
 
 /* ---- input tree walk ------------------------------------------------------------- */
 
@@ -148,18 +53,16 @@ static int quarantine_unreadable(sl_engine *e, const char *item, const char *why
     sl_hash_hex(key, key_hex);
     int state = sl_queue_find(e->work, stage, name);
     sl_ticket t;
-    sl_error terr;
-    sl_error_init(&terr);
-    sl_queue_path(path, sizeof path, e->work, stage, state, name);
     if (state == SL_STATE_CLAIMED ||
-        (state == SL_STATE_QUARANTINE && sl_ticket_read(path, &t, &terr) == 0 &&
-         strcmp(t.key, key_hex) == 0))
+        (state == SL_STATE_QUARANTINE &&
+         sl_queue_get(e->work, stage, state, name, &t) == 0 && strcmp(t.key, key_hex) == 0))
         return 0;
-    ticket_for(&t, item, item, key);
+    sl_ticket_for(&t, item, item, key);
     snprintf(t.cls, sizeof t.cls, "badinput");
     snprintf(t.reason, sizeof t.reason, "%.500s: %s", item, why);
     rc = sl_queue_put(e->work, stage, SL_STATE_QUARANTINE, name, &t, err);
-    if (rc == 0 && state != SL_STATE_NONE && state != SL_STATE_QUARANTINE)
+    if (rc == 0 && state != SL_STATE_NONE && state != SL_STATE_QUARANTINE &&
+        sl_queue_path(path, sizeof path, e->work, stage, state, name) == 0)
         unlink(path);
     if (rc == 0) {
         e->counts.quarantined++;
@@ -184,10 +87,13 @@ static int scan_item(sl_engine *e, const char *rel, const char *unreadable, sl_e
         e->items[e->item_count++] = strdup(rel);
     sl_error item_err;
     sl_error_init(&item_err);
+    int settled = 0;
     int rc = unreadable ? quarantine_unreadable(e, rel, unreadable, &item_err)
-                        : sl_engine_reconcile(e, rel, rel, 0, &item_err);
-    if (rc == 0)
+                        : sl_engine_reconcile(e, rel, rel, 0, &settled, &item_err);
+    if (rc == 0) {
+        e->items_settled += unreadable || settled; /* nothing left to do for it */
         return 0;
+    }
     sl_error_context(&item_err, NULL, rel);
     char line[1400];
     SL_LOG(SL_LOG_ERROR, "scan", rel, "%s", sl_error_format(&item_err, line, sizeof line));
@@ -315,7 +221,11 @@ int sl_engine_scan(sl_engine *e, sl_error *err)
     double start = sl_now_seconds();
     sl_engine_scan_mark(e, 1);
     sl_engine_gc(e);
+    e->items_settled = 0;
     int rc = walk(e, "", 0, err);
+    e->items_total = e->counts.items;
+    e->work_start = sl_now_seconds();
+    e->settled_at_start = e->items_settled;
     if (rc == 0 && !*sl_interrupt_flag())
         sl_engine_scan_stamp(e); /* before the mark goes: a waiting worker sees one of them */
     sl_engine_scan_mark(e, 0);

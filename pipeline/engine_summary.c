@@ -34,9 +34,7 @@ static int quarantined(sl_engine *e, const char *item, sl_ticket *t)
     if (sl_ticket_name(item, name, sizeof name, &err))
         return 0;
     for (int s = 0; s < e->stage_count; s++) {
-        char path[PATH_MAX];
-        sl_queue_path(path, sizeof path, e->work, e->stages[s]->name, SL_STATE_QUARANTINE, name);
-        if (sl_ticket_read(path, t, &err) == 0)
+        if (sl_queue_get(e->work, e->stages[s]->name, SL_STATE_QUARANTINE, name, t) == 0)
             return 1;
     }
     return 0;

@@ -25,70 +25,6 @@
 /* A claimed ticket still without a lease after this long is abandoned (seconds). */
 #define UNLEASED_CLAIM_S 10
 
-static void random_nonce(char out[33])
-{
-    unsigned char bytes[16];
-    FILE *f = fopen("/dev/urandom", "rb");
-    size_t n = f ? fread(bytes, 1, sizeof bytes, f) : 0;
-    if (f)
-        fclose(f);
-    if (n != sizeof bytes) { /* no urandom: time and pid are unique enough per claim */
-        struct timespec ts;
-        clock_gettime(CLOCK_REALTIME, &ts);
-        sl_hash h = sl_hash_bytes(&ts, sizeof ts);
-        memcpy(bytes, &h, sizeof bytes);
-        bytes[0] ^= (unsigned char)getpid();
-    }
-    for (int i = 0; i < 16; i++)
-        snprintf(out + 2 * i, 3, "%02x", bytes[i]);
-}
-
-static void stamp_lease(const sl_engine *e, sl_ticket *t)
-{
-    snprintf(t->host, sizeof t->host, "%s", e->self.host);
-    snprintf(t->boot, sizeof t->boot, "%s", e->self.boot);
-    snprintf(t->job, sizeof t->job, "%s", e->self.job);
-    t->pid = e->self.pid;
-    t->pid_start = e->self.pid_start;
-    t->expires = (int64_t)sl_now_seconds() + e->lease_seconds;
-}
-
-/* Is the claimed ticket still ours (same nonce and epoch)? */
-static int lease_held(const sl_engine *e, const char *stage, const char *name, const sl_ticket *mine)
-{
-    char path[PATH_MAX];
-    sl_queue_path(path, sizeof path, e->work, stage, SL_STATE_CLAIMED, name);
-    sl_ticket now;
-    sl_error err;
-    sl_error_init(&err);
-    return sl_ticket_read(path, &now, &err) == 0 && now.epoch == mine->epoch &&
-           strcmp(now.nonce, mine->nonce) == 0;
-}
-
-int sl_engine_lease_renew(sl_engine *e, const char *stage, const char *name, sl_ticket *t,
-                          sl_error *err)
-{
-    if (!lease_held(e, stage, name, t))
-        return sl_error_set(err, SL_E_LEASE_LOST, 0, name, "lease lost to another worker");
-    stamp_lease(e, t);
-    return sl_queue_put(e->work, stage, SL_STATE_CLAIMED, name, t, err);
-}
-
-int sl_engine_lease_check(sl_engine *e, const char *stage, const char *name,
-                          const sl_ticket *t, sl_error *err)
-{
-    if (!lease_held(e, stage, name, t))
-        return sl_error_set(err, SL_E_LEASE_LOST, 0, name, "lease lost to another worker");
-    return 0;
-}
-
-/* The owner of a leased ticket is gone: its lease expired (wherever it runs), or, on
- * this host, its pid died (or was reused). One rule for claims and scan marks. */
-static int lease_owner_gone(const sl_engine *e, const sl_ticket *t, int64_t now)
-{
-    return t->expires < now || sl_identity_alive(&e->self, t) == 0;
-}
-
 /* A claimed ticket nobody can be working on any more goes back to ready. */
 static void reclaim_stale(sl_engine *e, int s)
 {
@@ -122,7 +58,7 @@ static void reclaim_stale(sl_engine *e, int s)
              * ourselves forever. */
             stale = 1;
         } else {
-            stale = lease_owner_gone(e, &t, now);
+            stale = sl_lease_owner_gone(e, &t, now);
         }
         if (!stale)
             continue;
@@ -168,8 +104,8 @@ static int claim_one(sl_engine *e, int s, char *name, size_t name_size, sl_ticke
         }
         t->epoch++;
         t->attempt++;
-        random_nonce(t->nonce);
-        stamp_lease(e, t);
+        sl_random_nonce(t->nonce);
+        sl_engine_stamp_lease(e, t);
         rc = sl_queue_put(e->work, stage, SL_STATE_CLAIMED, names[i], t, err);
         if (rc) {
             /* No lease could be written (full disk): hand the ticket back at once
@@ -186,130 +122,6 @@ static int claim_one(sl_engine *e, int s, char *name, size_t name_size, sl_ticke
     return rc ? rc : claimed;
 }
 
-#define SCAN_QUEUE "_scan"
-
-void sl_engine_scan_mark(sl_engine *e, int mark)
-{
-    char name[128];
-    snprintf(name, sizeof name, "%s.%ld", e->self.host, e->self.pid);
-    sl_error err;
-    sl_error_init(&err);
-    if (!mark) {
-        char path[PATH_MAX];
-        sl_queue_path(path, sizeof path, e->work, SCAN_QUEUE, SL_STATE_CLAIMED, name);
-        unlink(path);
-        e->scan_mark_expires = 0;
-        return;
-    }
-    if (e->scan_mark_expires &&
-        (int64_t)sl_now_seconds() < e->scan_mark_expires - e->lease_seconds / 2)
-        return;
-    sl_ticket t;
-    sl_ticket_init(&t);
-    snprintf(t.item, sizeof t.item, "%s", "(scan)");
-    stamp_lease(e, &t);
-    /* Best effort: without it (full disk) others may finish early and exit 75. */
-    if (sl_queue_create(e->work, SCAN_QUEUE, &err) == 0 &&
-        sl_queue_put(e->work, SCAN_QUEUE, SL_STATE_CLAIMED, name, &t, &err) == 0)
-        e->scan_mark_expires = t.expires;
-}
-
-void sl_engine_scan_stamp(sl_engine *e)
-{
-    sl_ticket t;
-    sl_ticket_init(&t);
-    snprintf(t.item, sizeof t.item, "%s", "(last scan)");
-    stamp_lease(e, &t);
-    t.expires = (int64_t)sl_now_seconds(); /* when it ended */
-    sl_error err;
-    sl_error_init(&err);
-    if (sl_queue_put(e->work, SCAN_QUEUE, SL_STATE_DONE, "last", &t, &err) != 0)
-        SL_LOG(SL_LOG_WARN, "scan", NULL, "scan stamp not written: %s", err.message);
-}
-
-/* Does a scan mark or stamp `t` come from job `job` ("" = any job)? Slurm array tasks
- * carry "ARRAYJOB_TASK[+rRESTART]" (sl_identity_self), so a job's array id names all of
- * its tasks. */
-static int from_job(const sl_ticket *t, const char *job)
-{
-    size_t n = strlen(job);
-    return !job[0] || (strncmp(t->job, job, n) == 0 &&
-                       (t->job[n] == '\0' || t->job[n] == '_' || t->job[n] == '+'));
-}
-
-/* A live scan mark of `job` (other than ours), or the stamp of a finished one. */
-static int scan_seen(const sl_engine *e, const char *job, int64_t now)
-{
-    char path[PATH_MAX];
-    sl_ticket t;
-    sl_error err;
-    sl_error_init(&err);
-    sl_queue_path(path, sizeof path, e->work, SCAN_QUEUE, SL_STATE_DONE, "last");
-    if (sl_ticket_read(path, &t, &err) == 0 && from_job(&t, job))
-        return 1;
-    char **names;
-    int count = 0, seen = 0;
-    if (sl_queue_list(e->work, SCAN_QUEUE, SL_STATE_CLAIMED, &names, &count, &err) != 0)
-        return 0;
-    for (int i = 0; i < count && !seen; i++) {
-        sl_error terr;
-        sl_error_init(&terr);
-        sl_queue_path(path, sizeof path, e->work, SCAN_QUEUE, SL_STATE_CLAIMED, names[i]);
-        seen = sl_ticket_read(path, &t, &terr) == 0 && t.expires >= now && from_job(&t, job);
-    }
-    free(names);
-    return seen;
-}
-
-int sl_engine_wait_for_scan(sl_engine *e, const char *job, int64_t seconds, sl_error *err)
-{
-    double start = sl_now_seconds();
-    int said = 0;
-    while (!scan_seen(e, job, (int64_t)sl_now_seconds())) {
-        if (*sl_interrupt_flag())
-            return sl_error_set(err, SL_E_INTERRUPTED, 0, e->work, "interrupted");
-        if (sl_now_seconds() - start >= (double)seconds)
-            return sl_error_set(err, SL_E_BUSY, 0, e->work,
-                                "no scan %s%s%s within %lld s: nothing to work on yet",
-                                job[0] ? "of job " : "has run in this work folder",
-                                job[0] ? job : "", job[0] ? " began" : "", (long long)seconds);
-        if (!said++)
-            SL_LOG(SL_LOG_INFO, "worker", NULL, "waiting for a scan%s%s (up to %lld s)",
-                   job[0] ? " of job " : "", job, (long long)seconds);
-        struct timespec pause = {0, 500 * 1000 * 1000};
-        nanosleep(&pause, NULL);
-    }
-    return 0;
-}
-
-/* Scans announced by other live processes (their announcements when dead are removed). */
-static int scans_elsewhere(const sl_engine *e)
-{
-    char **names;
-    int count = 0, live = 0;
-    sl_error err;
-    sl_error_init(&err);
-    if (sl_queue_list(e->work, SCAN_QUEUE, SL_STATE_CLAIMED, &names, &count, &err) != 0)
-        return 0;
-    int64_t now = (int64_t)sl_now_seconds();
-    for (int i = 0; i < count; i++) {
-        char path[PATH_MAX];
-        sl_queue_path(path, sizeof path, e->work, SCAN_QUEUE, SL_STATE_CLAIMED, names[i]);
-        sl_ticket t;
-        sl_error terr;
-        sl_error_init(&terr);
-        if (sl_ticket_read(path, &t, &terr) != 0)
-            continue; /* being written */
-        if (t.pid == e->self.pid && strcmp(t.host, e->self.host) == 0)
-            continue;
-        if (lease_owner_gone(e, &t, now))
-            unlink(path);
-        else
-            live++;
-    }
-    free(names);
-    return live;
-}
 
 /* Tickets of stage s in `state` (0 when the queue cannot be listed). */
 static int count_tickets(const sl_engine *e, int s, int state)
@@ -380,7 +192,7 @@ int sl_engine_work(sl_engine *e, sl_error *err)
              * enqueue a next stage) or are scanning (and may enqueue items), and the
              * exit code should describe the finished collection, so wait for them (a
              * dead owner is reclaimed above, a dead scanner's mark dropped). */
-            if (tickets_in(e, SL_STATE_CLAIMED) > 0 || scans_elsewhere(e) > 0) {
+            if (tickets_in(e, SL_STATE_CLAIMED) > 0 || sl_engine_scans_elsewhere(e) > 0) {
                 struct timespec pause = {0, 250 * 1000 * 1000};
                 nanosleep(&pause, NULL);
                 quiet_once = 0;

@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 
 #include "core/atomicfile.h"
+#include "core/dirs.h"
 #include "core/escape.h"
 #include "core/hash.h"
 #include "core/io.h"
@@ -52,6 +53,8 @@ int sl_ticket_name(const char *item, char *name, size_t size, sl_error *err)
 int sl_queue_path(char *buf, size_t size, const char *work, const char *stage, int state,
                   const char *name)
 {
+    if (state < 0 || state >= SL_STATE_COUNT)
+        return -1; /* SL_STATE_NONE has no folder */
     int n = name ? snprintf(buf, size, "%s/queue/%s/%s/%s", work, stage, state_names[state], name)
                  : snprintf(buf, size, "%s/queue/%s/%s", work, stage, state_names[state]);
     return n < 0 || (size_t)n >= size ? -1 : 0;
@@ -102,6 +105,16 @@ int sl_queue_move(const char *work, const char *stage, const char *name, int fro
     return rc;
 }
 
+int sl_queue_get(const char *work, const char *stage, int state, const char *name,
+                 sl_ticket *t)
+{
+    char path[PATH_MAX];
+    sl_error err;
+    sl_error_init(&err);
+    return sl_queue_path(path, sizeof path, work, stage, state, name) ||
+           sl_ticket_read(path, t, &err) != 0;
+}
+
 int sl_queue_put(const char *work, const char *stage, int state, const char *name,
                  const sl_ticket *t, sl_error *err)
 {
@@ -111,11 +124,6 @@ int sl_queue_put(const char *work, const char *stage, int state, const char *nam
     return sl_ticket_write(path, t, err);
 }
 
-static int compare_names(const void *a, const void *b)
-{
-    return strcmp(*(const char *const *)a, *(const char *const *)b);
-}
-
 int sl_queue_list(const char *work, const char *stage, int state, char ***names, int *count,
                   sl_error *err)
 {
@@ -123,55 +131,17 @@ int sl_queue_list(const char *work, const char *stage, int state, char ***names,
     *count = 0;
     char path[PATH_MAX];
     sl_queue_path(path, sizeof path, work, stage, state, NULL);
-    DIR *dir = opendir(path);
-    if (!dir) {
-        if (errno == ENOENT)
-            return 0;
-        return sl_error_errno(err, errno, path, "opendir");
+    size_t n = 0;
+    sl_error lerr;
+    sl_error_init(&lerr);
+    /* Hidden names are temps being written and NFS silly-renames, never tickets. */
+    int rc = sl_dir_list(path, SL_DIR_NO_HIDDEN, names, &n, &lerr);
+    if (rc && lerr.sys_errno == ENOENT)
+        return 0;
+    if (rc) {
+        sl_error_merge(err, &lerr);
+        return rc;
     }
-    size_t cap = 0, n = 0, text = 0;
-    char **list = NULL;
-    struct dirent *de;
-    while ((de = readdir(dir))) {
-        if (de->d_name[0] == '.') /* ".", "..", temps, NFS silly-renames */
-            continue;
-        if (n == cap) {
-            cap = cap ? cap * 2 : 64;
-            char **grown = realloc(list, cap * sizeof *list);
-            if (!grown) {
-                for (size_t i = 0; i < n; i++)
-                    free(list[i]);
-                free(list);
-                closedir(dir);
-                return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
-            }
-            list = grown;
-        }
-        list[n] = strdup(de->d_name);
-        text += strlen(de->d_name) + 1;
-        n++;
-    }
-    closedir(dir);
-    if (n > 1)
-        qsort(list, n, sizeof *list, compare_names);
-    /* One block: pointer array followed by the strings, so the caller frees once. */
-    char **block = malloc(n * sizeof *block + text + 1);
-    if (!block) {
-        for (size_t i = 0; i < n; i++)
-            free(list[i]);
-        free(list);
-        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
-    }
-    char *p = (char *)(block + n);
-    for (size_t i = 0; i < n; i++) {
-        size_t len = strlen(list[i]) + 1;
-        memcpy(p, list[i], len);
-        block[i] = p;
-        p += len;
-        free(list[i]);
-    }
-    free(list);
-    *names = block;
     *count = (int)n;
     return 0;
 }

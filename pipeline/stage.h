@@ -8,13 +8,20 @@
  *   - writes its artifacts into `out_dir` through core/atomicfile.h only (the engine
  *     hashes every file in `out_dir` and writes the commit record last);
  *   - adds counts to `report` (an open JSON object: the stage's part of the item report);
- *   - polls `progress` and returns SL_E_INTERRUPTED at a safe point when asked to stop;
+ *   - polls `progress` and returns SL_E_INTERRUPTED at a safe point when asked to stop
+ *     (sl_stage_step);
  *   - returns 0 or a negative SL_E_* with `err` naming the file and the cause. Bad input
  *     must be SL_E_BADINPUT/SL_E_LIMIT/SL_E_UNSUPPORTED (the item is quarantined).
+ *
+ * Its face (stages/NAME/NAME.h): `sl_NAME_config`, a flat struct of the resolved section
+ * (every field commented); `sl_NAME_default_config()`, that struct with every option at
+ * the default of the stage's option table (sl_stage_default_config: the defaults are
+ * written once, in the table); the functions that do its work; and `sl_NAME_stage`.
  */
 #ifndef SCANLOD_PIPELINE_STAGE_H
 #define SCANLOD_PIPELINE_STAGE_H
 
+#include <limits.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -41,8 +48,32 @@ typedef struct sl_stage_io {
 /* The artifact directory of the earlier stage `name` for this item, or NULL. */
 const char *sl_stage_dir(const sl_stage_io *io, const char *name);
 
+/* "dir/name" into `path` (an artifact file of io->in_dir, io->out_dir or an upstream
+ * dir); SL_E_STORAGE (ENAMETOOLONG) when it does not fit. */
+int sl_stage_path(char path[PATH_MAX], const char *dir, const char *name, sl_error *err);
+
+/* A safe point of `run`: reports `phase` at `fraction` done; SL_E_INTERRUPTED (with `err`
+ * set) when the run has been asked to stop, else 0. */
+int sl_stage_step(const sl_stage_io *io, const char *phase, double fraction, sl_error *err);
+
+/* The LOD methods (ARCHITECTURE section 2): each is a path of stages from the range stage
+ * to the export stage, picked per run by `[lod] method`; a stage names the methods whose
+ * path it is on. The engine runs the registry's stages of the chosen method, in order.
+ *   octree  (paper 1): range -> samples -> merge -> priority -> crack -> export
+ *   segment (paper 3): range -> segment -> export
+ *   cluster (paper 2): range -> cluster -> export */
+enum sl_lod_method {
+    SL_METHOD_OCTREE = 1 << 0,
+    SL_METHOD_SEGMENT = 1 << 1,
+    SL_METHOD_CLUSTER = 1 << 2,
+};
+#define SL_METHODS_ALL (SL_METHOD_OCTREE | SL_METHOD_SEGMENT | SL_METHOD_CLUSTER)
+/* "octree|segment|cluster": the [lod] method choices, in bit order. */
+#define SL_METHOD_NAMES "octree|segment|cluster"
+
 typedef struct sl_stage {
     const char *name;         /* also the config section */
+    unsigned methods;         /* the methods whose path includes it (sl_lod_method bits) */
     const char *description;  /* one line, for --help and docs */
     uint32_t version;         /* bump when the output for the same input changes */
     const sl_option *options; /* the options this stage declares (usually section == name) */
@@ -57,6 +88,12 @@ typedef struct sl_stage {
      * item under [run] output/ITEM/. */
     int publish;
 } sl_stage;
+
+/* Fills `out` (`size` bytes: the stage's flat config struct) with the stage's config at
+ * the defaults of its option table, through its own `configure`: what
+ * sl_NAME_default_config() returns, for tools and tests that call a stage's work
+ * directly. Defaults that fail their own table are a bug: it aborts with a message. */
+void sl_stage_default_config(const sl_stage *stage, void *out, size_t size);
 
 /* The engine knows no stage by name: the program hands it the list of stages, in pipeline
  * order (stages/registry.h), when it opens it. */

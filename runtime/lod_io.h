@@ -30,9 +30,4 @@ int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err);
 int sl_lod_model_parse(const void *body, uint64_t size, const char *name, sl_lod_model *out,
                        sl_error *err);
 
-/* Completes a model whose tree, lod_array, neighbours and transitions are set: derives
- * expansion_index, the accumulation table (by drawing the cells each expansion changes)
- * and error_after from per-node errors (may be NULL: then all zero). */
-int sl_lod_model_finish(sl_lod_model *m, const float *node_error, sl_error *err);
-
 #endif

@@ -158,12 +158,9 @@ static inline uint32_t sl_neighbour(const sl_neighbours *nb, uint32_t n, int d)
 #define SL_LOD_UNIFORM_ROW 16
 extern const uint8_t sl_lod_uniform_cells[256][SL_LOD_UNIFORM_ROW];
 
-/* Builds the neighbour table of every node (O(n log n) lookups). Returns -1 on OOM. */
-int sl_neighbours_build(const sl_octree *t, sl_neighbours *out);
+/* The tables are built by the stages (sl_neighbours_build: stages/priority/priority.h;
+ * sl_transitions_build: stages/crack/crack.h) and read here. */
 void sl_neighbours_release(sl_neighbours *nb);
-
-/* Gathers every node's transition record from the finer level (O(n log n)). */
-int sl_transitions_build(const sl_octree *t, sl_transitions *out, uint64_t *unresolved);
 void sl_transitions_release(sl_transitions *tr);
 
 /* The cell of frontier node n when the nodes with expansion_index < k are expanded:

@@ -7,17 +7,19 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 packages=(
   build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev
   libopenvdb-dev libboost-iostreams-dev libtbb-dev
-  libopenimageio-dev libinih-dev libxxhash-dev libmeshoptimizer-dev
+  libopenimageio-dev libinih-dev libxxhash-dev libmeshoptimizer-dev libdraco-dev
   zlib1g-dev time gnuplot-nox
   # scripts/bench/peers/vsa_lod.cpp: CGAL's Variational Shape Approximation (issue 12)
   libcgal-dev
+  # tests/export/test_glb_render.sh: three.js in headless Chromium
+  chromium
   # tests/cluster/: a throwaway single-node Slurm (its own config; no service is enabled)
   slurm-wlm munge iproute2
 )
 
 missing=()
 for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed' || missing+=("$p")
+  [ "$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null)" = 'install ok installed' ] || missing+=("$p")
 done
 # node + npm run the Khronos glTF validator in the tests (Debian ships npm separately).
 command -v node >/dev/null || missing+=(nodejs)
@@ -40,4 +42,8 @@ fi
 # The glTF validator (npm package gltf-validator, pinned by scripts/gltf/package-lock.json).
 if [ ! -f "$root/scripts/gltf/node_modules/gltf-validator/package.json" ]; then
   npm ci --prefix "$root/scripts/gltf" --no-audit --no-fund --loglevel=error
+fi
+# three.js and playwright-core for the render test (pinned by scripts/render/package-lock.json).
+if [ ! -f "$root/scripts/render/node_modules/playwright-core/package.json" ]; then
+  npm ci --prefix "$root/scripts/render" --no-audit --no-fund --loglevel=error
 fi

@@ -1,7 +1,6 @@
 /* crack stage entry (crack.h). */
 #include <errno.h>
 #include <limits.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -16,9 +15,15 @@
 static int crack_configure(const sl_config *cfg, void **out, sl_error *err)
 {
     (void)cfg;
-    (void)err;
-    *out = NULL;
-    return 0;
+    *out = calloc(1, sizeof(sl_crack_config));
+    return *out ? 0 : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+}
+
+sl_crack_config sl_crack_default_config(void)
+{
+    sl_crack_config c;
+    sl_stage_default_config(&sl_crack_stage, &c, sizeof c);
+    return c;
 }
 
 static int crack_run(const void *config, const sl_stage_io *io, sl_error *err)
@@ -28,19 +33,22 @@ static int crack_run(const void *config, const sl_stage_io *io, sl_error *err)
     if (!merge_dir)
         return sl_error_set(err, SL_E_INTERNAL, 0, NULL, "crack stage needs the merge stage");
     char octree_path[PATH_MAX], priority_path[PATH_MAX], out_path[PATH_MAX];
-    snprintf(octree_path, sizeof octree_path, "%s/%s", merge_dir, SL_OCTREE_FILE);
-    snprintf(priority_path, sizeof priority_path, "%s/%s", io->in_dir, SL_PRIORITY_FILE);
-    snprintf(out_path, sizeof out_path, "%s/%s", io->out_dir, SL_MODEL_FILE);
     sl_lod_model model;
     sl_lod_model_init(&model);
-    int rc = sl_octree_read(octree_path, &model.tree, err);
     sl_priority p;
     memset(&p, 0, sizeof p);
+    int rc = sl_stage_path(octree_path, merge_dir, SL_OCTREE_FILE, err);
+    if (rc == 0)
+        rc = sl_stage_path(priority_path, io->in_dir, SL_PRIORITY_FILE, err);
+    if (rc == 0)
+        rc = sl_stage_path(out_path, io->out_dir, SL_MODEL_FILE, err);
+    if (rc == 0)
+        rc = sl_octree_read(octree_path, &model.tree, err);
     if (rc == 0)
         rc = sl_priority_read(priority_path, &model.tree, &p, err);
     uint64_t unresolved = 0;
-    if (rc == 0 && sl_progress_step(io->progress, "crack: transitions", 0.1))
-        rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+    if (rc == 0)
+        rc = sl_stage_step(io, "crack: transitions", 0.1, err);
     if (rc == 0 && sl_transitions_build(&model.tree, &model.transitions, &unresolved))
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     if (rc == 0) {
@@ -50,8 +58,7 @@ static int crack_run(const void *config, const sl_stage_io *io, sl_error *err)
         model.neighbours = p.neighbours;
         p.lod_array = NULL;
         memset(&p.neighbours, 0, sizeof p.neighbours);
-        if (sl_progress_step(io->progress, "crack: accumulation", 0.5))
-            rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+        rc = sl_stage_step(io, "crack: accumulation", 0.5, err);
     }
     if (rc == 0)
         rc = sl_lod_model_finish(&model, p.node_error, err);
@@ -70,10 +77,11 @@ static int crack_run(const void *config, const sl_stage_io *io, sl_error *err)
 
 const sl_stage sl_crack_stage = {
     .name = "crack",
+    .methods = SL_METHOD_OCTREE,
     .description = "LOD array -> crack compensation records and the LOD model (paper 1 2.4)",
     .version = CRACK_STAGE_VERSION,
     .options = NULL,
     .configure = crack_configure,
-    .release_config = NULL,
+    .release_config = free,
     .run = crack_run,
 };

@@ -27,9 +27,6 @@ static int good_level_name(const char *name)
 int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_config *c,
                            sl_error *err)
 {
-    c->levels = calloc(SL_EXPORT_MAX_LEVELS, sizeof *c->levels);
-    if (!c->levels)
-        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     const char *lists[2] = {percents, budgets};
     for (int l = 0; l < 2; l++) {
         const char *p = lists[l];
@@ -81,53 +78,81 @@ int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_
     return 0;
 }
 
-static sl_mesh mesh_view(const sl_lod_mesh *m)
+/* The level's GLB geometry: the level itself, or with a baked atlas its per-triangle
+ * charts (three vertices per triangle) with texture coordinates and the image. */
+static sl_lod_mesh glb_geometry(const sl_lod_mesh *mesh, const sl_export_baked *baked,
+                                sl_export_glb *glb)
 {
-    sl_mesh v;
-    sl_mesh_init(&v);
-    v.vertex_count = m->vertex_count;
-    v.positions = m->positions;
-    v.normals = m->normals;
-    v.colors = m->colors;
-    v.triangle_count = m->triangle_count;
-    v.triangles = m->indices;
-    return v;
+    if (!baked || !baked->image)
+        return *mesh;
+    glb->texcoords = baked->texcoords;
+    glb->options.image = baked->image;
+    glb->options.image_size = baked->image_size;
+    glb->options.image_mime_type = baked->mime_type;
+    sl_lod_mesh g = {baked->vertex_count, baked->triangle_count, baked->positions,
+                     baked->normals, NULL, baked->triangles};
+    return g; /* vertex colours would multiply the texture: left out */
 }
 
 static int write_files(const sl_export_config *c, const sl_export_level *lv,
-                       const sl_lod_mesh *mesh, const char *extras, const sl_stage_io *io,
-                       sl_error *err)
+                       const sl_lod_mesh *mesh, const sl_export_baked *baked, const char *extras,
+                       const sl_export_glb *level_glb, sl_glb_stats *stats,
+                       const sl_stage_io *io, sl_error *err)
 {
-    static const char *const exts[3] = {"ply", "glb", "obj"};
-    const int wanted[3] = {c->write_ply, c->write_glb, c->write_obj};
+    sl_export_glb glb = *level_glb;
+    sl_lod_mesh textured = glb_geometry(mesh, baked, &glb);
+    static const char *const exts[4] = {"ply", "glb", "obj", "png"};
+    const int wanted[4] = {c->write_ply, c->write_glb, c->write_obj, c->thumbnail_size > 0};
     int rc = 0;
-    for (int i = 0; i < 3 && rc == 0; i++) {
+    for (int i = 0; i < 4 && rc == 0; i++) {
         if (!wanted[i])
             continue;
-        char path[PATH_MAX];
-        snprintf(path, sizeof path, "%s/%s.%s", io->out_dir, lv->name, exts[i]);
-        rc = sl_export_write_mesh(path, mesh, extras, err);
-    }
-    if (rc == 0 && c->thumbnail_size > 0) {
-        char path[PATH_MAX];
-        snprintf(path, sizeof path, "%s/%s.png", io->out_dir, lv->name);
-        rc = sl_export_thumbnail(path, mesh, c->thumbnail_size, err);
+        char file[sizeof lv->name + 8], path[PATH_MAX];
+        snprintf(file, sizeof file, "%s.%s", lv->name, exts[i]);
+        rc = sl_stage_path(path, io->out_dir, file, err);
+        if (rc == 0)
+            rc = i == 1 ? sl_export_write_mesh(path, &textured, extras, &glb, stats, err)
+                 : i < 3 ? sl_export_write_mesh(path, mesh, extras, &glb, NULL, err)
+                         : sl_export_thumbnail(path, mesh, c->thumbnail_size, glb.z_up, err);
     }
     return rc;
 }
 
-/* One level's line of the collection summary. */
-typedef struct level_row {
-    uint32_t k;
-    uint64_t triangles, vertices;
-    int watertight, measured, thumbnail;
-    double rms, hausdorff; /* fractions of the input's diagonal, when measured */
-} level_row;
+/* The GLB's encoding and what quantisation did to it, in the input's units and as
+ * fractions of the input's diagonal (0 when not measured): the bound is added to the
+ * level's errors, since no point of the published surface is further than it from the
+ * point of the unquantised level it came from. */
+static void report_glb(sl_json *r, const sl_export_config *c, const sl_glb_stats *g,
+                       double to_metres, double max_error, double diagonal,
+                       double hausdorff, int measured)
+{
+    static const char *const names[] = {"none", "meshopt", "draco"};
+    double bound = g->position_bound / to_metres, worst = g->position_error_max / to_metres;
+    sl_json_object_begin(r, "glb");
+    sl_json_string(r, "compression", names[c->glb.compression]);
+    sl_json_bool(r, "quantized", c->glb.quantize || c->glb.compression == SL_GLB_DRACO);
+    sl_json_u64(r, "vertices", g->vertices);
+    sl_json_u64(r, "triangles", g->triangles);
+    sl_json_double(r, "position_step_world", g->position_step / to_metres);
+    sl_json_double(r, "quantization_bound_world", bound);
+    sl_json_double(r, "quantization_error_world", worst);
+    sl_json_double(r, "quantization_rms_world", g->position_error_rms / to_metres);
+    if (diagonal > 0) {
+        sl_json_double(r, "quantization_bound", bound / diagonal);
+        sl_json_double(r, "quantization_error", worst / diagonal);
+    }
+    sl_json_double(r, "normal_error_deg", g->normal_error_max_deg);
+    sl_json_double(r, "color_error_srgb_steps", g->color_error_max);
+    sl_json_double(r, "max_error", max_error + bound);
+    if (measured)
+        sl_json_double(r, "hausdorff", hausdorff + bound / diagonal);
+    sl_json_object_end(r);
+}
 
 static int measure_level(const sl_export_config *c, const sl_mesh *input, const sl_lod_mesh *mesh,
                          const sl_stage_io *io, sl_json *r, level_row *row, sl_error *err)
 {
-    sl_mesh view = mesh_view(mesh);
+    sl_mesh view = sl_export_mesh_view(mesh);
     sl_mesh_topology topo;
     int rc = sl_mesh_topology_compute(&view, &topo, err);
     if (rc)
@@ -155,6 +180,7 @@ static int measure_level(const sl_export_config *c, const sl_mesh *input, const 
         row->measured = 1;
         row->rms = d.fraction.rms;
         row->hausdorff = d.fraction.hausdorff;
+        row->diagonal = d.diagonal;
     }
     return 0;
 }
@@ -209,14 +235,69 @@ static int write_summary_section(const sl_export_config *c, const sl_lod_model *
         fputs("\n\n", md);
     fclose(md);
     char path[PATH_MAX];
-    snprintf(path, sizeof path, "%s/summary-item.md", io->out_dir);
-    int rc = text ? sl_write_file_atomic(path, text, size, err)
+    int rc = text ? sl_stage_path(path, io->out_dir, "summary-item.md", err)
                   : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    if (rc == 0)
+        rc = sl_write_file_atomic(path, text, size, err);
     free(text);
     return rc;
 }
 
+/* Bakes the level's atlas when the input has a texture (and GLBs are written); reports
+ * what it made. 0, or SL_E_NOMEM/SL_E_INTERNAL. */
+static int bake_level(const sl_export_config *c, const sl_export_texture *texture,
+                      const sl_export_level *lv, const sl_lod_mesh *mesh, sl_json *r,
+                      sl_export_baked *baked, sl_error *err)
+{
+    memset(baked, 0, sizeof *baked);
+    if (!texture || !c->write_glb || mesh->triangle_count == 0)
+        return 0;
+    int wanted = sl_export_texture_size(c, lv->name);
+    int rc = sl_export_bake(texture, mesh, wanted, c->texture_png, c->texture_quality, baked, err);
+    if (rc < 0)
+        return rc;
+    sl_json_object_begin(r, "texture");
+    if (rc == 1) {
+        sl_json_string(r, "warning", "too many triangles for the atlas: vertex colours only");
+    } else {
+        sl_json_u64(r, "size", (uint64_t)baked->size);
+        sl_json_string(r, "mime_type", baked->mime_type);
+        sl_json_u64(r, "image_bytes", baked->image_size);
+        sl_json_u64(r, "cell_texels", (uint64_t)baked->cell);
+        sl_json_double(r, "texel_efficiency", baked->texel_efficiency);
+    }
+    sl_json_object_end(r);
+    return 0;
+}
+
+int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
+                          const sl_lod_mesh *mesh, const char *extras, double max_error,
+                          const sl_mesh *input, const sl_export_frame *frame,
+                          const sl_export_texture *texture, const sl_stage_io *io,
+                          level_row *row, sl_error *err)
+{
+    sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z', NULL};
+    sl_json *r = io->report;
+    row->triangles = mesh->triangle_count;
+    row->vertices = mesh->vertex_count;
+    row->thumbnail = mesh->triangle_count && c->thumbnail_size > 0;
+    sl_glb_stats stats;
+    memset(&stats, 0, sizeof stats);
+    sl_export_baked baked;
+    int rc = bake_level(c, texture, lv, mesh, r, &baked, err);
+    if (rc == 0 && mesh->triangle_count)
+        rc = write_files(c, lv, mesh, &baked, extras, &glb, &stats, io, err);
+    sl_export_baked_release(&baked);
+    if (rc == 0)
+        rc = measure_level(c, input, mesh, io, r, row, err);
+    if (rc == 0 && mesh->triangle_count && c->write_glb)
+        report_glb(r, c, &stats, frame->to_metres, max_error, row->diagonal, row->hausdorff,
+                   row->measured);
+    return rc;
+}
+
 int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_mesh *input,
+                     const sl_export_frame *frame, const sl_export_texture *texture,
                      const sl_stage_io *io, sl_error *err)
 {
     sl_json *r = io->report;
@@ -233,10 +314,8 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
         const sl_export_level *lv = &c->levels[i];
         uint32_t k = lv->by_percent ? sl_lod_expansions_for_percent(model, lv->percent)
                                     : sl_lod_expansions_for_triangles(model, lv->budget);
-        if (sl_progress_step(io->progress, "export", (double)i / c->level_count)) {
-            rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+        if ((rc = sl_stage_step(io, "export", (double)i / c->level_count, err)))
             break;
-        }
         sl_lod_mesh mesh;
         uint64_t cracks = 0;
         if (sl_lod_generate(model, k, &mesh, &cracks)) {
@@ -260,14 +339,9 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
         sl_json_u64(r, "vertices", mesh.vertex_count);
         sl_json_double(r, "max_error", model->error_after[k]);
         sl_json_u64(r, "unpatched_cells", cracks);
-        level_row *row = &rows[i];
-        row->k = k;
-        row->triangles = mesh.triangle_count;
-        row->vertices = mesh.vertex_count;
-        row->thumbnail = mesh.triangle_count && c->thumbnail_size > 0;
-        rc = mesh.triangle_count ? write_files(c, lv, &mesh, extras, io, err) : 0;
-        if (rc == 0)
-            rc = measure_level(c, input, &mesh, io, r, row, err);
+        rows[i].k = k;
+        rc = sl_export_write_level(c, lv, &mesh, extras, model->error_after[k], input, frame,
+                                   texture, io, &rows[i], err);
         sl_json_object_end(r);
         sl_lod_mesh_release(&mesh);
     }

@@ -24,6 +24,14 @@
 
 extern const sl_stage sl_merge_stage;
 
+/* The resolved [merge] section (options: stages/merge/merge_stage.c). */
+typedef struct sl_merge_config {
+    uint64_t max_samples; /* refuse sample grids with more samples (a memory guard) */
+} sl_merge_config;
+
+/* The section at its option table's defaults (sl_stage_default_config). */
+sl_merge_config sl_merge_default_config(void);
+
 /* Signed samples on the leaf grid (the samples stage's output, read back). */
 typedef struct sl_sample_grid {
     uint64_t count;

@@ -6,7 +6,7 @@
 #include <errno.h>
 #include <stdint.h>
 
-#include "stages/merge/key_table.h"
+#include "geometry/key_table.h"
 #include "stages/merge/merge.h"
 
 typedef struct level_tables {

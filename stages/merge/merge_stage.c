@@ -1,7 +1,6 @@
 /* merge stage entry: samples.vdb -> octree.slot (paper 1, section 2.2; merge.h). */
 #include <errno.h>
 #include <limits.h>
-#include <stdio.h>
 #include <stdlib.h>
 
 #include "runtime/octree_io.h"
@@ -16,10 +15,6 @@
  * published as a success with empty levels); a work folder from version 2 rebuilds. */
 #define MERGE_STAGE_VERSION 3u
 
-typedef struct merge_config {
-    int64_t max_samples;
-} merge_config;
-
 static const sl_option merge_options[] = {
     {"merge", "max_samples", SL_OPT_INT, "2147483647", 1, 4294967295.0, NULL,
      "Refuse sample grids with more samples than this (memory guard: about 60 bytes per "
@@ -29,12 +24,19 @@ static const sl_option merge_options[] = {
 
 static int merge_configure(const sl_config *cfg, void **out, sl_error *err)
 {
-    merge_config *c = calloc(1, sizeof *c);
+    sl_merge_config *c = calloc(1, sizeof *c);
     if (!c)
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    c->max_samples = sl_config_int(cfg, "merge", "max_samples");
+    c->max_samples = (uint64_t)sl_config_int(cfg, "merge", "max_samples");
     *out = c;
     return 0;
+}
+
+sl_merge_config sl_merge_default_config(void)
+{
+    sl_merge_config c;
+    sl_stage_default_config(&sl_merge_stage, &c, sizeof c);
+    return c;
 }
 
 static void report_octree(sl_json *r, const sl_octree *t)
@@ -60,13 +62,15 @@ static void report_octree(sl_json *r, const sl_octree *t)
 
 static int merge_run(const void *config, const sl_stage_io *io, sl_error *err)
 {
-    const merge_config *c = config;
+    const sl_merge_config *c = config;
     char in_path[PATH_MAX], out_path[PATH_MAX];
-    snprintf(in_path, sizeof in_path, "%s/%s", io->in_dir, SL_SAMPLES_FILE);
-    snprintf(out_path, sizeof out_path, "%s/%s", io->out_dir, SL_OCTREE_FILE);
+    int rc = sl_stage_path(in_path, io->in_dir, SL_SAMPLES_FILE, err);
+    if (rc == 0)
+        rc = sl_stage_path(out_path, io->out_dir, SL_OCTREE_FILE, err);
     sl_vdb_samples samples;
     sl_vdb_set_threads(io->threads); /* OpenVDB's TBB pool reads the grids: cap it */
-    int rc = sl_vdb_samples_read(in_path, (uint64_t)c->max_samples, &samples, err);
+    if (rc == 0)
+        rc = sl_vdb_samples_read(in_path, c->max_samples, &samples, err);
     if (rc)
         return rc;
     sl_sample_grid grid = {samples.count, samples.coords, samples.distance, samples.colors,
@@ -86,6 +90,7 @@ static int merge_run(const void *config, const sl_stage_io *io, sl_error *err)
 
 const sl_stage sl_merge_stage = {
     .name = "merge",
+    .methods = SL_METHOD_OCTREE,
     .description = "signed samples -> marching-cube octree (paper 1 section 2.2)",
     .version = MERGE_STAGE_VERSION,
     .options = merge_options,

@@ -25,7 +25,7 @@
 
 #include "runtime/mc_cube.h"
 #include "runtime/octree_io.h"
-#include "stages/merge/key_table.h"
+#include "geometry/key_table.h"
 #include "stages/merge/merge_internal.h"
 
 

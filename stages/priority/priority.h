@@ -42,6 +42,10 @@ typedef struct sl_priority {
 
 void sl_priority_release(sl_priority *p);
 
+/* The same-level neighbour table of every node (priority_neighbours.c; O(n log n)
+ * lookups, OpenMP over nodes). Returns -1 on OOM. */
+int sl_neighbours_build(const sl_octree *t, sl_neighbours *out);
+
 /* What orders the expansions ([priority] metric; docs/lod.md "The priority metric"). */
 typedef enum sl_priority_metric {
     SL_PRIORITY_ERROR,     /* squared distance to the finest surface removed per triangle
@@ -50,6 +54,14 @@ typedef enum sl_priority_metric {
                               subtree */
     SL_PRIORITY_AREA       /* the paper's M_r, with the paper's waiting rule */
 } sl_priority_metric;
+
+/* The resolved [priority] section (options: stages/priority/priority_stage.c). */
+typedef struct sl_priority_config {
+    sl_priority_metric metric; /* what orders the expansions */
+} sl_priority_config;
+
+/* The section at its option table's defaults (sl_stage_default_config). */
+sl_priority_config sl_priority_default_config(void);
 
 /* "error", "hausdorff", "area" -> metric; -1 for another name. And back. */
 int sl_priority_metric_parse(const char *name);

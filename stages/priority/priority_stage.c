@@ -2,7 +2,6 @@
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -120,10 +119,6 @@ int sl_priority_read(const char *path, const sl_octree *t, sl_priority *out, sl_
     return rc;
 }
 
-typedef struct priority_config {
-    sl_priority_metric metric;
-} priority_config;
-
 static const sl_option priority_options[] = {
     {"priority", "metric", SL_OPT_ENUM, "error", 0, 0, "error|hausdorff|area",
      "What orders the node expansions, so what the levels between the coarsest and the "
@@ -137,7 +132,7 @@ static const sl_option priority_options[] = {
 
 static int priority_configure(const sl_config *cfg, void **out, sl_error *err)
 {
-    priority_config *c = calloc(1, sizeof *c);
+    sl_priority_config *c = calloc(1, sizeof *c);
     if (!c)
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     const char *name = sl_config_string(cfg, "priority", "metric");
@@ -151,14 +146,23 @@ static int priority_configure(const sl_config *cfg, void **out, sl_error *err)
     return 0;
 }
 
+sl_priority_config sl_priority_default_config(void)
+{
+    sl_priority_config c;
+    sl_stage_default_config(&sl_priority_stage, &c, sizeof c);
+    return c;
+}
+
 static int priority_run(const void *config, const sl_stage_io *io, sl_error *err)
 {
-    const priority_config *c = config;
+    const sl_priority_config *c = config;
     char in_path[PATH_MAX], out_path[PATH_MAX];
-    snprintf(in_path, sizeof in_path, "%s/%s", io->in_dir, SL_OCTREE_FILE);
-    snprintf(out_path, sizeof out_path, "%s/%s", io->out_dir, SL_PRIORITY_FILE);
     sl_octree tree;
-    int rc = sl_octree_read(in_path, &tree, err);
+    int rc = sl_stage_path(in_path, io->in_dir, SL_OCTREE_FILE, err);
+    if (rc == 0)
+        rc = sl_stage_path(out_path, io->out_dir, SL_PRIORITY_FILE, err);
+    if (rc == 0)
+        rc = sl_octree_read(in_path, &tree, err);
     if (rc)
         return rc;
     sl_priority p;
@@ -169,21 +173,21 @@ static int priority_run(const void *config, const sl_stage_io *io, sl_error *err
     p.node_error = malloc(tree.node_count * sizeof *p.node_error);
     if (!p.lod_array || !p.area_difference || !p.node_error)
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    if (rc == 0 && sl_progress_step(io->progress, "priority: metrics", 0.0))
-        rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+    if (rc == 0)
+        rc = sl_stage_step(io, "priority: metrics", 0.0, err);
     if (rc == 0 && sl_priority_metrics(&tree, p.area_difference, p.node_error))
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    if (rc == 0 && sl_progress_step(io->progress, "priority: neighbours", 0.3))
-        rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+    if (rc == 0)
+        rc = sl_stage_step(io, "priority: neighbours", 0.3, err);
     if (rc == 0 && sl_neighbours_build(&tree, &p.neighbours))
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    if (rc == 0 && sl_progress_step(io->progress, "priority: keys", 0.4))
-        rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+    if (rc == 0)
+        rc = sl_stage_step(io, "priority: keys", 0.4, err);
     float *key = rc == 0 ? malloc((tree.node_count ? tree.node_count : 1) * sizeof *key) : NULL;
     if (rc == 0 && (!key || sl_priority_keys(&tree, c->metric, p.area_difference, key)))
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    if (rc == 0 && sl_progress_step(io->progress, "priority: order", 0.8))
-        rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "interrupted");
+    if (rc == 0)
+        rc = sl_stage_step(io, "priority: order", 0.8, err);
     if (rc == 0)
         rc = sl_priority_order(&tree, &p.neighbours, key, c->metric != SL_PRIORITY_AREA,
                                p.lod_array, &p.expansion_count, err);
@@ -209,6 +213,7 @@ static int priority_run(const void *config, const sl_stage_io *io, sl_error *err
 
 const sl_stage sl_priority_stage = {
     .name = "priority",
+    .methods = SL_METHOD_OCTREE,
     .description = "octree -> error-driven (or area-difference) LOD array (paper 1 section 2.3)",
     .version = PRIORITY_STAGE_VERSION,
     .options = priority_options,

@@ -67,6 +67,7 @@ typedef struct sl_range_config {
     int colors;                    /* 0: none; 1: auto (vertex colours, else texture) */
 } sl_range_config;
 
+/* The section at its option table's defaults (sl_stage_default_config). */
 sl_range_config sl_range_default_config(void);
 
 /* What the stage saw and did; every dropped element is counted by reason. For meshes

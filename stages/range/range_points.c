@@ -98,12 +98,8 @@ static int check_extent(const float lo[3], const float hi[3], sl_error *err)
 static int orient_closed_mesh(const range_clean *clean, sl_pointset *ps,
                               sl_range_counts *counts, sl_error *err)
 {
-    sl_mesh view; /* borrows the arrays; not released */
-    sl_mesh_init(&view);
-    view.vertex_count = ps->count;
-    view.positions = ps->positions;
-    view.triangle_count = clean->triangle_count;
-    view.triangles = clean->triangles;
+    sl_mesh view = sl_mesh_view(ps->count, ps->positions, NULL, NULL, clean->triangle_count,
+                                clean->triangles);
     sl_mesh_topology topology;
     int rc = sl_mesh_topology_compute(&view, &topology, err);
     if (rc != SL_OK || !topology.watertight)

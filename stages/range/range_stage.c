@@ -39,27 +39,12 @@ static const sl_option range_options[] = {
     SL_OPTION_END,
 };
 
-sl_range_config sl_range_default_config(void)
-{
-    sl_range_config c;
-    memset(&c, 0, sizeof c);
-    c.normals_from_file = 0;
-    c.knn = 12;
-    c.grid_max_edge_factor = 4.0;
-    c.range_images = 0;
-    c.range_image_size = 512;
-    c.limits = sl_ply_default_limits();
-    c.max_nonfinite_fraction = 0.5;
-    c.colors = 1;
-    return c;
-}
-
 static int range_configure(const sl_config *cfg, void **stage_config, sl_error *err)
 {
-    sl_range_config *c = malloc(sizeof *c);
+    sl_range_config *c = calloc(1, sizeof *c);
     if (!c)
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory");
-    *c = sl_range_default_config();
+    c->limits = sl_ply_default_limits(); /* max_face_corners is the reader's, not an option */
     c->normals_from_file = strcmp(sl_config_string(cfg, "range", "normals"), "file") == 0;
     c->knn = (uint32_t)sl_config_int(cfg, "range", "knn");
     c->grid_max_edge_factor = sl_config_double(cfg, "range", "grid_max_edge_factor");
@@ -74,9 +59,11 @@ static int range_configure(const sl_config *cfg, void **stage_config, sl_error *
     return SL_OK;
 }
 
-static void range_release_config(void *stage_config)
+sl_range_config sl_range_default_config(void)
 {
-    free(stage_config);
+    sl_range_config c;
+    sl_stage_default_config(&sl_range_stage, &c, sizeof c);
+    return c;
 }
 
 static void report_counts(sl_json *j, const sl_range_counts *c, const sl_pointset *ps,
@@ -138,7 +125,7 @@ static int range_run(const void *stage_config, const sl_stage_io *io, sl_error *
         sl_mesh_release(&mesh);
         return rc;
     }
-    char dir[1024], path[1100];
+    char dir[1024], path[PATH_MAX];
     directory_of(io->source_path, dir, sizeof dir);
     sl_pointset ps;
     sl_range_counts counts;
@@ -149,12 +136,9 @@ static int range_run(const void *stage_config, const sl_stage_io *io, sl_error *
             snprintf(err->file, sizeof err->file, "%s", io->source_path);
         return rc;
     }
-    if (sl_progress_step(io->progress, "write", 0.9)) {
-        rc = SL_E_INTERRUPTED;
-        goto done;
-    }
-    snprintf(path, sizeof path, "%s/%s", io->out_dir, SL_POINTSET_FILE);
-    if ((rc = sl_pointset_write(path, &ps, err)) != SL_OK)
+    if ((rc = sl_stage_step(io, "write", 0.9, err)) != SL_OK ||
+        (rc = sl_stage_path(path, io->out_dir, SL_POINTSET_FILE, err)) != SL_OK ||
+        (rc = sl_pointset_write(path, &ps, err)) != SL_OK)
         goto done;
     if (cfg->range_images &&
         (rc = sl_range_images_write(io->out_dir, &ps, cfg->range_image_size, io->progress,
@@ -168,10 +152,11 @@ done:
 
 const sl_stage sl_range_stage = {
     .name = "range",
+    .methods = SL_METHODS_ALL,
     .description = "PLY mesh or point cloud -> oriented, coloured point set (paper 1 section 4)",
     .version = 2,
     .options = range_options,
     .configure = range_configure,
-    .release_config = range_release_config,
+    .release_config = free,
     .run = range_run,
 };

@@ -46,7 +46,7 @@
 
 #define SL_SAMPLES_FILE "samples.vdb"
 #define SL_SAMPLES_MAX_DEPTH 19 /* vertex coordinates <= 2^19 fit the 20-bit fields of
-                                   the key tables (stages/merge/key_table.h) */
+                                   the key tables (geometry/key_table.h) */
 #define SL_SAMPLES_MAX_BAND 8
 /* The automatic leaf (from the point spacing) is at most the bounding box's diagonal
  * divided by this: a mesh of a few large triangles has vertices as far apart as its
@@ -80,6 +80,7 @@ typedef struct sl_samples_config {
                               the k nearest points' normals */
 } sl_samples_config;
 
+/* Both sections at their option table's defaults (sl_stage_default_config). */
 sl_samples_config sl_samples_default_config(void);
 
 /* The grid the samples live on. */

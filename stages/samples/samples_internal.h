@@ -6,7 +6,7 @@
 #include <stdint.h>
 
 #include "geometry/triangle_bvh.h"
-#include "stages/merge/key_table.h"
+#include "geometry/key_table.h"
 #include "stages/samples/samples.h"
 
 /* A sorted array of unique keys (sl_vertex_key: cubes by their minimum corner). */

@@ -60,28 +60,11 @@ static const sl_option samples_options[] = {
 
 static const char *const samples_sections[] = {"samples", "octree", NULL};
 
-sl_samples_config sl_samples_default_config(void)
-{
-    sl_samples_config c;
-    memset(&c, 0, sizeof c);
-    c.leaf_size = 0;
-    c.depth = 0;
-    c.spacing_factor = 1.5;
-    c.max_depth = 16;
-    c.closest = SL_SAMPLES_CLOSEST_TRIANGLES;
-    c.distance = SL_SAMPLES_TANGENT;
-    c.band = 1;
-    c.max_samples = (uint64_t)1 << 31;
-    c.sign_neighbours = 1;
-    return c;
-}
-
 static int samples_configure(const sl_config *cfg, void **stage_config, sl_error *err)
 {
-    sl_samples_config *c = malloc(sizeof *c);
+    sl_samples_config *c = calloc(1, sizeof *c);
     if (!c)
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory");
-    *c = sl_samples_default_config();
     c->leaf_size = sl_config_double(cfg, "octree", "leaf_size");
     c->depth = (int)sl_config_int(cfg, "octree", "depth");
     c->spacing_factor = sl_config_double(cfg, "octree", "spacing_factor");
@@ -107,9 +90,11 @@ static int samples_configure(const sl_config *cfg, void **stage_config, sl_error
     return SL_OK;
 }
 
-static void samples_release_config(void *stage_config)
+sl_samples_config sl_samples_default_config(void)
 {
-    free(stage_config);
+    sl_samples_config c;
+    sl_stage_default_config(&sl_samples_stage, &c, sizeof c);
+    return c;
 }
 
 static void report_counts(sl_json *j, const sl_samples_config *cfg, const sl_samples_counts *c,
@@ -149,7 +134,7 @@ static void report_counts(sl_json *j, const sl_samples_config *cfg, const sl_sam
 /* Seconds per phase: the log and `_phases.json` (not in the report: see the top). */
 static void record_phases(const sl_stage_io *io, const sl_samples_counts *c, double write_s)
 {
-    char text[256], path[1100];
+    char text[256], path[PATH_MAX];
     int n = snprintf(text, sizeof text,
                      "{\"plan_s\":%.3f,\"cubes_s\":%.3f,\"tree_s\":%.3f,\"samples_s\":%.3f,"
                      "\"write_s\":%.3f}\n", c->seconds_plan, c->seconds_cubes, c->seconds_tree,
@@ -159,24 +144,25 @@ static void record_phases(const sl_stage_io *io, const sl_samples_counts *c, dou
            "samples %.3f s, write %.3f s", (unsigned long long)c->samples, c->plan.leaf_size,
            c->plan.depth, c->seconds_plan, c->seconds_cubes, c->seconds_tree, c->seconds_samples,
            write_s);
-    snprintf(path, sizeof path, "%s/_phases.json", io->out_dir);
     sl_error ignored;
     sl_error_init(&ignored);
-    if (n > 0 && (size_t)n < sizeof text)
+    if (n > 0 && (size_t)n < sizeof text &&
+        sl_stage_path(path, io->out_dir, "_phases.json", &ignored) == SL_OK)
         sl_write_file_atomic(path, text, (size_t)n, &ignored); /* best effort: diagnostics */
 }
 
 static int samples_run(const void *stage_config, const sl_stage_io *io, sl_error *err)
 {
     const sl_samples_config *cfg = stage_config;
-    char path[1100];
+    char path[PATH_MAX];
     sl_vdb_set_threads(io->threads); /* OpenVDB's TBB pool next to our OpenMP threads */
     const char *range_dir = sl_stage_dir(io, "range"); /* the range stage's artifacts */
     if (!range_dir)
         range_dir = io->in_dir ? io->in_dir : ".";
-    snprintf(path, sizeof path, "%s/%s", range_dir, SL_POINTSET_FILE);
     sl_pointset ps;
-    int rc = sl_pointset_read(path, &ps, err);
+    int rc = sl_stage_path(path, range_dir, SL_POINTSET_FILE, err);
+    if (rc == SL_OK)
+        rc = sl_pointset_read(path, &ps, err);
     if (rc != SL_OK)
         return rc;
     sl_vdb_samples samples;
@@ -189,13 +175,13 @@ static int samples_run(const void *stage_config, const sl_stage_io *io, sl_error
     }
     int colors = ps.colors != NULL;
     sl_pointset_release(&ps);
-    if (rc == SL_OK && sl_progress_step(io->progress, "write", 0.95))
-        rc = SL_E_INTERRUPTED;
+    if (rc == SL_OK)
+        rc = sl_stage_step(io, "write", 0.95, err);
     double t0 = omp_get_wtime();
-    if (rc == SL_OK) {
-        snprintf(path, sizeof path, "%s/%s", io->out_dir, SL_SAMPLES_FILE);
+    if (rc == SL_OK)
+        rc = sl_stage_path(path, io->out_dir, SL_SAMPLES_FILE, err);
+    if (rc == SL_OK)
         rc = sl_vdb_samples_write(path, &samples, err);
-    }
     sl_vdb_samples_release(&samples);
     if (rc != SL_OK)
         return rc;
@@ -206,12 +192,13 @@ static int samples_run(const void *stage_config, const sl_stage_io *io, sl_error
 
 const sl_stage sl_samples_stage = {
     .name = "samples",
+    .methods = SL_METHOD_OCTREE,
     .description = "oriented points -> signed samples at leaf-cube vertices, OpenVDB grids "
                    "(paper 1 section 2.1)",
     .version = 3, /* 3: automatic leaf at most the diagonal / SL_SAMPLES_DIAGONAL_LEAVES */
     .options = samples_options,
     .sections = samples_sections,
     .configure = samples_configure,
-    .release_config = samples_release_config,
+    .release_config = free,
     .run = samples_run,
 };

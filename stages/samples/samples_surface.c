@@ -136,12 +136,8 @@ int samples_surface_build(samples_surface *s, const sl_pointset *ps, sl_error *e
 {
     memset(s, 0, sizeof *s);
     s->ps = ps;
-    sl_mesh view; /* borrows the point set's arrays; never released */
-    sl_mesh_init(&view);
-    view.vertex_count = ps->count;
-    view.positions = ps->positions;
-    view.triangle_count = ps->triangle_count;
-    view.triangles = ps->triangles;
+    sl_mesh view = sl_mesh_view(ps->count, ps->positions, NULL, NULL, ps->triangle_count,
+                                ps->triangles);
     int rc = sl_triangle_bvh_build(&s->bvh, &view, err);
     if (rc == SL_OK)
         rc = build_incidence(s, err);

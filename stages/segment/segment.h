@@ -150,57 +150,20 @@ int sl_segment_simplify(const sl_segment_config *cfg, const sl_segment_input *in
                         const sl_segment_target *target, sl_segment_level *level,
                         sl_progress *progress, sl_error *err);
 
-/* --- the stage ([lod] method = segment; not in the registry yet) -------------------- */
+/* --- the stage ([lod] method = segment) ---------------------------------------------- */
 
 /* Reads the range stage's points.slpts, writes into its artifact directory:
- *   levels.slseg    every level of the export's ladder ([export] lod_percents and
- *                   budgets; a percent P = at most P % of the input's triangles), as
- *                   triangles in the point indices of points.slpts, so the export takes
- *                   positions, normals and colours from there (docs/formats.md);
+ *   levels.sllev    every level of the export's ladder ([export] lod_percents and
+ *                   budgets; a percent P = at most P % of the input's triangles), in the
+ *                   level-list format the cluster method writes too
+ *                   (SL_CLUSTER_LEVELS_FILE, stages/cluster/cluster.h; bound 0: the
+ *                   segment method proves none), which the export stage publishes;
  *   segments.slsgm  the segment of every input triangle (equation 1) and per segment
  *                   its unit area-weighted normal and area.
  * Options: [segment] (segment_stage.c); it also reads [export] for the ladder. */
 extern const sl_stage sl_segment_stage;
 
-#define SL_SEGMENT_LEVELS_FILE "levels.slseg"
 #define SL_SEGMENT_MAP_FILE "segments.slsgm"
-#define SL_SEGMENT_LEVELS_FORMAT_VERSION 1u
 #define SL_SEGMENT_MAP_FORMAT_VERSION 1u
-#define SL_SEGMENT_MAX_LEVELS 64
-
-/* What a stored level was asked to be. */
-typedef struct sl_segment_level_info {
-    char name[32];   /* the file name stem: "lod20", "thumb" */
-    int by_percent;  /* 1: value is a percent; 0: a triangle budget */
-    double value;
-    int clamped;     /* the budget was at or above the input's size: the input itself */
-    int over_budget; /* the method could not get within the budget (its corners alone
-                        exceed it): the smallest level it reaches */
-} sl_segment_level_info;
-
-typedef struct sl_segment_stored_level {
-    sl_segment_level_info info;
-    uint64_t triangle_count;
-    uint32_t *triangles;  /* 3 * triangle_count indices into points.slpts */
-    double max_error;     /* the bound used, fraction of the diagonal */
-    double estimated_rms; /* the search's RMS, fraction of the diagonal */
-} sl_segment_stored_level;
-
-typedef struct sl_segment_levels {
-    uint32_t level_count;
-    uint32_t point_count;      /* of the points.slpts the triangles index */
-    uint64_t input_triangles;
-    uint32_t segment_count;
-    sl_segment_stored_level levels[SL_SEGMENT_MAX_LEVELS];
-} sl_segment_levels;
-
-/* Writes levels.slseg (core/artifact.h envelope, magic SLSEGLVL). */
-int sl_segment_levels_write(const char *path, uint32_t point_count, uint64_t input_triangles,
-                            uint32_t segment_count, const sl_segment_level_info *info,
-                            const sl_segment_level *levels, uint32_t level_count, sl_error *err);
-/* Reads and validates it (sizes against the file, indices against point_count):
- * SL_E_CORRUPT otherwise. Release with sl_segment_levels_release. */
-int sl_segment_levels_read(const char *path, sl_segment_levels *out, sl_error *err);
-void sl_segment_levels_release(sl_segment_levels *levels);
 
 #endif

@@ -8,8 +8,7 @@
  *    the polygon alone, then in rounds put back, in every triangle, the interior vertex
  *    farthest from that triangle's plane if it is farther than max_error, until none is.
  *    The vertices never put back are the removed ones, each within max_error of the
- *    triangle over it. This is the paper's "vertices near the plane are removed", with the
- *    plane replaced by the patch as it is being rebuilt.
+ *    triangle over it: the paper's "vertices near the plane go", the plane being the patch.
  *  - near / paper: equations 3-8 once, against the least-squares plane of the segment's
  *    vertices (TLS, geometry/plane_fit.h), then one triangulation.
  * Every triangulation is the constrained Delaunay triangulation of geometry/cdt.h. A new
@@ -17,9 +16,8 @@
  * of its corners (the area-weighted normal of the segment's input triangles there) gets
  * its farthest vertex back; if it has none, the patch is refused.
  *
- * Candidates are found in triangles by rasterising each triangle over a grid of the
- * candidates (cells of about two candidates): the triangles tile the polygon, so a round
- * costs about the number of cells plus the triangles' edge lengths in cells.
+ * Candidates are found in triangles by rasterising each over a grid of the candidates
+ * (about two a cell): a round costs about the cells plus the edges' lengths in cells.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -130,8 +128,6 @@ static int reserve_triangles(seg_scratch *s, uint32_t n)
     s->tri_cap = cap;
     return 0;
 }
-
-/* --- the patch's slots ---------------------------------------------------------------- */
 
 typedef struct patch {
     const sl_segment_model *m;

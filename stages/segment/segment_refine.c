@@ -1,26 +1,16 @@
-/* Greedy insertion into a patch's triangulation, one vertex at a time (rule error).
- *
- * Garland and Heckbert, "Fast polygonal approximation of terrains and height fields"
- * (1995), algorithm III with a data-dependent triangulation (Dyn, Levin and Rippa,
- * IMA J. Numer. Anal. 10, 1990): the patch starts as the constrained Delaunay
- * triangulation of its trimmed loops (geometry/cdt.h); each triangle holds the removed
- * vertices that project into it and its score, the sum of their squared distances to
- * its plane; the worst triangle (a heap) gets its farthest vertex back: the triangle is
- * split in three (or, with the vertex on an edge, the two triangles there in four), its
- * vertices are shared out, and the edges around are flipped while a flip lowers the
- * score of the two triangles (or, where neither holds a vertex, while the Delaunay
- * criterion asks for it), the quad is convex in projection, the surface moves by at most
- * flip_height and the new triangles pass the normal check. It stops when the worst score
- * is at most tau: then every removed vertex lies within sqrt(tau) of its triangle's
- * plane. Scores are sums, not maxima, because the fidelity that counts is the RMS
- * distance: a triangle over many slightly-off vertices matters more than one over a
- * single outlier (measured: RMS 1.8x meshoptimizer's with maxima, 1.0x with sums, on
- * fandisk at 10 %; docs/segmentation.md).
- *
- * A triangle whose normal is farther than the bound from the input's at a corner gets
- * priority over every score; one that has no vertex to put back makes the patch refused.
- * The scores at which vertices go back are recorded, so that one run tells how many
- * triangles any smaller tau would give (segment_levels.c).
+/* Greedy insertion into a patch's triangulation, one vertex at a time (rule error):
+ * Garland and Heckbert (1995), algorithm III, with a data-dependent triangulation (Dyn,
+ * Levin and Rippa, 1990). The patch starts as the CDT of its trimmed loops; each triangle
+ * holds the removed vertices projecting into it and its score, the sum of their squared
+ * distances to its plane (sums, not maxima: the RMS is what counts; docs/segmentation.md);
+ * the worst triangle (a heap) gets its farthest vertex back (split in three, or in four
+ * on an edge), its vertices are shared out, and edges are flipped while a flip lowers the
+ * two triangles' score (or the Delaunay criterion asks, where they hold none), the quad
+ * is convex in projection, the surface moves by at most flip_height and the normal check
+ * passes. It stops when the worst score is at most tau. A triangle failing the normal
+ * check goes first; one with no vertex to put back refuses the patch. The scores at
+ * which vertices go back are recorded: one run tells the triangles of any smaller tau
+ * (segment_levels.c).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -288,14 +278,10 @@ static int push_edge(seg_refine *r, uint32_t h)
     return 0;
 }
 
-/* --- flips ------------------------------------------------------------------------------ */
-
-/* Flips the edge of half-edge h if the phase's criterion asks for it: while inserting,
- * the Delaunay criterion (what a constrained Delaunay triangulation of the points so far
- * would hold, so triangles stay well shaped and thin ones cannot hide the input between
- * their vertices); in the final optimisation, a lower score of the two triangles, with
- * the surface moving by at most flip_height and the new triangles passing the normal
- * check. Returns 1 if flipped, 0 if not, -1 out of memory. */
+/* Flips the edge of half-edge h if the phase asks: inserting, the Delaunay criterion (well
+ * shaped triangles, no thin one hiding the input); optimising, a lower score of the two,
+ * the surface moving at most flip_height, the normal check passed. 1 flipped, 0 not, -1
+ * out of memory. */
 static int try_flip(seg_refine *r, uint32_t h, int optimise)
 {
     uint32_t g = r->twin[h];
@@ -467,8 +453,6 @@ static int insert(seg_refine *r, uint32_t t, uint32_t q)
         return -1;
     return legalize(r, 0, FLIPS_PER_INSERTION) ? -1 : 1;
 }
-
-/* --- the public part -------------------------------------------------------------------- */
 
 typedef struct edge_key {
     uint64_t key;

@@ -1,12 +1,13 @@
 /* The segment stage ([lod] method = segment; segment.h): the range stage's welded mesh
- * (points.slpts) -> the export's ladder of levels (levels.slseg) and the segmentation
- * of equation 1 (segments.slsgm). Formats: docs/formats.md.
+ * (points.slpts) -> the export's ladder of levels (levels.sllev, the level list the
+ * cluster method writes too) and the segmentation of equation 1 (segments.slsgm).
+ * Formats: docs/formats.md.
  *
  * The ladder is the export's own ([export] lod_percents and budgets), read here so that
  * the export stage gets exactly the levels it asks for: a percent P is at most P % of
  * the input's triangles (100: the input itself), a budget name:N at most N triangles
- * (at or above the input's count: the input, "clamped"). Not registered in
- * stages/registry.c yet: the engine's per-method stage graphs will wire it.
+ * (at or above the input's count: the input, "clamped"). Registered after the range
+ * stage, on the segment method's path only (.methods).
  */
 #include <errno.h>
 #include <limits.h>
@@ -16,14 +17,14 @@
 #include <string.h>
 
 #include "core/artifact.h"
+#include "stages/cluster/cluster.h"
+#include "stages/export/export.h"
 #include "stages/range/range.h"
 #include "stages/segment/segment_internal.h"
 
-#define SEGMENT_STAGE_VERSION 1u
-#define LEVELS_MAGIC "SLSEGLVL"
+#define SEGMENT_STAGE_VERSION 2u /* 2: levels.sllev, the level list, for levels.slseg */
+#define MAX_LEVELS SL_EXPORT_MAX_LEVELS
 #define MAP_MAGIC "SLSEGMAP"
-#define LEVELS_HEADER 24u
-#define LEVEL_RECORD 64u
 
 static const sl_option segment_options[] = {
     {"segment", "delta_seg", SL_OPT_DOUBLE, "20", 0.01, 89, NULL,
@@ -69,16 +70,27 @@ typedef struct stage_level {
     uint64_t triangles;  /* asked for */
 } stage_level;
 
+/* What a level was asked to be. */
+typedef struct stage_level_info {
+    char name[32];   /* the file name stem: "lod20", "thumb" */
+    int by_percent;  /* 1: value is a percent; 0: a triangle budget */
+    double value;
+    uint64_t budget; /* the triangles it may have */
+    int clamped;     /* the budget was at or above the input's size: the input itself */
+    int over_budget; /* the method could not get within the budget (its corners alone
+                        exceed it): the smallest level it reaches */
+} stage_level_info;
+
 typedef struct stage_config {
     sl_segment_config seg;
     uint32_t level_count;
-    stage_level levels[64];
+    stage_level levels[MAX_LEVELS];
 } stage_config;
 
 static int add_level(stage_config *c, const char *word, int by_percent, sl_error *err)
 {
-    if (c->level_count == 64)
-        return sl_error_set(err, SL_E_CONFIG, 0, "[export]", "more than 64 levels");
+    if (c->level_count == MAX_LEVELS)
+        return sl_error_set(err, SL_E_CONFIG, 0, "[export]", "more than %d levels", MAX_LEVELS);
     stage_level *lv = &c->levels[c->level_count];
     memset(lv, 0, sizeof *lv);
     char *end;
@@ -155,120 +167,62 @@ static void segment_release_config(void *c)
 
 /* --- files ------------------------------------------------------------------------------ */
 
-int sl_segment_levels_write(const char *path, uint32_t point_count, uint64_t input_triangles,
-                            uint32_t segment_count, const sl_segment_level_info *info,
-                            const sl_segment_level *levels, uint32_t level_count, sl_error *err)
+/* levels.sllev, the level list the export reads (stages/cluster/cluster.h, the same file
+ * as the cluster method's): per level the points of points.slpts it uses, in their order
+ * (positions copied, `source` naming each point for the export's normals and colours),
+ * and its triangles remapped to them. The segment method proves no Hausdorff bound: its
+ * levels carry bound 0 and the export reports their measured distances only. */
+static int write_list(const char *path, const sl_pointset *ps, const stage_level_info *info,
+                      const sl_segment_level *levels, uint32_t level_count, sl_error *err)
 {
-    if (level_count > SL_SEGMENT_MAX_LEVELS)
-        return sl_error_set(err, SL_E_INTERNAL, 0, path, "%u levels", level_count);
-    unsigned char header[LEVELS_HEADER], records[SL_SEGMENT_MAX_LEVELS][LEVEL_RECORD];
-    memset(header, 0, sizeof header);
-    sl_put_u32(header, level_count);
-    sl_put_u32(header + 4, point_count);
-    sl_put_u64(header + 8, input_triangles);
-    sl_put_u32(header + 16, segment_count);
-    sl_artifact_part parts[2 + 2 * SL_SEGMENT_MAX_LEVELS];
-    int n = 0;
-    parts[n++] = (sl_artifact_part){header, sizeof header};
-    for (uint32_t i = 0; i < level_count; i++) {
-        unsigned char *r = records[i];
-        memset(r, 0, LEVEL_RECORD);
-        memcpy(r, info[i].name, strnlen(info[i].name, 31));
-        sl_put_u32(r + 32, info[i].by_percent ? 0 : 1);
-        sl_put_u32(r + 36, (uint32_t)(info[i].clamped ? 1 : 0) | (info[i].over_budget ? 2u : 0u));
-        double v = info[i].value;
-        float e = (float)levels[i].stats.max_error, q = (float)levels[i].stats.estimate;
-        memcpy(r + 40, &v, 8);
-        sl_put_u64(r + 48, levels[i].triangle_count);
-        memcpy(r + 56, &e, 4);
-        memcpy(r + 60, &q, 4);
-        parts[n++] = (sl_artifact_part){r, LEVEL_RECORD};
-    }
-    for (uint32_t i = 0; i < level_count; i++)
-        parts[n++] = (sl_artifact_part){levels[i].triangles, 12 * (size_t)levels[i].triangle_count};
-    return sl_artifact_write(path, LEVELS_MAGIC, SL_SEGMENT_LEVELS_FORMAT_VERSION,
-                             SEGMENT_STAGE_VERSION, parts, n, err);
-}
-
-static int corrupt(sl_error *err, const char *path, const char *what)
-{
-    return sl_error_set(err, SL_E_CORRUPT, 0, path, "invalid segment levels file: %s", what);
-}
-
-int sl_segment_levels_read(const char *path, sl_segment_levels *out, sl_error *err)
-{
-    memset(out, 0, sizeof *out);
-    void *body;
-    uint64_t size;
-    int rc = sl_artifact_read(path, LEVELS_MAGIC, SL_SEGMENT_LEVELS_FORMAT_VERSION,
-                              (uint64_t)1 << 40, &body, &size, NULL, err);
-    if (rc)
-        return rc;
-    const unsigned char *p = body;
-    uint32_t count = size >= LEVELS_HEADER ? sl_get_u32(p) : 0;
-    if (size < LEVELS_HEADER || count > SL_SEGMENT_MAX_LEVELS ||
-        size < LEVELS_HEADER + (uint64_t)count * LEVEL_RECORD) {
-        free(body);
-        return corrupt(err, path, "truncated header");
-    }
-    out->level_count = count;
-    out->point_count = sl_get_u32(p + 4);
-    out->input_triangles = sl_get_u64(p + 8);
-    out->segment_count = sl_get_u32(p + 16);
-    uint64_t need = LEVELS_HEADER + (uint64_t)count * LEVEL_RECORD;
-    for (uint32_t i = 0; i < count; i++) {
-        const unsigned char *r = p + LEVELS_HEADER + (uint64_t)i * LEVEL_RECORD;
-        uint64_t t = sl_get_u64(r + 48);
-        if (t > ((uint64_t)1 << 36) || r[31] != 0 || sl_get_u32(r + 32) > 1) {
-            free(body);
-            return corrupt(err, path, "bad level record");
-        }
-        need += 12 * t;
-    }
-    if (need != size) {
-        free(body);
-        return corrupt(err, path, "the body size does not match its levels");
-    }
-    const unsigned char *at = p + LEVELS_HEADER + (uint64_t)count * LEVEL_RECORD;
-    for (uint32_t i = 0; i < count && !rc; i++) {
-        const unsigned char *r = p + LEVELS_HEADER + (uint64_t)i * LEVEL_RECORD;
-        sl_segment_stored_level *lv = &out->levels[i];
-        memcpy(lv->info.name, r, 32);
-        lv->info.by_percent = sl_get_u32(r + 32) == 0;
-        uint32_t flags = sl_get_u32(r + 36);
-        lv->info.clamped = flags & 1;
-        lv->info.over_budget = (flags >> 1) & 1;
-        memcpy(&lv->info.value, r + 40, 8);
-        lv->triangle_count = sl_get_u64(r + 48);
-        float e, q;
-        memcpy(&e, r + 56, 4);
-        memcpy(&q, r + 60, 4);
-        lv->max_error = e;
-        lv->estimated_rms = q;
-        lv->triangles = malloc(12 * (lv->triangle_count ? lv->triangle_count : 1));
-        if (!lv->triangles) {
-            rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    sl_cluster_list list;
+    memset(&list, 0, sizeof list);
+    list.input_triangles = ps->triangle_count;
+    double d2 = 0;
+    for (int k = 0; k < 3; k++)
+        d2 += ((double)ps->bbox_max[k] - ps->bbox_min[k]) * ((double)ps->bbox_max[k] - ps->bbox_min[k]);
+    list.diagonal = sqrt(d2);
+    list.count = level_count;
+    list.meshes = calloc(level_count ? level_count : 1, sizeof *list.meshes);
+    uint32_t *map = malloc((ps->count ? ps->count : 1) * sizeof *map);
+    int rc = list.meshes && map ? SL_OK : sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    for (uint32_t i = 0; i < level_count && !rc; i++) {
+        sl_cluster_list_mesh *m = &list.meshes[i];
+        const sl_segment_level *lv = &levels[i];
+        memcpy(m->name, info[i].name, sizeof m->name);
+        m->by_percent = info[i].by_percent;
+        m->percent = info[i].by_percent ? info[i].value : 0;
+        m->budget = info[i].budget;
+        m->reached = !info[i].over_budget;
+        m->clamped = info[i].clamped;
+        memset(map, 0xff, (ps->count ? ps->count : 1) * sizeof *map);
+        for (uint64_t k = 0; k < 3 * lv->triangle_count; k++)
+            map[lv->triangles[k]] = 0;
+        for (uint64_t p = 0; p < ps->count; p++)
+            if (map[p] != UINT32_MAX)
+                map[p] = (uint32_t)m->vertex_count++;
+        size_t nv = m->vertex_count ? (size_t)m->vertex_count : 1;
+        m->positions = malloc(12 * nv);
+        m->source = malloc(4 * nv);
+        m->triangle_count = lv->triangle_count;
+        m->triangles = malloc(12 * (lv->triangle_count ? lv->triangle_count : 1));
+        if (!m->positions || !m->source || !m->triangles) {
+            rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "level %s", m->name);
             break;
         }
-        memcpy(lv->triangles, at, 12 * lv->triangle_count);
-        at += 12 * lv->triangle_count;
-        for (uint64_t k = 0; k < 3 * lv->triangle_count; k++)
-            if (lv->triangles[k] >= out->point_count) {
-                rc = corrupt(err, path, "a triangle names a point out of range");
-                break;
+        for (uint64_t p = 0; p < ps->count; p++)
+            if (map[p] != UINT32_MAX) {
+                memcpy(m->positions + 3 * (uint64_t)map[p], ps->positions + 3 * p, 12);
+                m->source[map[p]] = (uint32_t)p;
             }
+        for (uint64_t k = 0; k < 3 * lv->triangle_count; k++)
+            m->triangles[k] = map[lv->triangles[k]];
     }
-    free(body);
-    if (rc)
-        sl_segment_levels_release(out);
+    if (!rc)
+        rc = sl_cluster_list_write(path, &list, err);
+    free(map);
+    sl_cluster_list_release(&list);
     return rc;
-}
-
-void sl_segment_levels_release(sl_segment_levels *l)
-{
-    for (uint32_t i = 0; i < l->level_count && i < SL_SEGMENT_MAX_LEVELS; i++)
-        free(l->levels[i].triangles);
-    memset(l, 0, sizeof *l);
 }
 
 /* segments.slsgm: the segment of each triangle, then per segment its unit area-weighted
@@ -308,7 +262,7 @@ static int write_map(const char *path, const sl_segment_model *m, sl_error *err)
 
 /* --- run -------------------------------------------------------------------------------- */
 
-static void report_level(sl_json *j, const sl_segment_level_info *info, const sl_segment_level *lv)
+static void report_level(sl_json *j, const stage_level_info *info, const sl_segment_level *lv)
 {
     const sl_segment_stats *s = &lv->stats;
     sl_json_object_begin(j, NULL);
@@ -333,7 +287,7 @@ static void report_level(sl_json *j, const sl_segment_level_info *info, const sl
 }
 
 static int make_levels(const stage_config *c, sl_segment_model *model, uint64_t input_triangles,
-                       sl_segment_level *levels, sl_segment_level_info *info,
+                       sl_segment_level *levels, stage_level_info *info,
                        sl_progress *progress, sl_error *err)
 {
     for (uint32_t i = 0; i < c->level_count; i++) {
@@ -345,6 +299,7 @@ static int make_levels(const stage_config *c, sl_segment_model *model, uint64_t 
         uint64_t budget = want->by_percent
                               ? (uint64_t)floor(want->value / 100.0 * (double)input_triangles)
                               : (uint64_t)want->value;
+        info[i].budget = budget;
         info[i].clamped = budget >= input_triangles;
         sl_segment_target target = {budget ? budget : 1, 0, 0};
         if (c->seg.rule != SL_SEGMENT_RULE_ERROR) /* no size: one pass */
@@ -376,8 +331,8 @@ static int segment_run(const void *config, const sl_stage_io *io, sl_error *err)
     }
     sl_segment_input in = {ps.count, ps.positions, ps.triangle_count, ps.triangles};
     sl_segment_model *model = NULL;
-    sl_segment_level levels[SL_SEGMENT_MAX_LEVELS];
-    sl_segment_level_info info[SL_SEGMENT_MAX_LEVELS];
+    sl_segment_level levels[MAX_LEVELS];
+    stage_level_info info[MAX_LEVELS];
     memset(levels, 0, sizeof levels);
     rc = sl_segment_model_build(&c->seg, &in, &model, io->progress, err);
     if (!rc)
@@ -387,9 +342,8 @@ static int segment_run(const void *config, const sl_stage_io *io, sl_error *err)
         rc = write_map(path, model, err);
     }
     if (!rc) {
-        snprintf(path, sizeof path, "%s/%s", io->out_dir, SL_SEGMENT_LEVELS_FILE);
-        rc = sl_segment_levels_write(path, (uint32_t)ps.count, ps.triangle_count,
-                                     model->seg.segment_count, info, levels, c->level_count, err);
+        snprintf(path, sizeof path, "%s/%s", io->out_dir, SL_CLUSTER_LEVELS_FILE);
+        rc = write_list(path, &ps, info, levels, c->level_count, err);
     }
     if (!rc) {
         sl_json *j = io->report;
@@ -414,6 +368,7 @@ static int segment_run(const void *config, const sl_stage_io *io, sl_error *err)
 
 const sl_stage sl_segment_stage = {
     .name = "segment",
+    .methods = SL_METHOD_SEGMENT,
     .description = "welded mesh -> levels by segmentation, trimming, plane fit and "
                    "retriangulation (paper 3)",
     .version = SEGMENT_STAGE_VERSION,

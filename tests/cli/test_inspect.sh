@@ -41,6 +41,24 @@ check "missing file: exit 65" [ "$rc" -eq 65 ]
 check "missing file: says so in one line ($err)" [ "$err" = "scanlod: $TMP/missing.ply: No such file or directory" ]
 # FIFOs, directories, devices: tests/cli/test_input_files.sh (all commands alike).
 
+# A LOD model: what it holds, checked as extract checks it; the finest cut's triangles are
+# the export stage's triangles_finest.
+mkdir -p "$TMP/in"
+cp "$SCANS/bun_zipper_res4.ply" "$TMP/in/"
+write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out"
+"$SCANLOD" run "$TMP/c.ini" -q
+model="$TMP/out/bun_zipper_res4.ply/model.slod"
+inspect "$model"
+check "model: exit 0 ($err)" [ "$rc" -eq 0 ]
+finest=$(python3 -c "import json; print(json.load(open('$TMP/out/bun_zipper_res4.ply/report.json'))['stages']['export']['triangles_finest'])")
+check "model: the finest cut's triangles ($finest) as the report says" grep -qx "triangles: 0 at the root, $finest at the finest cut" <<<"$out"
+for key in grid nodes crossings "lod array" error "transition records"; do
+  check "model: says its $key" grep -q "^$key: " <<<"$out"
+done
+head -c 4000 "$model" >"$TMP/cut.slod"
+inspect "$TMP/cut.slod"
+check "truncated model: exit 65, one line naming it ($err)" [ "$rc" -eq 65 ] && grep -q "^scanlod: $TMP/cut.slod: header declares" <<<"$err"
+
 inspect
 check "no argument: exit 64" [ "$rc" -eq 64 ]
 check "no argument: usage on stderr" grep -q "^usage: scanlod inspect" <<<"$err"

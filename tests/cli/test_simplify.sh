@@ -7,9 +7,9 @@ source "$(dirname "$0")/../lib.sh"
 data="$SCANLOD_SOURCE_DIR/tests/data"
 fast=(--search-samples 0)
 
-simplify() { # simplify ARGS...: sets rc, out, err
+simplify() { # simplify ARGS...: --method segment ARGS; sets rc, out, err
   set +e
-  out=$("$SCANLOD" simplify "$@" 2>"$TMP/err")
+  out=$("$SCANLOD" simplify --method segment "$@" 2>"$TMP/err")
   rc=$?
   set -e
   err=$(cat "$TMP/err")
@@ -92,7 +92,7 @@ check "only degenerate faces: one line" [ "$(wc -l <"$TMP/err")" -eq 1 ]
 
 # --- usage: exit 64, nothing read -------------------------------------------------------
 for args in "--ratio 0" "--ratio 2" "--triangles 0" "--triangles x" "--max-error -1" \
-            "--delta-seg 95" "--delta-b 200" "--rule fancy" "--method cluster" \
+            "--delta-seg 95" "--delta-b 200" "--rule fancy" "--method fancy" \
             "--ratio 0.5 --triangles 9" "--frobnicate"; do
   # shellcheck disable=SC2086
   simplify "$TMP/missing.ply" $args
@@ -100,8 +100,14 @@ for args in "--ratio 0" "--ratio 2" "--triangles 0" "--triangles x" "--max-error
 done
 simplify
 check "no input: exit 64" [ "$rc" -eq 64 ]
+set +e
+"$SCANLOD" simplify "$data/scans/fandisk.ply" --ratio 0.1 2>"$TMP/err"
+rc=$?
+set -e
+check "no --method: exit 64, says so" [ "$rc" -eq 64 ] && grep -q "needs --method" "$TMP/err"
 simplify --help
 check "--help: exit 0" [ "$rc" -eq 0 ]
 check "--help: the method's options" grep -q -- "--delta-seg" <<<"$out"
+check "--help: both methods" grep -q -- "--intermediates" <<<"$out"
 
 finish

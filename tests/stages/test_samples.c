@@ -22,7 +22,7 @@
 #include "geometry/mesh_distance.h"
 #include "geometry/ply.h"
 #include "pipeline/config.h"
-#include "stages/merge/key_table.h"
+#include "geometry/key_table.h"
 #include "stages/registry.h"
 #include "stages/samples/samples.h"
 #include "tests/check.h"

@@ -1,5 +1,5 @@
-/* The segment stage through its entry (not yet registered): options of [segment] and the
- * export's ladder, the run on the range stage's points.slpts (levels.slseg within their
+/* The segment stage through its entry: options of [segment] and the export's ladder, the
+ * run on the range stage's points.slpts (levels.sllev, the level list, within their
  * budgets and watertight, segments.slsgm), byte-identical files on 1 and 2 threads,
  * nothing written when interrupted, a point cloud refused, a damaged levels file refused
  * by the reader. */
@@ -14,6 +14,7 @@
 #include "geometry/mesh_adjacency.h"
 #include "geometry/ply.h"
 #include "pipeline/config.h"
+#include "stages/cluster/cluster.h"
 #include "stages/export/export.h"
 #include "stages/range/range.h"
 #include "stages/segment/segment.h"
@@ -162,7 +163,7 @@ static void test_run(void)
     CHECK(run_stage(sc, range, out1, 1, NULL) == 0);
     CHECK(run_stage(sc, range, out2, 2, NULL) == 0);
     CHECK_EQ_U64(count_files(out1), 2);
-    const char *files[] = {SL_SEGMENT_LEVELS_FILE, SL_SEGMENT_MAP_FILE};
+    const char *files[] = {SL_CLUSTER_LEVELS_FILE, SL_SEGMENT_MAP_FILE};
     for (int f = 0; f < 2; f++) { /* the same bytes on 1 and 2 threads */
         long s1, s2;
         snprintf(path, sizeof path, "%s/%s", out1, files[f]);
@@ -173,44 +174,50 @@ static void test_run(void)
         free(a);
         free(b);
     }
-    sl_segment_levels lv;
+    sl_cluster_list lv; /* the level list the export reads, as the cluster method's */
     sl_error err;
     sl_error_init(&err);
-    snprintf(path, sizeof path, "%s/%s", out1, SL_SEGMENT_LEVELS_FILE);
-    CHECK(sl_segment_levels_read(path, &lv, &err) == 0);
-    CHECK_EQ_U64(lv.level_count, 5);
-    CHECK_EQ_U64(lv.point_count, ps.count);
+    snprintf(path, sizeof path, "%s/%s", out1, SL_CLUSTER_LEVELS_FILE);
+    CHECK(sl_cluster_list_read(path, &lv, &err) == 0);
+    CHECK_EQ_U64(lv.count, 5);
+    CHECK_EQ_U64(lv.input_triangles, ps.triangle_count);
     const uint64_t budgets[5] = {ps.triangle_count * 5 / 100, ps.triangle_count * 20 / 100,
                                  ps.triangle_count, 500, 99999};
     const char *names[5] = {"lod5", "lod20", "lod100", "thumb", "big"};
-    for (uint32_t i = 0; i < lv.level_count && i < 5; i++) {
-        const sl_segment_stored_level *l = &lv.levels[i];
-        CHECK_MSG(!strcmp(l->info.name, names[i]), "%s", l->info.name);
-        CHECK_MSG(l->triangle_count <= budgets[i], "%s: %llu", l->info.name,
+    for (uint32_t i = 0; i < lv.count && i < 5; i++) {
+        const sl_cluster_list_mesh *l = &lv.meshes[i];
+        CHECK_MSG(!strcmp(l->name, names[i]), "%s", l->name);
+        CHECK_MSG(l->triangle_count <= budgets[i], "%s: %llu", l->name,
                   (unsigned long long)l->triangle_count);
-        CHECK(l->info.clamped == (budgets[i] >= ps.triangle_count));
+        CHECK(l->clamped == (budgets[i] >= ps.triangle_count));
+        CHECK(l->by_percent == (i < 3) && l->budget == budgets[i] && !l->intermediate);
+        int moved = 0; /* every vertex is the point it names, unmoved */
+        for (uint64_t v = 0; v < l->vertex_count; v++)
+            moved += l->source[v] >= ps.count ||
+                     memcmp(l->positions + 3 * v, ps.positions + 3 * (uint64_t)l->source[v], 12);
+        CHECK_MSG(moved == 0, "%s: %d vertices are not their points", l->name, moved);
         sl_mesh_adjacency adj;
-        CHECK(sl_mesh_adjacency_build(l->triangles, l->triangle_count, ps.count, NULL,
+        CHECK(sl_mesh_adjacency_build(l->triangles, l->triangle_count, l->vertex_count, NULL,
                                       SL_ADJACENCY_STRICT, &adj, &err) == 0);
         CHECK_MSG(adj.report.boundary_edges == 0 && adj.report.euler_characteristic == 2,
-                  "%s: %llu boundary edges", l->info.name,
+                  "%s: %llu boundary edges", l->name,
                   (unsigned long long)adj.report.boundary_edges);
         sl_mesh_adjacency_release(&adj);
     }
-    CHECK(lv.levels[2].triangle_count == ps.triangle_count); /* lod100: the input */
-    sl_segment_levels_release(&lv);
+    CHECK(lv.meshes[2].triangle_count == ps.triangle_count); /* lod100: the input */
+    sl_cluster_list_release(&lv);
 
     /* a damaged file is refused: one byte of its body flipped */
     long size;
     char *data = slurp(path, &size);
     data[size - 5] ^= 0x40;
-    snprintf(path, sizeof path, "%s/damaged.slseg", out3);
+    snprintf(path, sizeof path, "%s/damaged.sllev", out3);
     FILE *f = fopen(path, "wb");
     fwrite(data, 1, (size_t)size, f);
     fclose(f);
     free(data);
     sl_error_init(&err);
-    CHECK(sl_segment_levels_read(path, &lv, &err) == SL_E_CORRUPT);
+    CHECK(sl_cluster_list_read(path, &lv, &err) == SL_E_CORRUPT);
     unlink(path);
 
     /* interrupted: nothing written */

@@ -7,6 +7,7 @@
  * into that directory for tests/export/test_glb.sh to run the Khronos validator on.
  */
 #include <errno.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -20,6 +21,12 @@
 #include "json_validate.h"
 
 static char tmpdir[512];
+
+/* IEC 61966-2-1, written here again so that the test does not trust the writer's. */
+static double glb_test_linear_to_srgb(double l)
+{
+    return l <= 0.0031308 ? 12.92 * l : 1.055 * pow(l, 1 / 2.4) - 0.055;
+}
 
 typedef struct glb_file {
     char *data;
@@ -99,29 +106,38 @@ static void test_cube_layout(void)
     path_in_tmp("cube.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    sl_glb_mesh g = sl_glb_mesh_view(&m, "{\"lod_percent\":20,\"triangles\":12}");
-    CHECK(sl_glb_write(path, &g, &err) == 0);
+    CHECK(sl_glb_write(path, &m, "{\"lod_percent\":20,\"triangles\":12}", NULL, NULL,
+                       &err) == 0);
     glb_file f;
     if (glb_read(path, &f) == 0) {
-        /* 24 positions + 24 normals (12 bytes each), 24 colours (4), 36 short indices. */
-        CHECK_EQ_U64(f.bin_length, 288 + 288 + 96 + 72);
+        /* 24 positions + 24 normals (12 bytes each), 24 linear colours (4 x 16 bits), 36
+         * short indices. */
+        CHECK_EQ_U64(f.bin_length, 288 + 288 + 192 + 72);
         CHECK(strstr(f.json, "\"generator\":\"scanlod\"") != NULL);
         CHECK(strstr(f.json, "\"attributes\":{\"POSITION\":0,\"NORMAL\":1,\"COLOR_0\":2}"));
         CHECK(strstr(f.json, "\"indices\":3") != NULL);
         CHECK(strstr(f.json, "\"min\":[-1,-1,-1],\"max\":[2,2,2]") != NULL);
         CHECK(strstr(f.json, "\"componentType\":5123,\"count\":36,\"type\":\"SCALAR\""));
-        CHECK(strstr(f.json, "\"componentType\":5121,\"count\":24,\"type\":\"VEC4\","
-                             "\"normalized\":true"));
+        CHECK(strstr(f.json, "\"componentType\":5123,\"normalized\":true,\"count\":24,"
+                             "\"type\":\"VEC4\""));
+        CHECK(strstr(f.json, "extensionsUsed") == NULL); /* plain glTF 2.0 */
         CHECK(strstr(f.json, "\"extras\":{\"lod_percent\":20,\"triangles\":12}") != NULL);
         CHECK_EQ_U64(json_number_after(f.json, "\"byteOffset\":", 1), 288);
         CHECK_EQ_U64(json_number_after(f.json, "\"byteOffset\":", 2), 576);
-        CHECK_EQ_U64(json_number_after(f.json, "\"byteOffset\":", 3), 672);
+        CHECK_EQ_U64(json_number_after(f.json, "\"byteOffset\":", 3), 768);
         CHECK_EQ_U64(json_number_after(f.json, "\"target\":", 3), 34963);
         CHECK(memcmp(f.bin, m.positions, 288) == 0); /* the tests run on little-endian hosts */
-        CHECK(memcmp(f.bin + 576, m.colors, 96) == 0);
+        /* Colours are linear (glTF): sRGB 200 comes back as 200 after linear -> sRGB. */
+        int colors_ok = 1;
+        for (int i = 0; i < 24 * 4; i++) {
+            double v = (f.bin[576 + 2 * i] | f.bin[577 + 2 * i] << 8) / 65535.0;
+            double back = i % 4 == 3 ? v * 255 : 255 * glb_test_linear_to_srgb(v);
+            colors_ok &= fabs(back - m.colors[i]) <= 0.5;
+        }
+        CHECK(colors_ok);
         int same = 1;
         for (int i = 0; i < 36; i++)
-            same &= f.bin[672 + 2 * i] + 256u * f.bin[673 + 2 * i] == m.triangles[i];
+            same &= f.bin[768 + 2 * i] + 256u * f.bin[769 + 2 * i] == m.triangles[i];
         CHECK(same);
         glb_free(&f);
     }
@@ -133,12 +149,12 @@ static void test_padding_and_minimal(void)
 {
     float pos[9] = {0.1f, 0.2f, 0.3f, 1e-7f, -5.5f, 3.25f, 7.0f, 0.333333343f, -0.0f};
     uint32_t idx[3] = {0, 1, 2};
-    sl_glb_mesh g = {3, 1, pos, NULL, NULL, idx, NULL};
+    sl_mesh g = sl_mesh_view(3, pos, NULL, NULL, 1, idx);
     char path[600];
     path_in_tmp("one.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    CHECK(sl_glb_write(path, &g, &err) == 0);
+    CHECK(sl_glb_write(path, &g, NULL, NULL, NULL, &err) == 0);
     glb_file f;
     if (glb_read(path, &f) == 0) {
         CHECK_EQ_U64(f.bin_length, 36 + 8);
@@ -171,8 +187,7 @@ static void test_large_indices_and_normals(void)
     path_in_tmp("grid.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    sl_glb_mesh g = sl_glb_mesh_view(&m, NULL);
-    CHECK(sl_glb_write(path, &g, &err) == 0);
+    CHECK(sl_glb_write(path, &m, NULL, NULL, NULL, &err) == 0);
     glb_file f;
     if (glb_read(path, &f) == 0) {
         uint64_t v = m.vertex_count, t = m.triangle_count;
@@ -192,19 +207,19 @@ static void test_large_indices_and_normals(void)
     sl_mesh_release(&m);
 }
 
-static void expect_rejected(const sl_glb_mesh *g, int code, const char *message_part)
+static void expect_rejected(const sl_mesh *g, int code, const char *message_part)
 {
     char path[600];
     path_in_tmp("rejected.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    CHECK_MSG(sl_glb_write(path, g, &err) == code, "%s", sl_error_name(err.code));
+    CHECK_MSG(sl_glb_write(path, g, NULL, NULL, NULL, &err) == code, "%s", sl_error_name(err.code));
     CHECK_MSG(strstr(err.message, message_part) != NULL, "%s", err.message);
     CHECK(access(path, F_OK) != 0 && errno == ENOENT);
     sl_error_init(&err);
     path_in_tmp("rejected.obj", path, sizeof path);
     if (code != SL_E_INTERNAL || strstr(message_part, "index"))
-        CHECK(sl_obj_write(path, g, &err) == code);
+        CHECK(sl_obj_write(path, g, NULL, &err) == code);
     CHECK(access(path, F_OK) != 0);
 }
 
@@ -212,25 +227,25 @@ static void test_rejections(void)
 {
     float pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     uint32_t idx[3] = {0, 1, 2};
-    sl_glb_mesh empty = {3, 0, pos, NULL, NULL, idx, NULL};
+    sl_mesh empty = sl_mesh_view(3, pos, NULL, NULL, 0, idx);
     expect_rejected(&empty, SL_E_BADINPUT, "nothing to write");
-    sl_glb_mesh no_vertices = {0, 1, pos, NULL, NULL, idx, NULL};
+    sl_mesh no_vertices = sl_mesh_view(0, pos, NULL, NULL, 1, idx);
     expect_rejected(&no_vertices, SL_E_BADINPUT, "nothing to write");
     uint32_t bad_idx[3] = {0, 1, 3};
-    sl_glb_mesh out_of_range = {3, 1, pos, NULL, NULL, bad_idx, NULL};
+    sl_mesh out_of_range = sl_mesh_view(3, pos, NULL, NULL, 1, bad_idx);
     expect_rejected(&out_of_range, SL_E_INTERNAL, "vertex index 3");
     float nan_pos[9] = {0, 0, 0, 1, NAN, 0, 0, 1, 0};
-    sl_glb_mesh nan = {3, 1, nan_pos, NULL, NULL, idx, NULL};
+    sl_mesh nan = sl_mesh_view(3, nan_pos, NULL, NULL, 1, idx);
     expect_rejected(&nan, SL_E_BADINPUT, "vertex 1 has a non-finite position");
     float inf_pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, -INFINITY};
-    sl_glb_mesh inf = {3, 1, inf_pos, NULL, NULL, idx, NULL};
+    sl_mesh inf = sl_mesh_view(3, inf_pos, NULL, NULL, 1, idx);
     expect_rejected(&inf, SL_E_BADINPUT, "vertex 2 has a non-finite position");
-    sl_glb_mesh not_object = {3, 1, pos, NULL, NULL, idx, "\"lod\""};
+    sl_mesh not_object = sl_mesh_view(3, pos, NULL, NULL, 1, idx);
     char path[600];
     path_in_tmp("rejected.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    CHECK(sl_glb_write(path, &not_object, &err) == SL_E_INTERNAL);
+    CHECK(sl_glb_write(path, &not_object, "\"lod\"", NULL, NULL, &err) == SL_E_INTERNAL);
     CHECK(access(path, F_OK) != 0);
 }
 
@@ -239,13 +254,15 @@ static void test_deterministic(void)
     sl_mesh m;
     float c[3] = {0.5f, 0, 0};
     meshes_sphere(&m, 12, 24, c, 1);
-    sl_glb_mesh g = sl_glb_mesh_view(&m, "{\"level\":1}");
+
     char a[600], b[600];
     path_in_tmp("a.glb", a, sizeof a);
     path_in_tmp("b.glb", b, sizeof b);
     sl_error err;
     sl_error_init(&err);
-    CHECK(sl_glb_write(a, &g, &err) == 0 && sl_glb_write(b, &g, &err) == 0);
+    const char *extras = "{\"level\":1}";
+    CHECK(sl_glb_write(a, &m, extras, NULL, NULL, &err) == 0 &&
+          sl_glb_write(b, &m, extras, NULL, NULL, &err) == 0);
     char *da = NULL, *db = NULL;
     size_t na = 0, nb = 0;
     CHECK(sl_read_file(a, 1 << 24, &da, &na, &err) == 0);
@@ -264,8 +281,7 @@ static void test_obj(void)
     path_in_tmp("cube.obj", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    sl_glb_mesh g = sl_glb_mesh_view(&m, "{\"level\":2}");
-    CHECK(sl_obj_write(path, &g, &err) == 0);
+    CHECK(sl_obj_write(path, &m, "{\"level\":2}", &err) == 0);
     char *text = NULL;
     size_t size = 0;
     CHECK(sl_read_file(path, 1 << 20, &text, &size, &err) == 0);
@@ -301,19 +317,17 @@ static void write_samples(const char *dir)
     for (size_t i = 0; i < sizeof cubes / sizeof cubes[0]; i++) {
         meshes_cube(&m, -0.5f, 0.5f, cubes[i].normals, cubes[i].colors);
         snprintf(path, sizeof path, "%s/%s.glb", dir, cubes[i].name);
-        sl_glb_mesh g = sl_glb_mesh_view(&m, "{\"scanlod\":{\"level\":0}}");
-        CHECK(sl_glb_write(path, &g, &err) == 0);
+        CHECK(sl_glb_write(path, &m, "{\"scanlod\":{\"level\":0}}", NULL, NULL, &err) == 0);
         sl_mesh_release(&m);
     }
     float one_pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, one_nrm[9] = {0, 0, 3, 0, 0, 3, 0, 0, 3};
     uint32_t one_idx[3] = {0, 1, 2};
-    sl_glb_mesh one = {3, 1, one_pos, one_nrm, NULL, one_idx, NULL};
+    sl_mesh one = sl_mesh_view(3, one_pos, one_nrm, NULL, 1, one_idx);
     snprintf(path, sizeof path, "%s/one_triangle.glb", dir);
-    CHECK(sl_glb_write(path, &one, &err) == 0);
+    CHECK(sl_glb_write(path, &one, NULL, NULL, NULL, &err) == 0);
     meshes_grid(&m, 300, 1, 1);
     snprintf(path, sizeof path, "%s/grid_uint32.glb", dir);
-    sl_glb_mesh grid = sl_glb_mesh_view(&m, NULL);
-    CHECK(sl_glb_write(path, &grid, &err) == 0);
+    CHECK(sl_glb_write(path, &m, NULL, NULL, NULL, &err) == 0);
     sl_mesh_release(&m);
     const char *scans[] = {"cow", "fandisk", "bun_zipper_res3", "rocker_arm"};
     for (size_t i = 0; i < sizeof scans / sizeof scans[0]; i++) {
@@ -323,9 +337,9 @@ static void write_samples(const char *dir)
         }
         meshes_vertex_normals(&m);
         snprintf(path, sizeof path, "%s/%s.glb", dir, scans[i]);
-        sl_glb_mesh g =
-            sl_glb_mesh_view(&m, "{\"scanlod\":{\"item\":\"scan\",\"lod_percent\":100}}");
-        CHECK_MSG(sl_glb_write(path, &g, &err) == 0, "%s: %s", scans[i], err.message);
+        const char *extras = "{\"scanlod\":{\"item\":\"scan\",\"lod_percent\":100}}";
+        CHECK_MSG(sl_glb_write(path, &m, extras, NULL, NULL, &err) == 0, "%s: %s", scans[i],
+                  err.message);
         sl_mesh_release(&m);
     }
 }

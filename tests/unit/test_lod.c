@@ -11,6 +11,7 @@
 
 #include "core/artifact.h"
 #include "runtime/lod_io.h"
+#include "stages/crack/crack.h"
 #include "stages/merge/merge.h"
 #include "stages/priority/priority.h"
 #include "tests/check.h"

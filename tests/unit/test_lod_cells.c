@@ -10,6 +10,8 @@
 #include <string.h>
 
 #include "runtime/lod_io.h"
+#include "stages/crack/crack.h"
+#include "stages/priority/priority.h"
 #include "tests/check.h"
 #include "tests/unit/sdf_octree.h"
 

@@ -34,8 +34,7 @@ static float *render(const sl_mesh *m, int w, int h)
     float *rgba = malloc((size_t)w * (size_t)h * 4 * sizeof *rgba);
     sl_error err;
     sl_error_init(&err);
-    sl_glb_mesh g = sl_glb_mesh_view(m, NULL);
-    int rc = sl_render_thumbnail(&g, w, h, rgba, &err);
+    int rc = sl_render_thumbnail(m, w, h, rgba, &err);
     CHECK_MSG(rc == 0, "%s", err.message);
     return rc ? (free(rgba), NULL) : rgba;
 }
@@ -145,7 +144,8 @@ static void test_rejections(void)
 {
     sl_mesh m;
     meshes_cube(&m, 0, 1, 1, 0);
-    sl_glb_mesh g = sl_glb_mesh_view(&m, NULL);
+    sl_mesh g = sl_mesh_view(m.vertex_count, m.positions, m.normals, m.colors,
+                             m.triangle_count, m.triangles);
     float px[4 * 16];
     sl_error err;
     sl_error_init(&err);
@@ -170,7 +170,8 @@ static void test_png(void)
     snprintf(path, sizeof path, "%s/cube.png", dir);
     sl_mesh m;
     meshes_cube(&m, -1, 1, 1, 1);
-    sl_glb_mesh g = sl_glb_mesh_view(&m, NULL);
+    sl_mesh g = sl_mesh_view(m.vertex_count, m.positions, m.normals, m.colors,
+                             m.triangle_count, m.triangles);
     sl_error err;
     sl_error_init(&err);
     CHECK_MSG(sl_write_thumbnail(path, &g, 96, &err) == 0, "%s", err.message);
@@ -211,14 +212,13 @@ static void write_scans(const char *dir)
         char path[1200];
         sl_error err;
         sl_error_init(&err);
-        sl_glb_mesh g = sl_glb_mesh_view(&m, NULL);
-        g.normals = NULL;
+        sl_mesh g = sl_mesh_view(m.vertex_count, m.positions, NULL, m.colors, m.triangle_count,
+                                 m.triangles); /* face normals */
         snprintf(path, sizeof path, "%s/%s_flat.png", dir, scans[i]);
         CHECK_MSG(sl_write_thumbnail(path, &g, 256, &err) == 0, "%s", err.message);
         meshes_vertex_normals(&m);
-        g = sl_glb_mesh_view(&m, NULL);
         snprintf(path, sizeof path, "%s/%s.png", dir, scans[i]);
-        CHECK_MSG(sl_write_thumbnail(path, &g, 256, &err) == 0, "%s", err.message);
+        CHECK_MSG(sl_write_thumbnail(path, &m, 256, &err) == 0, "%s", err.message);
         sl_mesh_release(&m);
     }
 }

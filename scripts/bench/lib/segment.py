@@ -65,7 +65,8 @@ class Bench:
                 "nonmanifold_edges": d["b_topology"]["nonmanifold_edges"]}
 
     def simplify(self, src, out, args):
-        return run_json([self.scanlod, "simplify", src, "-o", out, "--json"] + list(args))
+        return run_json([self.scanlod, "simplify", src, "--method", "segment", "-o", out,
+                         "--json"] + list(args))
 
     def meshopt(self, src, n, prefix):
         d = run_json([self.peer("meshopt_lod"), src, "--targets", n, "-o", prefix])

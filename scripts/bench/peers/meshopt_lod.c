@@ -139,19 +139,14 @@ static int weld(const sl_mesh *m, welded *w)
 static int write_level(const char *path, const welded *w, unsigned int *indices,
                        size_t index_count, sl_error *err)
 {
-    sl_mesh out;
-    sl_mesh_init(&out);
-    out.positions = malloc((w->vertex_count ? w->vertex_count : 1) * 3 * sizeof(float));
-    if (!out.positions)
+    float *positions = malloc((w->vertex_count ? w->vertex_count : 1) * 3 * sizeof(float));
+    if (!positions)
         return sl_error_set(err, SL_E_NOMEM, 0, path, "level vertices");
-    out.vertex_count = meshopt_optimizeVertexFetch(out.positions, indices, index_count,
-                                                   w->positions, w->vertex_count,
-                                                   3 * sizeof(float));
-    out.triangle_count = index_count / 3;
-    out.triangles = indices; /* borrowed: detached before release */
+    size_t used = meshopt_optimizeVertexFetch(positions, indices, index_count, w->positions,
+                                              w->vertex_count, 3 * sizeof(float));
+    sl_mesh out = sl_mesh_view(used, positions, NULL, NULL, index_count / 3, indices);
     int rc = sl_ply_write(path, &out, err);
-    out.triangles = NULL;
-    sl_mesh_release(&out);
+    free(positions);
     return rc;
 }
 

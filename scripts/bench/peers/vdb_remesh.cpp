@@ -164,15 +164,12 @@ void remesh(const sl_mesh &m, const Options &o, double voxel, Result &r)
 
 int write_result(const char *path, Result &r, sl_error *err)
 {
-    sl_mesh out;
-    sl_mesh_init(&out);
     // Borrowed storage: Vec3s and Vec3I are three packed floats / uint32s.
     static_assert(sizeof(openvdb::Vec3s) == 3 * sizeof(float), "packed Vec3s");
     static_assert(sizeof(openvdb::Vec3I) == 3 * sizeof(uint32_t), "packed Vec3I");
-    out.vertex_count = r.points.size();
-    out.positions = r.points.empty() ? nullptr : &r.points[0][0];
-    out.triangle_count = r.triangles.size();
-    out.triangles = r.triangles.empty() ? nullptr : &r.triangles[0][0];
+    sl_mesh out = sl_mesh_view(r.points.size(), r.points.empty() ? nullptr : &r.points[0][0],
+                               nullptr, nullptr, r.triangles.size(),
+                               r.triangles.empty() ? nullptr : &r.triangles[0][0]);
     return sl_ply_write(path, &out, err);
 }
 

@@ -1,6 +1,6 @@
 /* LSD radix sort on 64-bit keys, 16 bits per pass (see key_table.h). One routine serves
  * bare keys and (key, value) pairs: an element is `size` bytes whose first 8 are the key. */
-#include "stages/merge/key_table.h"
+#include "geometry/key_table.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -1,8 +1,9 @@
-/* Sorted 64-bit key tables for the octree build: LSD radix sort of (key, value) pairs and
- * binary search. Sorted arrays instead of hash maps: deterministic, compact, and trivially
- * shared by OpenMP threads for lookups. */
-#ifndef SCANLOD_STAGES_MERGE_KEY_TABLE_H
-#define SCANLOD_STAGES_MERGE_KEY_TABLE_H
+/* Sorted 64-bit key tables on the leaf grid (the samples stage's vertex sets, the merge
+ * stage's level tables): LSD radix sort of (key, value) pairs and binary search, and the
+ * packing of grid vertices and edges into keys. Sorted arrays instead of hash maps:
+ * deterministic, compact, and trivially shared by OpenMP threads for lookups. */
+#ifndef SCANLOD_GEOMETRY_KEY_TABLE_H
+#define SCANLOD_GEOMETRY_KEY_TABLE_H
 
 #include <stddef.h>
 #include <stdint.h>

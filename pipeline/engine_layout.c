@@ -1,23 +1,72 @@
-/* The four trees a run touches ([run] input, work, output, logs): each must be a folder
- * of its own, none inside another (docs/engine.md, "The trees of a run").
+/* Where things live: the run's folders and their rules, and the layout of the work folder
+ * (docs/engine.md, "Work directory" and "The trees of a run").
  *
- * An output inside the input would be scanned as new items by the next run (and the
- * next, each adding one more level: in/out/out/out/...); a work folder inside the input
- * likewise; an input inside the output would be swapped away by a publication. The check
- * runs before any work and names the option and where it was set (FILE:LINE), so a
- * mistake costs one line and exit 78, not a night.
+ * The four trees a run touches ([run] input, work, output, logs) must each be a folder
+ * of its own, none inside another. An output inside the input would be scanned as new
+ * items by the next run (and the next, each adding one more level: in/out/out/out/...);
+ * a work folder inside the input likewise; an input inside the output would be swapped
+ * away by a publication. The check runs before any work and names the option and where it
+ * was set (FILE:LINE), so a mistake costs one line and exit 78, not a night.
  */
 #include "pipeline/engine_internal.h"
 
 #include <errno.h>
 #include <fcntl.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "core/atomicfile.h"
+#include "core/dirs.h"
 #include "core/io.h"
+
+int sl_engine_path(char *buf, size_t size, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int n = vsnprintf(buf, size, fmt, ap);
+    va_end(ap);
+    return n < 0 || (size_t)n >= size ? -1 : 0;
+}
+
+int sl_artifact_dir(const sl_engine *e, int stage, const char *ticket, char *buf, size_t size)
+{
+    return sl_engine_path(buf, size, "%s/artifacts/%s/%s", e->work, e->stages[stage]->name,
+                          ticket);
+}
+
+int sl_remove_dir_contents(const char *dir, sl_error *err)
+{
+    /* The record goes first: without it nothing left here is trusted. */
+    char path[PATH_MAX];
+    if (sl_engine_path(path, sizeof path, "%s/%s", dir, SL_RECORD_FILE) == 0 &&
+        sl_io_unlink(path) != 0 && errno != ENOENT)
+        return sl_error_errno(err, errno, path, "unlink");
+    int rc = sl_remove_tree(dir, 1, err);
+    return rc ? rc : sl_fsync_dir(dir, err);
+}
+
+int sl_engine_make_work_layout(sl_engine *e, sl_error *err)
+{
+    char path[PATH_MAX];
+    int rc = sl_mkdirs(e->work, err);
+    for (int s = 0; rc == 0 && s < e->stage_count; s++) {
+        rc = sl_queue_create(e->work, e->stages[s]->name, err);
+        if (rc == 0 && sl_engine_path(path, sizeof path, "%s/artifacts/%s", e->work,
+                                      e->stages[s]->name) == 0)
+            rc = sl_mkdirs(path, err);
+    }
+    if (rc == 0 && sl_engine_path(path, sizeof path, "%s/artifacts/_publish", e->work) == 0)
+        rc = sl_mkdirs(path, err);
+    if (rc == 0 && sl_engine_path(path, sizeof path, "%s/cache/input", e->work) == 0)
+        rc = sl_mkdirs(path, err);
+    if (rc == 0)
+        rc = sl_mkdirs(e->output, err);
+    return rc;
+}
 
 /* `path` with every existing leading part resolved through symlinks (realpath), the
  * rest appended as it is: a folder that does not exist yet is compared where it will be. */

@@ -1,0 +1,109 @@
+/* Reconciliation: make one item's tickets match its current keys.
+ *
+ * For every stage in order, the stage key is computed from the config section hash, the
+ * stage version and the upstream chain (the input's content hash, then every earlier
+ * stage's outputs digest: sl_upstream_chain). A stage whose record verifies under
+ * that key is done; the first stage that is not gets a ready ticket (or keeps its
+ * quarantine, when the key is the one it was quarantined under). Items whose every stage
+ * is done are published if their publication is missing or stale.
+ */
+#include "pipeline/engine_internal.h"
+
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+void sl_ticket_for(sl_ticket *t, const char *item, const char *source_rel, sl_hash key)
+{
+    sl_ticket_init(t);
+    snprintf(t->item, sizeof t->item, "%s", item);
+    snprintf(t->source, sizeof t->source, "%s", source_rel);
+    sl_hash_hex(key, t->key);
+}
+
+/* Rewrites a ticket in its current state with a new key, then moves it. */
+static int requeue(sl_engine *e, const char *stage, const char *name, int from, sl_ticket *t,
+                   sl_hash key, int reset, sl_error *err)
+{
+    sl_hash_hex(key, t->key);
+    if (reset) {
+        t->attempt = 0;
+        t->crashes = 0;
+        t->cls[0] = t->reason[0] = '\0';
+    }
+    int rc = sl_queue_put(e->work, stage, from, name, t, err);
+    if (rc == 0 && from != SL_STATE_READY)
+        rc = sl_queue_move(e->work, stage, name, from, SL_STATE_READY, err);
+    return rc == SL_E_BUSY ? 0 : rc;
+}
+
+int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
+                        int *settled, sl_error *err)
+{
+    char name[SL_TICKET_NAME_MAX + 1];
+    int rc = sl_ticket_name(item, name, sizeof name, err);
+    if (rc)
+        return rc;
+    sl_hash upstream;
+    rc = sl_upstream_chain(e, name, source_rel, from, 0, &upstream, err);
+    if (rc == SL_E_CORRUPT && from > 0)
+        return sl_engine_reconcile(e, item, source_rel, 0, settled, err);
+    if (rc)
+        return rc;
+    for (int s = from; s < e->stage_count; s++) {
+        const char *stage = e->stages[s]->name;
+        sl_hash key = sl_stage_key(stage, e->stages[s]->version, e->config_hash[s], upstream);
+        int state = sl_queue_find(e->work, stage, name);
+        if (state == SL_STATE_CLAIMED)
+            return 0; /* a worker holds it; its lease decides */
+        char dir[PATH_MAX], record_path[PATH_MAX], ticket_path[PATH_MAX];
+        sl_artifact_dir(e, s, name, dir, sizeof dir);
+        sl_engine_path(record_path, sizeof record_path, "%s/%s", dir, SL_RECORD_FILE);
+        sl_record rec;
+        sl_error verr;
+        sl_error_init(&verr);
+        sl_ticket t;
+        if (sl_record_check(record_path, dir, &key, &rec, &verr) == 0) {
+            if (state != SL_STATE_DONE) {
+                sl_ticket_for(&t, item, source_rel, key);
+                rc = sl_queue_put(e->work, stage, SL_STATE_DONE, name, &t, err);
+                if (rc == 0 && state != SL_STATE_NONE) {
+                    sl_queue_path(ticket_path, sizeof ticket_path, e->work, stage, state, name);
+                    unlink(ticket_path);
+                }
+                if (rc)
+                    return rc;
+            }
+            e->counts.reused++;
+            upstream = sl_chain_hash(upstream, rec.outputs_digest);
+            continue;
+        }
+        if (state == SL_STATE_NONE) {
+            sl_ticket_for(&t, item, source_rel, key);
+            return sl_queue_put(e->work, stage, SL_STATE_READY, name, &t, err);
+        }
+        sl_queue_path(ticket_path, sizeof ticket_path, e->work, stage, state, name);
+        sl_error terr;
+        sl_error_init(&terr);
+        if (sl_ticket_read(ticket_path, &t, &terr) != 0)
+            sl_ticket_for(&t, item, source_rel, key); /* torn ticket: start over */
+        char key_hex[SL_HASH_HEX_SIZE];
+        sl_hash_hex(key, key_hex);
+        int same_key = strcmp(t.key, key_hex) == 0;
+        snprintf(t.source, sizeof t.source, "%s", source_rel);
+        if (state == SL_STATE_QUARANTINE && same_key) {
+            if (settled)
+                *settled = 1;
+            return 0; /* stays quarantined until its input, config or code changes */
+        }
+        if (state == SL_STATE_READY && same_key)
+            return 0;
+        return requeue(e, stage, name, state, &t, key, !same_key || state == SL_STATE_DONE, err);
+    }
+    if (sl_engine_publish_valid(e, item, name)) {
+        if (settled)
+            *settled = 1;
+        return 0;
+    }
+    return sl_engine_publish(e, item, name, source_rel, 1, err);
+}

@@ -1,0 +1,215 @@
+/* Levels from a level list (export_internal.h): the cluster stage's levels and intermediate
+ * models, or the segment stage's levels (stages/cluster/cluster.h, levels.sllev) written, measured and reported like the
+ * octree's levels. Normals and colours come from the range stage's points (each level
+ * vertex names the point it is, or was moved from): the input's shading on every level.
+ * Thumbnails are rendered for the levels, not for the intermediate models; atlases are
+ * baked for both when the input is textured. */
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/atomicfile.h"
+#include "core/markdown.h"
+#include "stages/cluster/cluster.h"
+#include "stages/export/export_internal.h"
+#include "stages/range/range.h"
+
+/* A list mesh as an sl_lod_mesh; normals and colours gathered from the points. */
+static int view_of(const sl_cluster_list_mesh *m, const sl_pointset *ps, sl_lod_mesh *out)
+{
+    memset(out, 0, sizeof *out);
+    size_t nv = m->vertex_count ? (size_t)m->vertex_count : 1;
+    out->vertex_count = m->vertex_count;
+    out->triangle_count = m->triangle_count;
+    out->positions = m->positions;
+    out->indices = m->triangles;
+    out->normals = malloc(3 * nv * sizeof *out->normals);
+    out->colors = ps->colors ? malloc(4 * nv) : NULL;
+    if (!out->normals || (ps->colors && !out->colors))
+        return -1;
+    for (uint64_t v = 0; v < m->vertex_count; v++) {
+        memcpy(out->normals + 3 * v, ps->normals + 3 * (uint64_t)m->source[v], 3 * sizeof(float));
+        if (out->colors)
+            memcpy(out->colors + 4 * v, ps->colors + 4 * (uint64_t)m->source[v], 4);
+    }
+    return 0;
+}
+
+/* The cluster method's bounds are proven (checked here against the measure); the segment
+ * method's levels carry none. */
+static int proven(const char *method)
+{
+    return strcmp(method, "cluster") == 0;
+}
+
+static void report_mesh(const sl_cluster_list_mesh *m, const char *method, sl_json *r)
+{
+    sl_json_string(r, "name", m->name);
+    sl_json_bool(r, "intermediate", m->intermediate);
+    sl_json_string(r, "from", m->from[0] ? m->from : NULL);
+    if (!m->intermediate) {
+        if (m->by_percent)
+            sl_json_double(r, "lod_percent", m->percent);
+        sl_json_u64(r, "budget", m->budget);
+        sl_json_bool(r, "clamped", m->clamped);
+        sl_json_bool(r, "reached", m->reached);
+    }
+    sl_json_u64(r, "triangles", m->triangle_count);
+    sl_json_u64(r, "vertices", m->vertex_count);
+    if (proven(method)) {
+        sl_json_double(r, "bound", m->bound_fraction);
+        sl_json_double(r, "bound_world", m->bound);
+    }
+}
+
+/* The item's section of OUTPUT/summary.md: a row per level and intermediate model. */
+static int write_summary(const sl_cluster_list *list, const char *method, const level_row *rows,
+                         int thumbnails, const sl_stage_io *io, sl_error *err)
+{
+    char *text = NULL;
+    size_t size = 0;
+    FILE *md = open_memstream(&text, &size);
+    if (!md)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    fputs("### ", md);
+    sl_md_text(md, io->item);
+    fprintf(md, "\n\n%s; input: %llu triangles.\n\n"
+                "| level | triangles | vertices | bound | RMS | Hausdorff | watertight |\n"
+                "|---|---:|---:|---:|---:|---:|---|\n",
+            proven(method) ? "Clustering levels with bounded error (paper 2)"
+                           : "Segmentation levels, planes kept exact (paper 3)",
+            (unsigned long long)list->input_triangles);
+    for (uint32_t i = 0; i < list->count; i++) {
+        const sl_cluster_list_mesh *m = &list->meshes[i];
+        fputs("| ", md);
+        sl_md_text(md, m->name);
+        fprintf(md, " | %llu | %llu |", (unsigned long long)m->triangle_count,
+                (unsigned long long)m->vertex_count);
+        if (proven(method))
+            fprintf(md, " %.3f %% |", 100 * m->bound_fraction);
+        else
+            fputs(" – |", md);
+        if (rows[i].measured)
+            fprintf(md, " %.3f %% | %.3f %% |", 100 * rows[i].rms, 100 * rows[i].hausdorff);
+        else
+            fputs(" – | – |", md);
+        fprintf(md, " %s |\n", rows[i].watertight ? "yes" : "no");
+    }
+    fputc('\n', md);
+    for (uint32_t i = 0, n = 0; thumbnails && i < list->count; i++)
+        if (rows[i].thumbnail) {
+            fputs(n++ ? " ![" : "![", md);
+            sl_md_text(md, io->item);
+            fputc(' ', md);
+            sl_md_text(md, list->meshes[i].name);
+            fputs("](<", md);
+            sl_md_link(md, io->item);
+            fputc('/', md);
+            sl_md_link(md, list->meshes[i].name);
+            fputs(".png>)", md);
+        }
+    if (thumbnails)
+        fputs("\n\n", md);
+    fclose(md);
+    char path[PATH_MAX];
+    int rc = text ? sl_stage_path(path, io->out_dir, "summary-item.md", err)
+                  : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    if (rc == 0)
+        rc = sl_write_file_atomic(path, text, size, err);
+    free(text);
+    return rc;
+}
+
+/* Writes, measures and reports one list mesh. */
+static int one_mesh(const sl_export_config *c, const sl_cluster_list_mesh *m,
+                    const char *method, const sl_pointset *ps, const sl_mesh *input, const sl_export_frame *frame,
+                    const sl_export_texture *texture, const sl_stage_io *io, level_row *row,
+                    sl_error *err)
+{
+    sl_lod_mesh mesh;
+    if (view_of(m, ps, &mesh)) {
+        free(mesh.normals);
+        free(mesh.colors);
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "level %s", m->name);
+    }
+    sl_export_config files = *c; /* intermediates: meshes, no thumbnails */
+    if (m->intermediate)
+        files.thumbnail_size = 0;
+    sl_export_level lv;
+    memset(&lv, 0, sizeof lv);
+    memcpy(lv.name, m->name, sizeof lv.name); /* both 32 bytes, NUL-terminated */
+    char extras[256];
+    if (proven(method))
+        snprintf(extras, sizeof extras,
+                 "{\"scanlod\":{\"level\":\"%s\",\"method\":\"%s\",\"bound\":%.9g}}", lv.name,
+                 method, m->bound_fraction);
+    else
+        snprintf(extras, sizeof extras, "{\"scanlod\":{\"level\":\"%s\",\"method\":\"%s\"}}",
+                 lv.name, method);
+    sl_json *r = io->report;
+    sl_json_object_begin(r, NULL);
+    report_mesh(m, method, r);
+    int rc = sl_export_write_level(&files, &lv, &mesh, extras, m->bound, input, frame, texture,
+                                   io, row, err);
+    if (rc == 0 && row->measured && proven(method)) /* the proven bound, checked by the measure (whose own
+                                     closest points round at 1e-16 of the diagonal) */
+        sl_json_bool(r, "bound_holds", row->hausdorff <= m->bound_fraction + 1e-12);
+    sl_json_object_end(r);
+    free(mesh.normals);
+    free(mesh.colors);
+    return rc;
+}
+
+int sl_export_level_list(const sl_export_config *c, const char *method, const char *list_dir,
+                         const char *range_dir, const sl_mesh *input,
+                         const sl_export_frame *frame, const sl_export_texture *texture,
+                         const sl_stage_io *io, sl_error *err)
+{
+    char list_path[PATH_MAX], points_path[PATH_MAX];
+    if (!range_dir)
+        return sl_error_set(err, SL_E_INTERNAL, 0, NULL, "a level list needs the range stage");
+    int rc = sl_stage_path(list_path, list_dir, SL_CLUSTER_LEVELS_FILE, err);
+    if (rc == 0)
+        rc = sl_stage_path(points_path, range_dir, SL_POINTSET_FILE, err);
+    sl_cluster_list list;
+    sl_pointset ps;
+    memset(&list, 0, sizeof list);
+    memset(&ps, 0, sizeof ps);
+    if (rc == 0)
+        rc = sl_cluster_list_read(list_path, &list, err);
+    if (rc == 0)
+        rc = sl_pointset_read(points_path, &ps, err);
+    for (uint32_t i = 0; rc == 0 && i < list.count; i++)
+        for (uint64_t v = 0; v < list.meshes[i].vertex_count; v++)
+            if (list.meshes[i].source[v] >= ps.count) {
+                rc = sl_error_set(err, SL_E_CORRUPT, 0, list_path,
+                                  "level %s names point %u of %llu", list.meshes[i].name,
+                                  list.meshes[i].source[v], (unsigned long long)ps.count);
+                break;
+            }
+    level_row *rows = rc == 0 ? calloc(list.count ? list.count : 1, sizeof *rows) : NULL;
+    if (rc == 0 && !rows)
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    if (rc == 0) {
+        sl_json *r = io->report;
+        sl_json_string(r, "method", method);
+        sl_json_u64(r, "input_triangles", list.input_triangles);
+        sl_json_bool(r, "fidelity_measured", input != NULL);
+        sl_json_array_begin(r, "levels");
+        for (uint32_t i = 0; i < list.count && rc == 0; i++) {
+            rc = sl_stage_step(io, "export", (double)i / list.count, err);
+            if (rc == 0)
+                rc = one_mesh(c, &list.meshes[i], method, &ps, input, frame, texture, io,
+                              &rows[i], err);
+        }
+        sl_json_array_end(r);
+    }
+    if (rc == 0)
+        rc = write_summary(&list, method, rows, c->thumbnail_size > 0, io, err);
+    free(rows);
+    sl_pointset_release(&ps);
+    sl_cluster_list_release(&list);
+    return rc;
+}
