@@ -2,6 +2,11 @@
 
 usage: segment.py run ROOT BUILD DATA SCRATCH RESULTS.json QUICK "PARTS"
        segment.py report RESULTS.json DOCS_DIR
+       segment.py remeasure ROOT BUILD DATA SCRATCH RESULTS.json
+
+remeasure: the fidelity rows of a run stopped during its fidelity part, measured again
+from the levels it left in SCRATCH (its simplify and meshopt times are then unknown).
+A run saves its results after every fidelity row, so a stopped run keeps what it did.
 """
 import datetime
 import json
@@ -47,6 +52,7 @@ class Bench:
         self.scanlod = os.path.join(build, "cli", "scanlod")
         self.peer = lambda n: os.path.join(build, "scripts", "bench", n)
         self.reps = 1 if quick else 3
+        self.checkpoint = lambda part, rows: None
 
     def ply(self, name):
         if name in BUNDLED:
@@ -143,6 +149,7 @@ def part_fidelity(b):
                          "segment": seg, "meshopt": mo, "octree": oc,
                          "segments": s["segment"]["segments"],
                          "seconds": s["simplify_seconds"], "meshopt_seconds": lv["seconds"]})
+            b.checkpoint("fidelity", rows)
             log("fidelity %s %d %%: %d triangles, RMS %.3g vs meshopt %.3g (%.2fx), octree %.3g"
                 % (m, pct, n, seg["rms"], mo["rms"], seg["rms"] / mo["rms"], oc["rms"]))
     return rows
@@ -172,11 +179,12 @@ def part_finest(b):
 def part_speed(b):
     rows = []
     surface = b.tmp("speed", "surface_2m.ply")
-    if not os.path.exists(surface):
+    if not b.quick and not os.path.exists(surface):
         run([b.peer("gen_surface"), "--triangles", 2000000, "-o", surface])
-    inputs = [("igea", b.ply("igea")), ("surface_2m", surface)]
+    inputs = [("igea", b.ply("igea"))] + ([] if b.quick else [("surface_2m", surface)])
     for name, src in inputs:
-        for mode, extra in (("default", []), ("estimate", ["--search-samples", "0"])):
+        modes = (("default", []),) + (() if b.quick else (("estimate", ["--search-samples", "0"]),))
+        for mode, extra in modes:
             seg_t, mo_t, n = [], [], 0
             for rep in range(b.reps):
                 out = b.tmp("speed", "%s_%s.ply" % (name, mode))
@@ -236,14 +244,46 @@ def cmd_run(args):
                 res["machine"]["build_type"] = line.split("=", 1)[1].strip()
     if os.path.exists(results):
         res.update(json.load(open(results)))
-    for part in parts.split():
-        log("part %s" % part)
-        res[part] = {"paper": part_paper, "fidelity": part_fidelity, "finest": part_finest,
-                     "speed": part_speed}[part](b)
+
+    def save():
         res["machine"]["load_end"] = os.getloadavg()[0]
         with open(results + ".tmp", "w") as f:
             json.dump(res, f, indent=1)
         os.replace(results + ".tmp", results)
+
+    def checkpoint(part, rows):
+        res[part] = rows
+        save()
+    b.checkpoint = checkpoint
+    for part in parts.split():
+        log("part %s" % part)
+        res[part] = {"paper": part_paper, "fidelity": part_fidelity, "finest": part_finest,
+                     "speed": part_speed}[part](b)
+        save()
+
+
+def cmd_remeasure(args):
+    root, build, data, scratch, results = args
+    b = Bench(root, build, data, scratch, False)
+    res = json.load(open(results))
+    rows, fid = [], os.path.join(scratch, "fid")
+    for m in FIDELITY_MODELS:
+        for pct in BUDGETS:
+            seg_out, oc_out = os.path.join(fid, "%s_%d.ply" % (m, pct)), os.path.join(fid, "oc_%s_%d.ply" % (m, pct))
+            mo = [f for f in os.listdir(fid) if f.startswith("mo_%s_%d_" % (m, pct))]
+            if not (os.path.exists(seg_out) and os.path.exists(oc_out) and mo):
+                continue
+            src = b.ply(m)
+            seg = b.compare(src, seg_out)
+            rows.append({"model": m, "percent": pct, "segment": seg,
+                         "meshopt": b.compare(src, os.path.join(fid, mo[0])),
+                         "octree": b.compare(src, oc_out), "segments": None, "seconds": None,
+                         "meshopt_seconds": None, "remeasured": True})
+            log("remeasured %s %d %%: %d triangles" % (m, pct, seg["triangles"]))
+    res["fidelity"] = rows
+    with open(results + ".tmp", "w") as f:
+        json.dump(res, f, indent=1)
+    os.replace(results + ".tmp", results)
 
 
 # --- the report ----------------------------------------------------------------------------
@@ -276,12 +316,14 @@ def table_fidelity(rows):
            "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|"]
     for r in rows:
         s, m, o = r["segment"], r["meshopt"], r["octree"]
-        out.append("| %s | %d %% | %d | %s | %s | **%s** | %d | %s | %s | %s | %s | %s | %d | %.2f | %.3f |"
+        opt = lambda v, f: "–" if v is None else f % v
+        out.append("| %s | %d %% | %d | %s | %s | **%s** | %d | %s | %s | %s | %s | %s | %s | %s | %s |"
                    % (r["model"], r["percent"], s["triangles"], pct(s["rms"]), pct(m["rms"]),
                       ratio(s["rms"], m["rms"]), o["triangles"], pct(o["rms"]),
                       ratio(s["rms"], o["rms"]), pct(s["hausdorff"]), pct(m["hausdorff"]),
                       "yes" if s["watertight"] else "no (open input)" if r["model"] == "bun_zipper"
-                      else "no", r["segments"], r["seconds"], r["meshopt_seconds"]))
+                      else "no", opt(r["segments"], "%d"), opt(r["seconds"], "%.2f"),
+                      opt(r["meshopt_seconds"], "%.3f")))
     return out
 
 
@@ -405,6 +447,6 @@ def cmd_report(args):
 
 ROOT = None
 if __name__ == "__main__":
-    if len(sys.argv) < 2 or sys.argv[1] not in ("run", "report"):
+    if len(sys.argv) < 2 or sys.argv[1] not in ("run", "report", "remeasure"):
         sys.exit(__doc__)
-    (cmd_run if sys.argv[1] == "run" else cmd_report)(sys.argv[2:])
+    {"run": cmd_run, "report": cmd_report, "remeasure": cmd_remeasure}[sys.argv[1]](sys.argv[2:])
