@@ -88,12 +88,12 @@ typedef struct simplify_args {
     int json;
 } simplify_args;
 
+/* A bad option: one line naming it (the usage is --help's). */
 static int usage_error(const char *fmt, const char *what)
 {
     fputs("scanlod simplify: ", stderr);
     fprintf(stderr, fmt, what);
-    fputs("\n", stderr);
-    fputs(simplify_usage, stderr);
+    fputs(" (scanlod simplify --help)\n", stderr);
     return SL_EXIT_USAGE;
 }
 
@@ -164,14 +164,12 @@ static int parse_args(int argc, char **argv, simplify_args *a)
             continue;
         }
         rc = a->method ? a->method->parse(argc, argv, &i) : 0;
-        if (rc < 0) {
-            fputs(simplify_usage, stderr);
+        if (rc < 0) /* the method said what, in one line */
             return SL_EXIT_USAGE;
-        }
         if (rc > 0)
             continue;
         if (arg[0] == '-' && arg[1])
-            return usage_error("unknown option %s (see --help)", arg);
+            return usage_error("unknown option %s", arg);
         if (a->input)
             return usage_error("unexpected argument %s", arg);
         a->input = arg;
@@ -183,10 +181,8 @@ static int parse_args(int argc, char **argv, simplify_args *a)
     if (counted > 1)
         return usage_error("%s", "give one of --triangles, --ratio and --max-error");
     a->job.has_output = a->output != NULL;
-    if (a->method->check(&a->job)) {
-        fputs(simplify_usage, stderr);
+    if (a->method->check(&a->job)) /* the method said what, in one line */
         return SL_EXIT_USAGE;
-    }
     return 0;
 }
 

@@ -6,7 +6,12 @@
  *
  * Levels: every `[export] lod_percents` (paper Table 1: k = P% of the LOD array) and every
  * named triangle budget `[export] budgets` (name:triangles; a budget above the finest level
- * gives the finest, marked "clamped").
+ * gives the finest, marked "clamped"). Levels whose meshes are identical (a clamped budget
+ * and lod100) are published once, under one of their names (docs/formats.md).
+ *
+ * Also per item: `scene.svx.json` (a Smithsonian Voyager scene of the GLBs, mapped to
+ * Voyager's qualities by triangle count) and `index.html` (the item's page with a 3D view
+ * of each level), and the item's sections of the collection's summaries.
  */
 #ifndef SCANLOD_STAGES_EXPORT_H
 #define SCANLOD_STAGES_EXPORT_H
@@ -56,6 +61,7 @@ typedef struct sl_export_config {
     int texture_quality;                        /* JPEG quality */
     int texture_size;                           /* atlas edge of levels not listed below */
     char texture_sizes[256];                    /* "name:edge,..." */
+    int viewer; /* index.html gets a 3D view per level: viewer bundle + NAME.glb.js copies */
 } sl_export_config;
 
 /* The section at its option table's defaults (sl_stage_default_config). */

@@ -4,6 +4,8 @@
 
 #include <stdint.h>
 
+#include "core/hash.h"
+#include "core/json.h"
 #include "geometry/mesh.h"
 #include "geometry/triangle_bvh.h"
 #include "pipeline/stage.h"
@@ -76,31 +78,83 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
                      const sl_export_frame *frame, const sl_export_texture *texture,
                      const sl_stage_io *io, sl_error *err);
 
-/* One level's line of the collection summary. */
-typedef struct level_row {
+/* What became of one level: the facts the summaries, the manifest and the pages show. */
+typedef struct sl_export_result {
     uint32_t k;
     uint64_t triangles, vertices;
-    int watertight, measured, thumbnail;
-    double rms, hausdorff; /* fractions of the input's diagonal, when measured */
-    double diagonal;       /* the input's, world; when measured */
-} level_row;
+    uint64_t boundary_edges, nonmanifold_edges;
+    int watertight, measured;
+    double rms, hausdorff, mean; /* fractions of the input's diagonal, when measured */
+    double diagonal;             /* the input's bounding-box diagonal (world), when measured */
+    sl_glb_stats glb;            /* what the GLB writer did (compression, quantisation) */
+    /* The level's atlas: 1 baked, -1 too many triangles for it, 0 no texture. */
+    int texture, texture_size, texture_cell;
+    const char *texture_mime;
+    uint64_t texture_bytes;
+    double texel_efficiency;
+    /* The level whose files hold this mesh: this level's own index, or that of another
+     * level with the identical mesh (lod100 for a budget clamped at the finest level, say),
+     * so the mesh is published once; -1 when the level has no triangles, so no files. */
+    int file;
+} sl_export_result;
 
-/* One level, its JSON object open in io->report: its atlas baked (with `texture`), its
- * files written as [export] asks, its topology and (with `input`) fidelity measured, its
- * GLB's quantisation reported on top of `max_error`; *row filled (but k). What the LOD
- * model's levels and a level list share. */
+/* What identifies a generated mesh: counts and the XXH3-128 of every array. Two meshes
+ * with equal digests (compared whole, with memcmp) have the same vertices, normals,
+ * colours and triangles in the same order, so they would write byte-identical files. */
+typedef struct sl_export_digest {
+    uint64_t vertices, triangles;
+    sl_hash positions, normals, colors, indices;
+} sl_export_digest;
+
+sl_export_digest sl_export_digest_mesh(const sl_lod_mesh *m);
+
+/* One distinct mesh's work, what the LOD model's levels and a level list share: its atlas
+ * baked (with `texture`), its files written as [export] asks under lv->name, its topology
+ * and (with `input`) fidelity measured; all of it kept in *row (not k, not file). */
 int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
-                          const sl_lod_mesh *mesh, const char *extras, double max_error,
-                          const sl_mesh *input, const sl_export_frame *frame,
-                          const sl_export_texture *texture, const sl_stage_io *io,
-                          level_row *row, sl_error *err);
+                          const sl_lod_mesh *mesh, const char *extras, const sl_mesh *input,
+                          const sl_export_frame *frame, const sl_export_texture *texture,
+                          const sl_stage_io *io, sl_export_result *row, sl_error *err);
+
+/* A level's facts in its open JSON object in `r`, after its own fields: topology, fidelity,
+ * "file" (`file_name`, NULL without triangles), atlas and GLB (with `max_error`, the
+ * level's bound before quantisation). */
+void sl_export_report_result(const sl_export_config *c, const sl_export_frame *frame,
+                             const sl_export_result *row, const char *file_name,
+                             double max_error, sl_json *r);
 
 /* The levels of a level list (levels.sllev in list_dir: the cluster or the segment stage's,
- * stages/cluster/cluster.h, `method` naming it) instead of an LOD model: written, measured
- * and reported like sl_export_levels (export_level_list.c). */
+ * stages/cluster/cluster.h, `method` naming it) instead of an LOD model: written, measured,
+ * deduplicated and reported like sl_export_levels, with the manifest and the pages
+ * (export_level_list.c). */
 int sl_export_level_list(const sl_export_config *c, const char *method, const char *list_dir,
                          const char *range_dir, const sl_mesh *input,
                          const sl_export_frame *frame, const sl_export_texture *texture,
                          const sl_stage_io *io, sl_error *err);
+
+/* The size of the level file NAME.EXT this stage wrote, 0 when there is none. */
+uint64_t sl_export_file_bytes(const sl_stage_io *io, const char *name, const char *ext);
+
+/* Voyager's derivative qualities used, coarsest first (docs/formats.md, "scene.svx.json"). */
+#define SL_EXPORT_QUALITIES 5
+extern const char *const sl_export_quality_names[SL_EXPORT_QUALITIES];
+
+/* For each quality, the level whose GLB serves it, or -1 when no level has a GLB. */
+void sl_export_map_qualities(const sl_export_config *c, const sl_export_result *results,
+                             int level_of_quality[SL_EXPORT_QUALITIES]);
+
+/* scene.svx.json (when GLBs are written) and the report's "files" and "manifest"
+ * sections, after every level is written. */
+int sl_export_manifest(const sl_export_config *c, const sl_export_result *results,
+                       const int level_of_quality[SL_EXPORT_QUALITIES], const sl_stage_io *io,
+                       sl_error *err);
+
+/* index.html and summary-item.html (the item's section of OUTPUT/summary.html), and with
+ * [export] viewer the viewer bundle and NAME.glb.js per GLB (export_html.c). `model` is
+ * NULL for a level list (the cluster method): no expansions, no model.slod. */
+int sl_export_html(const sl_export_config *c, const sl_lod_model *model, const sl_mesh *input,
+                   const sl_export_result *results,
+                   const int level_of_quality[SL_EXPORT_QUALITIES], const sl_stage_io *io,
+                   sl_error *err);
 
 #endif

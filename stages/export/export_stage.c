@@ -81,6 +81,11 @@ static const sl_option export_options[] = {
      "A level with few triangles gets a smaller atlas (chart cells of at most 64 texels)."},
     {"export", "texture_size", SL_OPT_INT, "2048", 64, 8192, NULL,
      "Atlas edge of the levels texture_sizes does not name (the lodP levels)."},
+    {"export", "viewer", SL_OPT_BOOL, "true", 0, 0, NULL,
+     "With glb in formats: the item's index.html (and the collection's summary.html) show "
+     "each level in an interactive 3D view that needs no network and works from a local "
+     "file. This adds the viewer script (about 1 MB) and each GLB again as a script "
+     "(NAME.glb.js, a third larger than the GLB) to every item."},
     SL_OPTION_END,
 };
 
@@ -130,6 +135,7 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
                               "'%.*s' is not name:pixels with 64 <= pixels <= 8192", (int)n, p);
         p += n + (p[n] == ',');
     }
+    c->viewer = sl_config_bool(cfg, "export", "viewer");
     if (rc) {
         free(c);
         return rc;

@@ -44,11 +44,13 @@ done
 check "no OUT_11.ply" [ ! -e "$TMP/t1_11.ply" ]
 
 # Bad options: exit 64 and one line naming the problem.
+one_line_with() { [ "$(wc -l <<<"$2")" -eq 1 ] && contains "$1" "$2"; }
 bad_option() { # bad_option WORDS ARGS...
   local words=$1; shift
   run_scanlod simplify "$cow" --method cluster "$@" -o "$TMP/x.ply"
   check "$* : exit 64 (got $rc)" [ "$rc" -eq 64 ]
-  check "$* : says '$words' ($(head -1 <<<"$err"))" contains "$words" "$(head -1 <<<"$err")"
+  check "$* : one line saying '$words' ($err)" one_line_with "$words" "$err"
+  check "$* : no output written" [ ! -e "$TMP/x.ply" ]
 }
 bad_option "--max-error needs a fraction" --max-error 0
 bad_option "--max-error needs a fraction" --max-error -0.01
@@ -59,8 +61,10 @@ bad_option "--intermediates needs a whole number in" --intermediates 1000000
 bad_option "--passes needs a whole number in" --passes 0
 bad_option "give one of" --max-error 0.01 --triangles 100
 bad_option "unknown method" --method octagon
+bad_option "unknown option --bogus" --bogus
 run_scanlod simplify "$cow" --method cluster --intermediates 3
 check "--intermediates without -o: exit 64 ($err)" [ "$rc" -eq 64 ]
+check "--intermediates without -o: one line saying so ($err)" one_line_with "needs -o" "$err"
 
 # Bad input: exit 65 and one line `scanlod: FILE: cause`.
 ply_head() { # ply_head VERTICES FACES
@@ -76,7 +80,6 @@ cube_faces() { # the first N of the 12 (no pipe into head: pipefail and SIGPIPE)
 { ply_head 9 13; cube_vertices; printf '0.5 0.5 2\n'; cube_faces 12; printf '3 4 5 8\n'; } >"$TMP/book.ply"
 { ply_head 8 10; cube_vertices; cube_faces 10; } >"$TMP/open.ply"
 { ply_head 8 13; cube_vertices; cube_faces 12; printf '3 0 0 1\n'; } >"$TMP/degenerate.ply"
-one_line_with() { [ "$(wc -l <<<"$2")" -eq 1 ] && contains "$1" "$2"; }
 bad_input() { # bad_input FILE WORDS ARGS...
   local file=$1 words=$2; shift 2
   run_scanlod simplify "$file" --method cluster --max-error 0.01 "$@" -o "$TMP/x.ply"
@@ -100,4 +103,16 @@ check "... and a note on stderr saying what was kept" contains "kept .* boundary
 bound=$(json_field "$out" "d['cluster']['bound']")
 h=$(measured "$SCANS/bun_zipper_res4.ply" "$TMP/open.ply")
 check "open mesh: compare's Hausdorff $h <= the bound $bound" le "$h" "$bound"
+# In a run ([lod] method = cluster): bad [cluster] values are one line naming the option,
+# exit 78 (configuration), and nothing is made.
+mkdir -p "$TMP/in"
+cp "$cow" "$TMP/in/"
+write_config "$TMP/run.ini" "$TMP/in" "$TMP/work" "$TMP/out"
+for setting in cluster.intermediates=1000000 cluster.intermediates=-1 cluster.passes=0 \
+               cluster.max_angle=nan cluster.slab_share=0; do
+  run_scanlod run "$TMP/run.ini" -q -s lod.method=cluster -s "$setting"
+  check "run -s $setting: exit 78 (got $rc)" [ "$rc" -eq 78 ]
+  check "run -s $setting: one line naming it ($err)" one_line_with "${setting%%=*}" "$err"
+  check "run -s $setting: no work folder" [ ! -e "$TMP/work" ]
+done
 finish

@@ -35,12 +35,26 @@ need("cluster" in r["stages"] and "samples" not in r["stages"], "stages %s" % li
 levels = r["stages"]["export"]["levels"]
 by = {l["name"]: l for l in levels}
 need({"lod40", "lod100", "thumb"} <= set(by), "levels %s" % sorted(by))
+# the manifest and the page cover the levels, not the intermediate models
+svx = json.load(open(os.path.join(out, item, "scene.svx.json")))
+uris = {a["uri"] for d in svx["models"][0]["derivatives"] for a in d["assets"]}
+need(uris and all(u[:-4] in by and not by[u[:-4]]["intermediate"] for u in uris), "svx assets %s" % sorted(uris))
+page = open(os.path.join(out, item, "index.html")).read()
+need("Clustering levels with bounded error" in page and "lod40" in page, "index.html")
+names = {l["name"]: l for l in levels}
 for l in levels:
-    stem = os.path.join(out, item, l["name"])
+    own = os.path.join(out, item, l["name"])
     need(l["bound"] >= 0 and "bound_world" in l, l["name"] + ": a bound")
     need(l.get("bound_holds") is True, "%s: measured %s > bound %s" % (l["name"], l.get("hausdorff"), l["bound"]))
-    need(os.path.getsize(stem + ".ply") > 0 and os.path.getsize(stem + ".glb") > 0, l["name"] + ": ply and glb")
-    need(os.path.exists(stem + ".png") != l["intermediate"], l["name"] + ": a thumbnail for levels only")
+    # identical meshes are published once, under a level's name before a model's
+    f = l.get("file")
+    need(f in names and names[f]["file"] == f, "%s: its file %s publishes itself" % (l["name"], f))
+    if f != l["name"]:
+        need(not os.path.exists(own + ".ply") and not os.path.exists(own + ".glb"), l["name"] + ": no copy of " + str(f))
+        need(names[f]["triangles"] == l["triangles"] and (l["intermediate"] or not names[f]["intermediate"]), l["name"] + ": the same mesh as " + str(f))
+        continue
+    need(os.path.getsize(own + ".ply") > 0 and os.path.getsize(own + ".glb") > 0, l["name"] + ": ply and glb")
+    need(os.path.exists(own + ".png") != l["intermediate"], l["name"] + ": a thumbnail for levels only")
     if closed and not l["intermediate"]:
         need(l["watertight"], l["name"] + ": watertight")
 for name, l in by.items():

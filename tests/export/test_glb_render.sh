@@ -3,7 +3,7 @@
 # cow (tests/data/textured, per-vertex UVs and a board of 8 flat colours) goes through
 # the pipeline with meshopt and with Draco compression. Each level's GLB has TEXCOORD_0,
 # an embedded JPEG and a baseColorTexture, and passes the validator; three.js in headless
-# Chromium (scripts/render/render.cjs, playwright-core) loads it, finds the texture, and
+# Chromium (scripts/viewer/render.cjs, playwright-core) loads it, finds the texture, and
 # draws it unlit from the side: at least 85% of the cow's pixels lie within 40 (RGB
 # distance) of one of the texture's own colours and all 8 colours show. As a control the
 # same level exported with `texture = none` (vertex colours) must not pass that check.
@@ -12,11 +12,11 @@
 source "$(dirname "$0")/../lib.sh"
 export PYTHONDONTWRITEBYTECODE=1 # png_pixels.py: no __pycache__ in the source tree
 gltf="$SCANLOD_SOURCE_DIR/scripts/gltf"
-render="$SCANLOD_SOURCE_DIR/scripts/render"
+render="$SCANLOD_SOURCE_DIR/scripts/viewer"
 gltf_validator_ready || { echo "FAIL: the glTF validator is not installed (scripts/install-deps.sh)" >&2; exit 1; }
 [ -x "${CHROMIUM:-/usr/bin/chromium}" ] || { echo "FAIL: no chromium (scripts/install-deps.sh)" >&2; exit 1; }
 [ -f "$render/node_modules/three/package.json" ] && [ -f "$render/node_modules/playwright-core/package.json" ] ||
-  { echo "FAIL: npm ci --prefix scripts/render (scripts/install-deps.sh)" >&2; exit 1; }
+  { echo "FAIL: npm ci --prefix scripts/viewer (scripts/install-deps.sh)" >&2; exit 1; }
 
 mkdir -p "$TMP/in"
 cp "$SCANLOD_SOURCE_DIR/tests/data/textured/cow_textured.ply" "$SCANLOD_SOURCE_DIR/tests/data/textured/cow_texture.png" "$TMP/in/"
