@@ -415,6 +415,12 @@ def cmd_report(args):
                 "`scanlod simplify --ratio B/100` (default config), then meshopt_simplify to the "
                 "count it produced and the octree model's largest cut within it (`scanlod extract "
                 "--triangles`). Ratios below 1: the segment method is closer.\n"]
+        if any(r.get("remeasured") for r in res["fidelity"]):
+            sec += ["This run was stopped during its fidelity part (the machine's two cores were "
+                    "shared; dragon_100kf at 2 %% took 6 minutes): the rows are the levels it had "
+                    "written, measured again by `segment.py remeasure` with the same %d samples; "
+                    "their times are not known (–), the inputs it had not reached are missing.\n"
+                    % res["samples"]]
         sec += table_fidelity(res["fidelity"]) + ["", "![RMS against triangles](bench/segment_rms.png)", ""]
         os.makedirs(os.path.join(docs, "bench"), exist_ok=True)
         plot(res["fidelity"], os.path.join(docs, "bench", "segment_rms.png"))
