@@ -117,7 +117,9 @@ by = {l["name"]: l for l in levels}
 need({"lod10", "lod40", "lod100", "thumb"} <= set(by), "levels %s" % sorted(by))
 need(by["lod100"]["triangles"] == len(itris) or not closed, "lod100 is the input")
 for l in levels:
-    stem = os.path.join(out, item, l["name"])
+    # identical levels are published once: "file" names the level whose files they are
+    need(l.get("file"), l["name"] + ": no files")
+    stem = os.path.join(out, item, l.get("file") or l["name"])
     need("bound_holds" not in l, l["name"] + ": a bound the method does not prove")
     need(os.path.getsize(stem + ".ply") > 0 and os.path.getsize(stem + ".glb") > 0, l["name"] + ": ply and glb")
     need(os.path.exists(stem + ".png"), l["name"] + ": a thumbnail")
