@@ -429,6 +429,10 @@ def cmd_report(args):
                 "The octree's finest level (`extract --lod-percent 100`) simplified by the segment "
                 "method to the triangle count of the octree's own cut at 5, 10 and 20 % of the "
                 "input; both measured against the input.\n"]
+        if "finest_machine" in res:
+            fm = res["finest_machine"]
+            sec += ["This part was run on its own (`segment.py run ... 1 finest`, quick: fandisk and "
+                    "rocker_arm) at %s, commit %s, load average %.1f.\n" % (fm["date"], fm["commit"], fm["load"])]
         sec += table_finest(res["finest"]) + [""]
     if "speed" in res:
         sec += ["### Speed\n",
