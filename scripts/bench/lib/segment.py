@@ -409,7 +409,7 @@ def cmd_report(args):
                               mach.get("build_type", "?"), mach["cores"], mach["load"],
                               ", %.1f at the end" % mach["load_end"] if "load_end" in mach else "",
                               res["samples"]))
-    sec = ["## The segment method (paper 3)\n", head]
+    sec = ["## 6. The segment method (paper 3, issue 12)\n", head]
     if "fidelity" in res:
         sec += ["### Fidelity at equal triangle counts\n",
                 "`scanlod simplify --ratio B/100` (default config), then meshopt_simplify to the "
