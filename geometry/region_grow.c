@@ -1,13 +1,10 @@
 /* Normal-angle region growing (region_grow.h; paper 3, section 3.1, equation 1).
  *
- * Method comment. A segment's normals are kept as the convex hull of their gnomonic
- * projections p = (n.e1, n.e2) / (n.s) on the plane tangent to the seed normal s (every
- * member is within delta < 90 degrees of s, so n.s > 0). For a candidate normal m the set
- * { x : ang(m, x) <= delta } is a circular cone of half-angle < 90 degrees, hence convex,
- * and so is its trace on that plane: the whole segment passes equation 1 against m
- * exactly when the hull's vertices do. The hull is rebuilt (monotone chain, exact
- * orientation) only when a new normal falls outside it, which a planar patch's normals
- * rarely do after the first few.
+ * Method comment. A segment's normals are kept as their extreme normals
+ * (geometry/normal_hull.h) in the chart of the seed normal s (every member is within
+ * delta < 90 degrees of s). For a candidate normal m the set { x : ang(m, x) <= delta } is
+ * a circular cone of half-angle < 90 degrees, hence convex: the whole segment passes
+ * equation 1 against m exactly when the hull's vertices do.
  */
 #include "geometry/region_grow.h"
 
@@ -15,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry/predicates.h"
+#include "geometry/normal_hull.h"
 
 #define NONE UINT32_MAX
 #define FLATNESS_BINS 1024
@@ -70,167 +67,10 @@ static int has_normal(const double *n)
     return n[0] != 0.0 || n[1] != 0.0 || n[2] != 0.0;
 }
 
-/* --- the segment's normal hull ----------------------------------------------------- */
-
-typedef struct hull {
-    double s[3], e1[3], e2[3]; /* seed normal and its tangent frame */
-    uint32_t count, cap;
-    double *p;                 /* 2 per vertex: gnomonic coordinates, counter-clockwise */
-    uint32_t *tri;             /* the triangle whose normal each vertex is */
-    double *scratch_p;         /* rebuild space: 2 * cap */
-    uint32_t *scratch_tri, *order;
-} hull;
-
-static int hull_reserve(hull *h, uint32_t need)
-{
-    if (need <= h->cap)
-        return 0;
-    uint32_t cap = h->cap ? h->cap : 16;
-    while (cap < need)
-        cap *= 2;
-    double *p = realloc(h->p, 2 * (size_t)cap * sizeof *p);
-    if (p)
-        h->p = p;
-    uint32_t *t = realloc(h->tri, cap * sizeof *t);
-    if (t)
-        h->tri = t;
-    double *sp = realloc(h->scratch_p, 2 * (size_t)cap * sizeof *sp);
-    if (sp)
-        h->scratch_p = sp;
-    uint32_t *st = realloc(h->scratch_tri, cap * sizeof *st);
-    if (st)
-        h->scratch_tri = st;
-    uint32_t *o = realloc(h->order, cap * sizeof *o);
-    if (o)
-        h->order = o;
-    if (!p || !t || !sp || !st || !o)
-        return -1;
-    h->cap = cap;
-    return 0;
-}
-
-static void hull_start(hull *h, const double *s, uint32_t tri)
-{
-    memcpy(h->s, s, sizeof h->s);
-    /* e1: s x (the axis least aligned with s), normalised; e2 = s x e1 */
-    double ax[3] = {0, 0, 0};
-    int k = fabs(s[0]) <= fabs(s[1]) && fabs(s[0]) <= fabs(s[2]) ? 0 : fabs(s[1]) <= fabs(s[2]) ? 1 : 2;
-    ax[k] = 1.0;
-    double e[3] = {s[1] * ax[2] - s[2] * ax[1], s[2] * ax[0] - s[0] * ax[2],
-                   s[0] * ax[1] - s[1] * ax[0]};
-    double len = sqrt(dot3(e, e));
-    for (int i = 0; i < 3; i++)
-        h->e1[i] = e[i] / len;
-    h->e2[0] = s[1] * h->e1[2] - s[2] * h->e1[1];
-    h->e2[1] = s[2] * h->e1[0] - s[0] * h->e1[2];
-    h->e2[2] = s[0] * h->e1[1] - s[1] * h->e1[0];
-    h->count = 1;
-    h->p[0] = h->p[1] = 0.0;
-    h->tri[0] = tri;
-}
-
-static void gnomonic(const hull *h, const double *n, double p[2])
-{
-    double d = dot3(n, h->s);
-    p[0] = dot3(n, h->e1) / d;
-    p[1] = dot3(n, h->e2) / d;
-}
-
-/* Is p inside or on the hull? (count >= 3: counter-clockwise polygon) */
-static int hull_contains(const hull *h, const double p[2])
-{
-    if (h->count < 3) {
-        for (uint32_t i = 0; i < h->count; i++)
-            if (h->p[2 * i] == p[0] && h->p[2 * i + 1] == p[1])
-                return 1;
-        return 0;
-    }
-    for (uint32_t i = 0; i < h->count; i++) {
-        uint32_t j = i + 1 == h->count ? 0 : i + 1;
-        if (sl_orient2d(h->p + 2 * i, h->p + 2 * j, p) < 0)
-            return 0;
-    }
-    return 1;
-}
-
-/* Monotone chain over the current vertices plus (p, tri), exact orientation; duplicate
- * and collinear points are dropped (a duplicate keeps its lowest triangle). */
-static void hull_rebuild(hull *h, const double p[2], uint32_t tri)
-{
-    uint32_t n = h->count + 1;
-    double *pts = h->scratch_p;
-    uint32_t *ids = h->scratch_tri, *o = h->order;
-    memcpy(pts, h->p, 2 * (size_t)h->count * sizeof *pts);
-    memcpy(ids, h->tri, h->count * sizeof *ids);
-    pts[2 * h->count] = p[0];
-    pts[2 * h->count + 1] = p[1];
-    ids[h->count] = tri;
-    for (uint32_t i = 0; i < n; i++) { /* insertion sort by (x, y, triangle): n is small */
-        uint32_t j = i;
-        for (; j > 0; j--) {
-            const double *a = pts + 2 * o[j - 1], *b = pts + 2 * i;
-            int less = b[0] < a[0] ||
-                       (b[0] == a[0] && (b[1] < a[1] || (b[1] == a[1] && ids[i] < ids[o[j - 1]])));
-            if (!less)
-                break;
-            o[j] = o[j - 1];
-        }
-        o[j] = i;
-    }
-    uint32_t m = 0; /* distinct points, in order */
-    for (uint32_t i = 0; i < n; i++)
-        if (!m || pts[2 * o[i]] != pts[2 * o[m - 1]] || pts[2 * o[i] + 1] != pts[2 * o[m - 1] + 1])
-            o[m++] = o[i];
-    if (m == 1) {
-        h->p[0] = pts[2 * o[0]];
-        h->p[1] = pts[2 * o[0] + 1];
-        h->tri[0] = ids[o[0]];
-        h->count = 1;
-        return;
-    }
-    /* Andrew's monotone chain into h->p / h->tri (room for m + 1 entries) */
-    uint32_t k = 0;
-    for (uint32_t step = 0; step < m; step++) { /* lower chain */
-        const double *q = pts + 2 * o[step];
-        while (k >= 2 && sl_orient2d(h->p + 2 * (k - 2), h->p + 2 * (k - 1), q) <= 0)
-            k--;
-        h->p[2 * k] = q[0];
-        h->p[2 * k + 1] = q[1];
-        h->tri[k++] = ids[o[step]];
-    }
-    uint32_t lower = k + 1;
-    for (uint32_t step = m - 1; step-- > 0;) { /* upper chain, back to the first point */
-        const double *q = pts + 2 * o[step];
-        while (k >= lower && sl_orient2d(h->p + 2 * (k - 2), h->p + 2 * (k - 1), q) <= 0)
-            k--;
-        h->p[2 * k] = q[0];
-        h->p[2 * k + 1] = q[1];
-        h->tri[k++] = ids[o[step]];
-    }
-    h->count = k - 1; /* the last point is the first */
-}
-
-static int hull_add(hull *h, const double *n, uint32_t tri)
-{
-    double p[2];
-    gnomonic(h, n, p);
-    if (hull_contains(h, p))
-        return 0;
-    if (hull_reserve(h, 2 * h->count + 4))
-        return -1;
-    hull_rebuild(h, p, tri);
-    return 0;
-}
-
 /* Equation 1 against the whole segment: every hull vertex within delta of n. */
-static int passes(const hull *h, const double *normals, const double *n, double cos_delta)
+static int passes(const sl_normal_hull *h, const double *n, double cos_delta)
 {
-    if (dot3(n, h->s) < cos_delta)
-        return 0;
-    for (uint32_t i = 0; i < h->count; i++)
-        if (dot3(n, normals + 3 * (uint64_t)h->tri[i]) < cos_delta)
-            return 0;
-    return 1;
+    return dot3(n, h->s) >= cos_delta && sl_normal_hull_min_dot(h, n) >= cos_delta;
 }
 
 /* --- the growth front: a binary heap of (key, triangle), smallest first ------------- */
@@ -342,7 +182,7 @@ typedef struct grow_work {
     const double *normals;
     const uint32_t *order;
     uint32_t *stamp; /* per triangle: the segment that last queued it, NONE */
-    hull h;
+    sl_normal_hull h;
     front f;
 } grow_work;
 
@@ -369,7 +209,9 @@ static int64_t grow(grow_work *w, double delta_degrees, uint32_t *label, uint32_
             (*without_normal)++;
             continue;
         }
-        hull_start(&w->h, s, seed);
+        sl_normal_hull_start(&w->h, s);
+        if (sl_normal_hull_add(&w->h, s, seed))
+            return -1;
         w->stamp[seed] = k;
         w->f.count = 0;
         for (uint32_t t = seed;;) {
@@ -388,13 +230,13 @@ static int64_t grow(grow_work *w, double delta_degrees, uint32_t *label, uint32_
             while (w->f.count && t == NONE) {
                 front_entry e = front_pop(&w->f);
                 const double *m = w->normals + 3 * (uint64_t)e.tri;
-                if (label[e.tri] == NONE && has_normal(m) && passes(&w->h, w->normals, m, cos_delta))
+                if (label[e.tri] == NONE && has_normal(m) && passes(&w->h, m, cos_delta))
                     t = e.tri;
             }
             if (t == NONE)
                 break;
             label[t] = k;
-            if (hull_add(&w->h, w->normals + 3 * (uint64_t)t, t))
+            if (sl_normal_hull_add(&w->h, w->normals + 3 * (uint64_t)t, t))
                 return -1;
         }
     }
@@ -442,8 +284,8 @@ int sl_region_grow(const sl_mesh_adjacency *adj, const float *positions,
     uint32_t *order = malloc(nn * sizeof *order);
     w.stamp = malloc(nn * sizeof *w.stamp);
     uint32_t *label = malloc(nn * sizeof *label), *seeds = malloc(nn * sizeof *seeds);
-    int ok = normals && order && w.stamp && label && seeds &&
-             hull_reserve(&w.h, 16) == 0;
+    sl_normal_hull_init(&w.h);
+    int ok = normals && order && w.stamp && label && seeds;
     if (ok) {
         sl_face_normals(adj, positions, normals);
         w.normals = normals;
@@ -483,11 +325,7 @@ int sl_region_grow(const sl_mesh_adjacency *adj, const float *positions,
     free(normals);
     free(order);
     free(w.stamp);
-    free(w.h.p);
-    free(w.h.tri);
-    free(w.h.scratch_p);
-    free(w.h.scratch_tri);
-    free(w.h.order);
+    sl_normal_hull_release(&w.h);
     free(w.f.e);
     if (count < 0) {
         free(label);

@@ -9,6 +9,8 @@ packages=(
   libopenvdb-dev libboost-iostreams-dev libtbb-dev
   libopenimageio-dev libinih-dev libxxhash-dev libmeshoptimizer-dev libdraco-dev
   zlib1g-dev time gnuplot-nox
+  # scripts/bench/peers/vsa_lod.cpp: CGAL's Variational Shape Approximation (issue 12)
+  libcgal-dev
   # tests/export/test_glb_render.sh: three.js in headless Chromium
   chromium
   # tests/cluster/: a throwaway single-node Slurm (its own config; no service is enabled)

@@ -10,6 +10,7 @@
 #include "stages/range/range.h"
 #include "stages/registry.h"
 #include "stages/samples/samples.h"
+#include "stages/segment/segment.h"
 
 static const sl_stage *const registry[] = {
     &sl_range_stage,
@@ -17,6 +18,7 @@ static const sl_stage *const registry[] = {
     &sl_merge_stage,
     &sl_priority_stage,
     &sl_crack_stage,
+    &sl_segment_stage,
     &sl_cluster_stage,
     &sl_export_stage,
     NULL,

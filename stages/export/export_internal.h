@@ -131,10 +131,11 @@ void sl_export_report_result(const sl_export_config *c, const sl_export_frame *f
                              const sl_export_result *row, const char *file_name,
                              double max_error, sl_json *r);
 
-/* The levels of a level list (the cluster stage's, stages/cluster/cluster.h) instead of an
- * LOD model: written, measured, deduplicated and reported like sl_export_levels, with the
- * manifest and the pages (export_level_list.c). */
-int sl_export_level_list(const sl_export_config *c, const char *cluster_dir,
+/* The levels of a level list (levels.sllev in list_dir: the cluster or the segment stage's,
+ * stages/cluster/cluster.h, `method` naming it) instead of an LOD model: written, measured,
+ * deduplicated and reported like sl_export_levels, with the manifest and the pages
+ * (export_level_list.c). */
+int sl_export_level_list(const sl_export_config *c, const char *method, const char *list_dir,
                          const char *range_dir, const sl_mesh *input,
                          const sl_export_frame *frame, const sl_export_texture *texture,
                          const sl_stage_io *io, sl_error *err);

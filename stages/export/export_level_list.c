@@ -1,5 +1,5 @@
 /* Levels from a level list (export_internal.h): the cluster stage's levels and intermediate
- * models (stages/cluster/cluster.h, levels.sllev) written, measured and reported like the
+ * models, or the segment stage's levels (stages/cluster/cluster.h, levels.sllev) written, measured and reported like the
  * octree's levels. Normals and colours come from the range stage's points (each level
  * vertex names the point it is, or was moved from): the input's shading on every level.
  * Thumbnails are rendered for the levels, not for the intermediate models; atlases are
@@ -40,7 +40,14 @@ static int view_of(const sl_cluster_list_mesh *m, const sl_pointset *ps, sl_lod_
     return 0;
 }
 
-static void report_mesh(const sl_cluster_list_mesh *m, sl_json *r)
+/* The cluster method's bounds are proven (checked here against the measure); the segment
+ * method's levels carry none. */
+static int proven(const char *method)
+{
+    return strcmp(method, "cluster") == 0;
+}
+
+static void report_mesh(const sl_cluster_list_mesh *m, const char *method, sl_json *r)
 {
     sl_json_string(r, "name", m->name);
     sl_json_bool(r, "intermediate", m->intermediate);
@@ -54,13 +61,16 @@ static void report_mesh(const sl_cluster_list_mesh *m, sl_json *r)
     }
     sl_json_u64(r, "triangles", m->triangle_count);
     sl_json_u64(r, "vertices", m->vertex_count);
-    sl_json_double(r, "bound", m->bound_fraction);
-    sl_json_double(r, "bound_world", m->bound);
+    if (proven(method)) {
+        sl_json_double(r, "bound", m->bound_fraction);
+        sl_json_double(r, "bound_world", m->bound);
+    }
 }
 
 /* The item's section of OUTPUT/summary.md: a row per level and intermediate model. */
-static int write_summary(const sl_cluster_list *list, const sl_export_result *rows, int thumbnails,
-                         const sl_stage_io *io, sl_error *err)
+static int write_summary(const sl_cluster_list *list, const char *method,
+                         const sl_export_result *rows, int thumbnails, const sl_stage_io *io,
+                         sl_error *err)
 {
     char *text = NULL;
     size_t size = 0;
@@ -69,16 +79,22 @@ static int write_summary(const sl_cluster_list *list, const sl_export_result *ro
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     fputs("### ", md);
     sl_md_text(md, io->item);
-    fprintf(md, "\n\nClustering levels with bounded error (paper 2); input: %llu triangles.\n\n"
+    fprintf(md, "\n\n%s; input: %llu triangles.\n\n"
                 "| level | triangles | vertices | bound | RMS | Hausdorff | watertight | files |\n"
                 "|---|---:|---:|---:|---:|---:|---|---|\n",
+            proven(method) ? "Clustering levels with bounded error (paper 2)"
+                           : "Segmentation levels, planes kept exact (paper 3)",
             (unsigned long long)list->input_triangles);
     for (uint32_t i = 0; i < list->count; i++) {
         const sl_cluster_list_mesh *m = &list->meshes[i];
         fputs("| ", md);
         sl_md_text(md, m->name);
-        fprintf(md, " | %llu | %llu | %.3f %% |", (unsigned long long)m->triangle_count,
-                (unsigned long long)m->vertex_count, 100 * m->bound_fraction);
+        fprintf(md, " | %llu | %llu |", (unsigned long long)m->triangle_count,
+                (unsigned long long)m->vertex_count);
+        if (proven(method))
+            fprintf(md, " %.3f %% |", 100 * m->bound_fraction);
+        else
+            fputs(" – |", md);
         if (rows[i].measured)
             fprintf(md, " %.3f %% | %.3f %% |", 100 * rows[i].rms, 100 * rows[i].hausdorff);
         else
@@ -180,7 +196,7 @@ static int morph_coarser(const sl_export_config *c, const sl_cluster_list *list,
 
 /* Writes and measures one distinct list mesh; its GLB morphs to list mesh `to` (>= 0). */
 static int one_mesh(const sl_export_config *c, const sl_cluster_list *list, uint32_t i, int to,
-                    const sl_pointset *ps, const sl_mesh *input, const sl_export_frame *frame,
+                    const char *method, const sl_pointset *ps, const sl_mesh *input, const sl_export_frame *frame,
                     const sl_export_texture *texture, const sl_stage_io *io,
                     sl_export_result *row, sl_error *err)
 {
@@ -203,9 +219,13 @@ static int one_mesh(const sl_export_config *c, const sl_cluster_list *list, uint
     memset(&lv, 0, sizeof lv);
     memcpy(lv.name, m->name, sizeof lv.name); /* both 32 bytes, NUL-terminated */
     char extras[256];
-    snprintf(extras, sizeof extras,
-             "{\"scanlod\":{\"level\":\"%s\",\"method\":\"cluster\",\"bound\":%.9g}}", lv.name,
-             m->bound_fraction);
+    if (proven(method))
+        snprintf(extras, sizeof extras,
+                 "{\"scanlod\":{\"level\":\"%s\",\"method\":\"%s\",\"bound\":%.9g}}",
+                 lv.name, method, m->bound_fraction);
+    else
+        snprintf(extras, sizeof extras, "{\"scanlod\":{\"level\":\"%s\",\"method\":\"%s\"}}",
+                 lv.name, method);
     int rc = sl_export_write_level(&files, &lv, &mesh, to >= 0 ? &coarser : NULL, extras, input,
                                    frame, texture, io, row, err);
     free(mesh.normals), free(mesh.colors);
@@ -213,21 +233,21 @@ static int one_mesh(const sl_export_config *c, const sl_cluster_list *list, uint
     return rc;
 }
 
-static void report_meshes(const sl_export_config *c, const sl_cluster_list *list,
-                          const sl_export_result *rows, const sl_export_frame *frame,
-                          sl_json *r)
+static void report_meshes(const sl_export_config *c, const char *method,
+                          const sl_cluster_list *list, const sl_export_result *rows,
+                          const sl_export_frame *frame, sl_json *r)
 {
     sl_json_array_begin(r, "levels");
     for (uint32_t i = 0; i < list->count; i++) {
         const sl_cluster_list_mesh *m = &list->meshes[i];
         sl_json_object_begin(r, NULL);
-        report_mesh(m, r);
+        report_mesh(m, method, r);
         sl_export_report_result(c, frame, &rows[i],
                                 rows[i].file >= 0 ? list->meshes[rows[i].file].name : NULL,
                                 m->bound, r);
         if (rows[i].morph_to >= 0)
             sl_json_string(r, "morph_to", list->meshes[rows[i].morph_to].name);
-        if (rows[i].measured) /* the proven bound, checked by the measure (whose own closest
+        if (rows[i].measured && proven(method)) /* the proven bound, checked by the measure (whose own closest
                                  points round at 1e-16 of the diagonal) */
             sl_json_bool(r, "bound_holds", rows[i].hausdorff <= m->bound_fraction + 1e-12);
         sl_json_object_end(r);
@@ -290,7 +310,7 @@ static int manifest_and_pages(const sl_export_config *c, const sl_cluster_list *
     return rc;
 }
 
-int sl_export_level_list(const sl_export_config *c, const char *cluster_dir,
+int sl_export_level_list(const sl_export_config *c, const char *method, const char *list_dir,
                          const char *range_dir, const sl_mesh *input,
                          const sl_export_frame *frame, const sl_export_texture *texture,
                          const sl_stage_io *io, sl_error *err)
@@ -298,7 +318,7 @@ int sl_export_level_list(const sl_export_config *c, const char *cluster_dir,
     char list_path[PATH_MAX], points_path[PATH_MAX];
     if (!range_dir)
         return sl_error_set(err, SL_E_INTERNAL, 0, NULL, "a level list needs the range stage");
-    int rc = sl_stage_path(list_path, cluster_dir, SL_CLUSTER_LEVELS_FILE, err);
+    int rc = sl_stage_path(list_path, list_dir, SL_CLUSTER_LEVELS_FILE, err);
     if (rc == 0)
         rc = sl_stage_path(points_path, range_dir, SL_POINTSET_FILE, err);
     sl_cluster_list list;
@@ -328,19 +348,19 @@ int sl_export_level_list(const sl_export_config *c, const char *cluster_dir,
     for (uint32_t i = 0; i < list.count && rc == 0; i++) {
         rc = sl_stage_step(io, "export", (double)i / list.count, err);
         if (rc == 0 && rows[i].file == (int)i)
-            rc = one_mesh(c, &list, i, morph_coarser(c, &list, rows, i), &ps, input, frame,
-                          texture, io, &rows[i], err);
+            rc = one_mesh(c, &list, i, morph_coarser(c, &list, rows, i), method, &ps, input,
+                          frame, texture, io, &rows[i], err);
     }
     for (uint32_t i = 0; i < list.count && rc == 0; i++)
         if (rows[i].file >= 0 && rows[i].file != (int)i)
             rows[i] = rows[rows[i].file]; /* the same mesh: the same files and measures */
     if (rc == 0) {
         sl_json *r = io->report;
-        sl_json_string(r, "method", "cluster");
+        sl_json_string(r, "method", method);
         sl_json_u64(r, "input_triangles", list.input_triangles);
         sl_json_bool(r, "fidelity_measured", input != NULL);
-        report_meshes(c, &list, rows, frame, r);
-        rc = write_summary(&list, rows, c->thumbnail_size > 0, io, err);
+        report_meshes(c, method, &list, rows, frame, r);
+        rc = write_summary(&list, method, rows, c->thumbnail_size > 0, io, err);
     }
     if (rc == 0)
         rc = manifest_and_pages(c, &list, rows, input, io, err);

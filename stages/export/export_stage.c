@@ -174,15 +174,18 @@ void sl_export_resolve_frame(const sl_export_config *c, const sl_mesh *input,
 static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
 {
     const sl_export_config *c = config;
-    /* [lod] method = cluster: the cluster stage's level list instead of an LOD model. */
-    const char *cluster_dir = sl_stage_dir(io, "cluster");
+    /* [lod] method = cluster or segment: that stage's level list instead of an LOD model. */
+    const char *list_method = sl_stage_dir(io, "cluster")   ? "cluster"
+                              : sl_stage_dir(io, "segment") ? "segment"
+                                                            : NULL;
+    const char *list_dir = list_method ? sl_stage_dir(io, list_method) : NULL;
     char model_path[PATH_MAX], published[PATH_MAX];
     sl_lod_model model;
     sl_lod_model_init(&model);
-    int rc = cluster_dir ? 0 : sl_stage_path(model_path, io->in_dir, SL_MODEL_FILE, err);
-    if (rc == 0 && !cluster_dir)
+    int rc = list_dir ? 0 : sl_stage_path(model_path, io->in_dir, SL_MODEL_FILE, err);
+    if (rc == 0 && !list_dir)
         rc = sl_stage_path(published, io->out_dir, SL_MODEL_FILE, err);
-    if (rc == 0 && !cluster_dir)
+    if (rc == 0 && !list_dir)
         rc = sl_lod_model_read(model_path, &model, err);
     if (rc)
         return rc;
@@ -228,8 +231,8 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
         }
         sl_json_object_end(io->report);
     }
-    if (cluster_dir) {
-        rc = sl_export_level_list(c, cluster_dir, sl_stage_dir(io, "range"),
+    if (list_dir) {
+        rc = sl_export_level_list(c, list_method, list_dir, sl_stage_dir(io, "range"),
                                   measure ? &input : NULL, &frame,
                                   texture.input ? &texture : NULL, io, err);
     } else {

@@ -5,6 +5,7 @@
 #include <omp.h>
 #include <string.h>
 
+#include "geometry/normal_hull.h"
 #include "geometry/region_grow.h"
 #include "tests/check.h"
 #include "tests/unit/analytic_meshes.h"
@@ -215,8 +216,58 @@ static void test_threads(void)
     tm_free(&torus);
 }
 
+/* The hull's vertices give the same largest angle as all normals added, for random
+ * normals in a 60-degree cone and random directions within 20 degrees of its axis. */
+static void test_normal_hull(void)
+{
+    uint64_t state = 99;
+#define RND() ((state = state * 6364136223846793005ull + 1442695040888963407ull) >> 11) * 0x1p-53
+    double axis[3] = {0.3, -0.2, 0.93}, len = sqrt(0.09 + 0.04 + 0.93 * 0.93);
+    for (int k = 0; k < 3; k++)
+        axis[k] /= len;
+    double (*all)[3] = malloc(500 * sizeof *all);
+    sl_normal_hull h;
+    sl_normal_hull_init(&h);
+    sl_normal_hull_start(&h, axis);
+    uint64_t bad = 0;
+    for (int i = 0; i < 500; i++) {
+        double v[3];
+        do {
+            for (int k = 0; k < 3; k++)
+                v[k] = 2 * RND() - 1;
+            double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            for (int k = 0; k < 3; k++)
+                v[k] /= l;
+        } while (v[0] * axis[0] + v[1] * axis[1] + v[2] * axis[2] < cos(M_PI / 6));
+        memcpy(all[i], v, sizeof v);
+        CHECK(sl_normal_hull_add(&h, v, (uint32_t)i) == 0);
+        for (int q = 0; q < 5; q++) {
+            double m[3];
+            do {
+                for (int k = 0; k < 3; k++)
+                    m[k] = axis[k] + 0.3 * (2 * RND() - 1);
+                double l = sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+                for (int k = 0; k < 3; k++)
+                    m[k] /= l;
+            } while (m[0] * axis[0] + m[1] * axis[1] + m[2] * axis[2] < cos(M_PI / 9));
+            double brute = 1;
+            for (int j = 0; j <= i; j++) {
+                double d = all[j][0] * m[0] + all[j][1] * m[1] + all[j][2] * m[2];
+                brute = d < brute ? d : brute;
+            }
+            bad += fabs(sl_normal_hull_min_dot(&h, m) - brute) > 1e-12;
+        }
+    }
+    CHECK_EQ_U64(bad, 0);
+    CHECK_MSG(h.count < 100, "%u hull vertices", h.count);
+    sl_normal_hull_release(&h);
+    free(all);
+#undef RND
+}
+
 int main(void)
 {
+    test_normal_hull();
     test_cube();
     test_cylinder();
     test_sphere_and_min_delta();

@@ -359,6 +359,12 @@ def main():
     section_growth(out, h)
     section_cluster(out, results, dest)
     section_plots(out)
+    # The segment method's section comes from its own benchmark (bench_segment.sh), which
+    # keeps it in docs/bench/segment-section.md; a rerun of this one keeps it too.
+    seg = os.path.join(os.path.dirname(os.path.abspath(dest)), "bench", "segment-section.md")
+    if os.path.exists(seg):
+        with open(seg) as f:
+            out += ["<!-- segment:begin -->", f.read().rstrip(), "<!-- segment:end -->"]
     with open(dest + ".tmp", "w") as f:
         f.write("\n".join(out).rstrip() + "\n")
     os.replace(dest + ".tmp", dest)
