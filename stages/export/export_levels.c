@@ -117,6 +117,9 @@ static int measure_level(const sl_export_config *c, const sl_mesh *input, const 
     sl_json_u64(r, "boundary_edges", topo.boundary_edges);
     sl_json_u64(r, "nonmanifold_edges", topo.nonmanifold_edges);
     sl_json_bool(r, "watertight", topo.watertight);
+    sl_json_u64(r, "components", topo.components);
+    sl_json_double(r, "largest_component_area_fraction",
+                   topo.area > 0 ? topo.largest_component_area / topo.area : 0);
     row->watertight = topo.watertight;
     if (!input || mesh->triangle_count == 0)
         return 0;

@@ -14,7 +14,8 @@
 #include "stages/crack/crack.h"
 #include "stages/export/export_internal.h"
 
-#define EXPORT_STAGE_VERSION 3u
+/* 4: report.json gives each level's connected parts and the largest one's share of the area. */
+#define EXPORT_STAGE_VERSION 4u
 
 static const sl_option export_options[] = {
     {"export", "lod_percents", SL_OPT_LIST, "20,40,60,80,100", 0, 100, NULL,
