@@ -94,7 +94,7 @@ done:
     return rc;
 }
 
-static void identity_line(const struct stat *st, char *buf, size_t size)
+void sl_stat_identity(const struct stat *st, char *buf, size_t size)
 {
     snprintf(buf, size, "%llu %llu %llu %lld.%09ld %lld.%09ld",
              (unsigned long long)st->st_dev, (unsigned long long)st->st_ino,
@@ -108,7 +108,7 @@ int sl_hash_file_cached(const char *path, const char *cache_path, sl_hash *out, 
     if (stat(path, &st) != 0)
         return sl_error_errno(err, errno, path, "stat");
     char identity[160];
-    identity_line(&st, identity, sizeof identity);
+    sl_stat_identity(&st, identity, sizeof identity);
 
     char *cached = NULL;
     size_t cached_size = 0;

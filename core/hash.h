@@ -23,6 +23,13 @@ sl_hash sl_hash_bytes(const void *data, size_t size);
 /* Streams the file through XXH3-128; *size gets its byte count (may be NULL). */
 int sl_hash_file(const char *path, sl_hash *out, uint64_t *size, sl_error *err);
 
+/* A file's identity as the caches compare it: "dev ino size mtime_ns ctime_ns" (any
+ * write through the file system changes the ctime; a rename in changes the inode).
+ * `size` >= SL_STAT_IDENTITY_SIZE. */
+#define SL_STAT_IDENTITY_SIZE 128
+struct stat;
+void sl_stat_identity(const struct stat *st, char *buf, size_t size);
+
 /* Same, but trusts `cache_path` when it records the file's current identity
  * (dev, ino, size, mtime_ns, ctime_ns); otherwise hashes and rewrites the cache. */
 int sl_hash_file_cached(const char *path, const char *cache_path, sl_hash *out,

@@ -36,7 +36,7 @@ int sl_upstream_chain(sl_engine *e, const char *ticket, const char *source_rel, 
         sl_record rec;
         sl_error rerr;
         sl_error_init(&rerr);
-        int bad = verify_last && i == s - 1 ? sl_record_verify(record, dir, NULL, &rec, &rerr)
+        int bad = verify_last && i == s - 1 ? sl_record_check(record, dir, NULL, &rec, &rerr)
                                             : sl_record_read(record, &rec, &rerr);
         if (bad)
             return SL_E_CORRUPT; /* an upstream result is gone or stale */

@@ -119,13 +119,9 @@ void sl_engine_stamp_lease(const sl_engine *e, sl_ticket *t)
 /* Is the claimed ticket still ours (same nonce and epoch)? */
 static int lease_held(const sl_engine *e, const char *stage, const char *name, const sl_ticket *mine)
 {
-    char path[PATH_MAX];
-    sl_queue_path(path, sizeof path, e->work, stage, SL_STATE_CLAIMED, name);
     sl_ticket now;
-    sl_error err;
-    sl_error_init(&err);
-    return sl_ticket_read(path, &now, &err) == 0 && now.epoch == mine->epoch &&
-           strcmp(now.nonce, mine->nonce) == 0;
+    return sl_queue_get(e->work, stage, SL_STATE_CLAIMED, name, &now) == 0 &&
+           now.epoch == mine->epoch && strcmp(now.nonce, mine->nonce) == 0;
 }
 
 int sl_engine_lease_renew(sl_engine *e, const char *stage, const char *name, sl_ticket *t,
@@ -204,23 +200,18 @@ static int from_job(const sl_ticket *t, const char *job)
 /* A live scan mark of `job` (other than ours), or the stamp of a finished one. */
 static int scan_seen(const sl_engine *e, const char *job, int64_t now)
 {
-    char path[PATH_MAX];
     sl_ticket t;
     sl_error err;
     sl_error_init(&err);
-    sl_queue_path(path, sizeof path, e->work, SCAN_QUEUE, SL_STATE_DONE, "last");
-    if (sl_ticket_read(path, &t, &err) == 0 && from_job(&t, job))
+    if (sl_queue_get(e->work, SCAN_QUEUE, SL_STATE_DONE, "last", &t) == 0 && from_job(&t, job))
         return 1;
     char **names;
     int count = 0, seen = 0;
     if (sl_queue_list(e->work, SCAN_QUEUE, SL_STATE_CLAIMED, &names, &count, &err) != 0)
         return 0;
-    for (int i = 0; i < count && !seen; i++) {
-        sl_error terr;
-        sl_error_init(&terr);
-        sl_queue_path(path, sizeof path, e->work, SCAN_QUEUE, SL_STATE_CLAIMED, names[i]);
-        seen = sl_ticket_read(path, &t, &terr) == 0 && t.expires >= now && from_job(&t, job);
-    }
+    for (int i = 0; i < count && !seen; i++)
+        seen = sl_queue_get(e->work, SCAN_QUEUE, SL_STATE_CLAIMED, names[i], &t) == 0 &&
+               t.expires >= now && from_job(&t, job);
     free(names);
     return seen;
 }

@@ -63,7 +63,7 @@ int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, 
         sl_error verr;
         sl_error_init(&verr);
         sl_ticket t;
-        if (sl_record_verify(record_path, dir, &key, &rec, &verr) == 0) {
+        if (sl_record_check(record_path, dir, &key, &rec, &verr) == 0) {
             if (state != SL_STATE_DONE) {
                 sl_ticket_for(&t, item, source_rel, key);
                 rc = sl_queue_put(e->work, stage, SL_STATE_DONE, name, &t, err);

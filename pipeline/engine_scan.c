@@ -53,18 +53,16 @@ static int quarantine_unreadable(sl_engine *e, const char *item, const char *why
     sl_hash_hex(key, key_hex);
     int state = sl_queue_find(e->work, stage, name);
     sl_ticket t;
-    sl_error terr;
-    sl_error_init(&terr);
-    sl_queue_path(path, sizeof path, e->work, stage, state, name);
     if (state == SL_STATE_CLAIMED ||
-        (state == SL_STATE_QUARANTINE && sl_ticket_read(path, &t, &terr) == 0 &&
-         strcmp(t.key, key_hex) == 0))
+        (state == SL_STATE_QUARANTINE &&
+         sl_queue_get(e->work, stage, state, name, &t) == 0 && strcmp(t.key, key_hex) == 0))
         return 0;
     sl_ticket_for(&t, item, item, key);
     snprintf(t.cls, sizeof t.cls, "badinput");
     snprintf(t.reason, sizeof t.reason, "%.500s: %s", item, why);
     rc = sl_queue_put(e->work, stage, SL_STATE_QUARANTINE, name, &t, err);
-    if (rc == 0 && state != SL_STATE_NONE && state != SL_STATE_QUARANTINE)
+    if (rc == 0 && state != SL_STATE_NONE && state != SL_STATE_QUARANTINE &&
+        sl_queue_path(path, sizeof path, e->work, stage, state, name) == 0)
         unlink(path);
     if (rc == 0) {
         e->counts.quarantined++;

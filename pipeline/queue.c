@@ -53,6 +53,8 @@ int sl_ticket_name(const char *item, char *name, size_t size, sl_error *err)
 int sl_queue_path(char *buf, size_t size, const char *work, const char *stage, int state,
                   const char *name)
 {
+    if (state < 0 || state >= SL_STATE_COUNT)
+        return -1; /* SL_STATE_NONE has no folder */
     int n = name ? snprintf(buf, size, "%s/queue/%s/%s/%s", work, stage, state_names[state], name)
                  : snprintf(buf, size, "%s/queue/%s/%s", work, stage, state_names[state]);
     return n < 0 || (size_t)n >= size ? -1 : 0;
@@ -101,6 +103,16 @@ int sl_queue_move(const char *work, const char *stage, const char *name, int fro
         rc = sl_fsync_dir(dir, err);
     }
     return rc;
+}
+
+int sl_queue_get(const char *work, const char *stage, int state, const char *name,
+                 sl_ticket *t)
+{
+    char path[PATH_MAX];
+    sl_error err;
+    sl_error_init(&err);
+    return sl_queue_path(path, sizeof path, work, stage, state, name) ||
+           sl_ticket_read(path, t, &err) != 0;
 }
 
 int sl_queue_put(const char *work, const char *stage, int state, const char *name,

@@ -58,6 +58,11 @@ int sl_ticket_write(const char *path, const sl_ticket *t, sl_error *err); /* ato
 /* The ticket name of an item id (`name`: SL_TICKET_NAME_MAX + 1 bytes). */
 int sl_ticket_name(const char *item, char *name, size_t size, sl_error *err);
 
+/* Reads ticket `name` of `stage` in `state`: 0, or nonzero when it is missing, torn or
+ * unreadable (alike to callers that only look: nobody's ticket to act on). */
+int sl_queue_get(const char *work, const char *stage, int state, const char *name,
+                 sl_ticket *t);
+
 /* WORK/queue/<stage>/<state>[/<name>] */
 int sl_queue_path(char *buf, size_t size, const char *work, const char *stage, int state,
                   const char *name);

@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "core/atomicfile.h"
 #include "core/escape.h"
@@ -230,5 +231,80 @@ int sl_record_read(const char *record_path, sl_record *out, sl_error *err)
     if (parse_record(text, out) != 0)
         rc = sl_error_set(err, SL_E_CORRUPT, 0, record_path, "record does not parse");
     free(text);
+    return rc;
+}
+
+/* "_verified" beside the record (a "_" file: part of no record); 0, or -1 when the path
+ * does not fit. */
+static int cache_path_of(const char *record_path, char *buf, size_t size)
+{
+    const char *slash = strrchr(record_path, '/');
+    int dir_len = slash ? (int)(slash - record_path) : 1;
+    int n = snprintf(buf, size, "%.*s/_verified", dir_len, slash ? record_path : ".");
+    return n < 0 || (size_t)n >= size ? -1 : 0;
+}
+
+/* The identities of the record and its outputs, one line each, in record order; -1 when
+ * one of them cannot be stat'ed (missing: the full check says so). */
+static int identities(const char *record_path, const char *dir, const sl_record *r, char **text)
+{
+    size_t cap = (size_t)(r->output_count + 1) * (SL_STAT_IDENTITY_SIZE + 1) + 1, n = 0;
+    char *buf = malloc(cap);
+    if (!buf)
+        return -1;
+    for (int i = -1; i < r->output_count; i++) {
+        char path[PATH_MAX];
+        struct stat st;
+        int len = i < 0 ? snprintf(path, sizeof path, "%s", record_path)
+                        : snprintf(path, sizeof path, "%s/%s", dir, r->outputs[i].name);
+        if (len < 0 || (size_t)len >= sizeof path || stat(path, &st) != 0) {
+            free(buf);
+            return -1;
+        }
+        sl_stat_identity(&st, buf + n, SL_STAT_IDENTITY_SIZE);
+        n += strlen(buf + n);
+        buf[n++] = '\n';
+    }
+    buf[n] = '\0';
+    *text = buf;
+    return 0;
+}
+
+int sl_record_check(const char *record_path, const char *dir, const sl_hash *key,
+                    sl_record *out, sl_error *err)
+{
+    char cache[PATH_MAX];
+    sl_record *r = malloc(sizeof *r);
+    if (!r)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, record_path, "out of memory");
+    sl_error ignored;
+    sl_error_init(&ignored);
+    char *now = NULL, *seen = NULL;
+    size_t seen_size = 0;
+    int fast = cache_path_of(record_path, cache, sizeof cache) == 0 &&
+               sl_record_read(record_path, r, &ignored) == 0 &&
+               (!key || sl_hash_equal(*key, r->key)) &&
+               sl_hash_equal(digest_outputs(r), r->outputs_digest) &&
+               identities(record_path, dir, r, &now) == 0 &&
+               sl_read_file(cache, 1 << 20, &seen, &seen_size, &ignored) == 0 &&
+               strcmp(now, seen) == 0;
+    free(seen);
+    int rc = 0;
+    if (!fast) {
+        rc = sl_record_verify(record_path, dir, key, r, err);
+        free(now);
+        now = NULL;
+        /* What matched now is vouched for until it changes; a cache that cannot be
+         * written costs a full check next time, never the item. */
+        if (rc == 0 && identities(record_path, dir, r, &now) == 0) {
+            sl_error werr;
+            sl_error_init(&werr);
+            sl_write_file_atomic(cache, now, strlen(now), &werr);
+        }
+    }
+    if (rc == 0 && out)
+        *out = *r;
+    free(now);
+    free(r);
     return rc;
 }

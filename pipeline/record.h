@@ -49,8 +49,20 @@ int sl_record_commit(const char *record_path, const char *dir, const char *const
 int sl_record_read(const char *record_path, sl_record *out, sl_error *err);
 
 /* 0 when the record parses, has `key` (unless key == NULL) and every listed output exists
- * in `dir` with the recorded size and hash; otherwise SL_E_CORRUPT with the reason. */
+ * in `dir` with the recorded size and hash; otherwise SL_E_CORRUPT with the reason. Reads
+ * every byte of every output: `scanlod verify`. */
 int sl_record_verify(const char *record_path, const char *dir, const sl_hash *key,
                      sl_record *out, sl_error *err);
+
+/* The same answer without reading the outputs again when nothing changed since the last
+ * full verification: a `_verified` file beside the record holds the identity (dev, inode,
+ * size, mtime, ctime: sl_stat_identity) of the record and of each output as they were
+ * when their hashes last matched; while every identity is still the same, the hashes are
+ * trusted (ARCHITECTURE section 3: content hashes cached against the stat identity).
+ * Anything else is verified in full, and the cache rewritten. For the scan and the stage
+ * runner, which ask every night of every artifact; a corruption that keeps a file's
+ * identity (bit rot under the file system) is `scanlod verify`'s to find. */
+int sl_record_check(const char *record_path, const char *dir, const sl_hash *key,
+                    sl_record *out, sl_error *err);
 
 #endif

@@ -63,7 +63,7 @@ claimed_by() {
   grep -l -E "^job=${array}_$1(\+r[0-9]+)?$" "$TMP"/work/queue/*/claimed/* 2>/dev/null | head -n 1
 }
 has_claim() { [ -n "$(claimed_by "$1")" ]; }
-has_export_claim() { claimed_by "$1" | grep -q '/export/claimed/'; }
+has_export_claim() { grep -q '/export/claimed/' <<<"$(claimed_by "$1")"; }
 task_ended() { # not pending, running or being killed
   case "$(task_state "$1")" in PENDING|RUNNING|CONFIGURING|COMPLETING|REQUEUED|"") return 1 ;; esac
 }
