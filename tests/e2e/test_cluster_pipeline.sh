@@ -41,6 +41,9 @@ uris = {a["uri"] for d in svx["models"][0]["derivatives"] for a in d["assets"]}
 need(uris and all(u[:-4] in by and not by[u[:-4]]["intermediate"] for u in uris), "svx assets %s" % sorted(uris))
 page = open(os.path.join(out, item, "index.html")).read()
 need("Clustering levels with bounded error" in page and "lod40" in page, "index.html")
+need(".morph" not in page, "index.html names an intermediate model")
+files = [f["name"] for f in r["stages"]["export"]["files"]]
+need(files and all(not by[f]["intermediate"] for f in files), "report files %s" % files)
 names = {l["name"]: l for l in levels}
 for l in levels:
     own = os.path.join(out, item, l["name"])
