@@ -142,6 +142,9 @@ static int print_json(const compare_args *args, const sl_mesh *a, const sl_mesh 
     sl_json_u64(&j, "nonmanifold_edges", topo->nonmanifold_edges);
     sl_json_u64(&j, "degenerate_triangles", topo->degenerate_triangles);
     sl_json_bool(&j, "watertight", topo->watertight);
+    sl_json_u64(&j, "components", topo->components);
+    sl_json_double(&j, "largest_component_area_fraction",
+                   topo->area > 0 ? topo->largest_component_area / topo->area : 0);
     sl_json_object_end(&j);
     sl_json_u64(&j, "samples", args->cfg.samples);
     sl_json_u64(&j, "seed", args->cfg.seed);
@@ -190,6 +193,8 @@ static void print_table(const compare_args *args, const sl_mesh *a, const sl_mes
            " degenerate triangles (after welding equal positions)\n",
            topo->boundary_edges, topo->nonmanifold_edges, topo->degenerate_triangles);
     printf("B watertight: %s\n", topo->watertight ? "yes" : "no");
+    printf("B parts: %" PRIu64 ", the largest with %.2f %% of the area\n", topo->components,
+           topo->area > 0 ? 100 * topo->largest_component_area / topo->area : 0.0);
     printf("time: %.3f s reading, %.3f s comparing\n", seconds[0], seconds[1]);
 }
 

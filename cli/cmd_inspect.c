@@ -129,6 +129,12 @@ static int inspect_slod(const char *path, sl_error *err)
         printf(")\n");
         printf("crossings: %u, colours: %s\n", t->crossing_count,
                yes_no(t->crossing_color != NULL));
+        if (sl_octree_dual(t))
+            printf("vertices: qef, %u quadric vertices (%u with transition loops), format %u\n",
+                   t->vertex_count, m.dual_count, SL_LOD_FORMAT_VERSION);
+        else
+            printf("vertices: mc (paper 1's marching-cube triangles), format %u\n",
+                   SL_LOD_FORMAT_VERSION);
         printf("lod array: %u expansions\n", e);
         printf("triangles: %llu at the root, %llu at the finest cut\n",
                (unsigned long long)m.accumulation[0], (unsigned long long)m.accumulation[e]);

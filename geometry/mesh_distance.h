@@ -73,6 +73,11 @@ typedef struct sl_mesh_topology {
     uint64_t boundary_edges;       /* in exactly one triangle */
     uint64_t nonmanifold_edges;    /* in three or more triangles */
     int watertight;                /* every edge in exactly two triangles (and >= 1 edge) */
+    uint64_t components;           /* parts connected through shared welded vertices
+                                      (degenerate triangles left out) */
+    double area;                   /* total area of the non-degenerate triangles */
+    double largest_component_area; /* area of the part with the most of it; a thumbnail
+                                      that holds together has nearly all of `area` here */
 } sl_mesh_topology;
 
 /* Distances between the surfaces of `a` and `b`. Both need at least one triangle of

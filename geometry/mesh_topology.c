@@ -4,10 +4,13 @@
  * -0 -> +0), so it is O(n) and exact: positions merge only when they are equal. Edges
  * are bucketed by their lower welded endpoint (a CSR array: counts, prefix sums, fill),
  * then each small bucket is sorted and its runs counted -- O(n) memory of 4 bytes per
- * edge end instead of sorting 64-bit edge keys.
+ * edge end instead of sorting 64-bit edge keys. Connected parts: union-find over the
+ * welded ids (path halving, union by index), then each triangle's area summed into its
+ * part's root.
  */
 #include "geometry/mesh_distance.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -129,6 +132,74 @@ static void count_edge_runs(uint32_t *ends, const uint64_t *start, uint64_t ids,
     }
 }
 
+static uint32_t find_root(uint32_t *parent, uint32_t x)
+{
+    while (parent[x] != x) {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    return x;
+}
+
+static double triangle_area(const sl_mesh *m, uint64_t t)
+{
+    const float *p[3];
+    for (int c = 0; c < 3; c++)
+        p[c] = m->positions + 3 * (uint64_t)m->triangles[3 * t + c];
+    double u[3], v[3];
+    for (int a = 0; a < 3; a++) {
+        u[a] = (double)p[1][a] - p[0][a];
+        v[a] = (double)p[2][a] - p[0][a];
+    }
+    double n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    return 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
+/* Parts connected through shared welded vertices and their areas; `ids` welded ids.
+ * Returns -1 when out of memory. */
+static int count_components(const sl_mesh *m, const uint32_t *weld, uint64_t ids,
+                            sl_mesh_topology *out)
+{
+    uint32_t *parent = malloc((ids ? ids : 1) * sizeof *parent);
+    double *area = calloc(ids ? ids : 1, sizeof *area);
+    if (!parent || !area) {
+        free(parent);
+        free(area);
+        return -1;
+    }
+    for (uint64_t i = 0; i < ids; i++)
+        parent[i] = (uint32_t)i;
+    for (uint64_t t = 0; t < m->triangle_count; t++) {
+        uint32_t w[3];
+        if (!welded_triangle(m, weld, t, w))
+            continue;
+        for (int c = 1; c < 3; c++) {
+            uint32_t a = find_root(parent, w[0]), b = find_root(parent, w[c]);
+            if (a != b)
+                parent[a > b ? a : b] = a < b ? a : b;
+        }
+    }
+    for (uint64_t t = 0; t < m->triangle_count; t++) {
+        uint32_t w[3];
+        if (!welded_triangle(m, weld, t, w))
+            continue;
+        double a = triangle_area(m, t);
+        area[find_root(parent, w[0])] += a;
+        out->area += a;
+    }
+    uint64_t used = 0;
+    for (uint64_t i = 0; i < ids; i++)
+        if (parent[i] == i && area[i] > 0) {
+            used++;
+            if (area[i] > out->largest_component_area)
+                out->largest_component_area = area[i];
+        }
+    out->components = used;
+    free(parent);
+    free(area);
+    return 0;
+}
+
 int sl_mesh_topology_compute(const sl_mesh *m, sl_mesh_topology *out, sl_error *err)
 {
     memset(out, 0, sizeof *out);
@@ -177,8 +248,12 @@ int sl_mesh_topology_compute(const sl_mesh *m, sl_mesh_topology *out, sl_error *
     out->welded_vertices = (uint64_t)ids;
     count_edge_runs(ends, start, (uint64_t)ids, out);
     out->watertight = out->edges > 0 && out->boundary_edges == 0 && out->nonmanifold_edges == 0;
-    free(weld);
     free(start);
     free(ends);
+    int rc = count_components(m, weld, (uint64_t)ids, out);
+    free(weld);
+    if (rc)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "connected parts of %llu triangles",
+                            (unsigned long long)m->triangle_count);
     return SL_OK;
 }

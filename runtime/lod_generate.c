@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "runtime/lod_dual.h"
 #include "runtime/lod_model.h"
 #include "runtime/lod_splits.h"
 
@@ -31,6 +32,9 @@ void sl_lod_model_release(sl_lod_model *m)
     free(m->cells);
     free(m->split_words);
     free(m->surface_before);
+    free(m->cell_node);
+    free(m->dual_position);
+    free(m->dual_color);
     sl_neighbours_release(&m->neighbours);
     sl_transitions_release(&m->transitions);
     sl_lod_model_init(m);
@@ -354,9 +358,57 @@ static void fetch_ahead(const sl_lod_model *m, uint32_t k, uint32_t pos, uint32_
         __builtin_prefetch(drawing);
 }
 
+/* Dual models (lod_dual.h): the drawn loops of frontier cell c (at LOD-order position
+ * pos) into the builder; returns 1 when a split lacked data (a crack). */
+static int draw_cell_loops(const sl_lod_model *m, uint32_t k, uint32_t pos,
+                           const sl_lod_cell_ref *c, sl_mesh_builder *b)
+{
+    uint32_t want, *state = split_state(m, k, c, &want);
+    if (state && *state != SL_OCTREE_NONE) { /* a transition cell, drawn at load */
+        const uint32_t *d = m->split_drawings + *state;
+        for (uint32_t i = 0, at = 1; i < (d[0] & 0xff); i++, at += 2 + d[at])
+            sl_mesh_builder_add_loop(b, d[at + 1], d + at + 2, (int)d[at]);
+        return (int)(d[0] >> 8 & 1);
+    }
+    uint32_t node = m->cell_node[pos], first = m->tree.vertex_first[node];
+    if (m->tree.vertex_first[node + 1] == first)
+        return 0; /* no vertex: trimmed (an open scan's cell beyond its border) */
+    uint32_t point_crossing[12], ids[12];
+    const uint32_t *own = m->tree.node_crossings + c->crossing_base;
+    for (int e = 0; e < 12; e++)
+        point_crossing[e] = (c->edge_mask >> e & 1) ? *own++ : SL_OCTREE_NONE;
+    const uint8_t *row = sl_dual_uniform_loops()[c->inside];
+    for (int l = 0, at = 5; l < row[0]; l++) {
+        int n = row[1 + l];
+        for (int j = 0; j < n; j++)
+            ids[j] = point_crossing[row[at++]];
+        sl_mesh_builder_add_loop(b, first + (uint32_t)l, ids, n);
+    }
+    return 0;
+}
+
+static uint64_t draw_frontier_dual(sl_lod_model *m, uint32_t k, sl_mesh_builder *b)
+{
+    uint32_t end = m->frontier_end[k];
+    uint64_t incomplete = 0;
+    for (uint32_t pos = 0; pos < end; pos++) {
+        const sl_lod_cell_ref *c = &m->cells[pos];
+        if (drawn_at(c, k))
+            incomplete += (uint64_t)draw_cell_loops(m, k, pos, c, b);
+    }
+    return incomplete;
+}
+
 /* Draws the frontier after k expansions into the builder; returns the crack count. */
 static uint64_t draw_frontier(sl_lod_model *m, uint32_t k, sl_mesh_builder *b)
 {
+    if (k > m->expansion_count)
+        k = m->expansion_count;
+    if (m->dual_position) {
+        if (sl_mesh_builder_dual(b, m->dual_position, m->dual_color, m->dual_count))
+            return 0;
+        return draw_frontier_dual(m, k, b);
+    }
     const sl_lod_split_table *st = sl_lod_split_table_get();
     fetch_tables(st);
     if (k > m->expansion_count)

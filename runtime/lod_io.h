@@ -18,7 +18,8 @@
 #include "runtime/lod_model.h"
 
 #define SL_LOD_MAGIC "SLODMODL"
-#define SL_LOD_FORMAT_VERSION 1u
+/* 2: the octree section of format 2 (optional dual vertices). */
+#define SL_LOD_FORMAT_VERSION 2u
 
 int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_version,
                        sl_error *err);

@@ -240,8 +240,10 @@ static int lay_out_cells(sl_lod_model *m)
     free(m->frontier_end);
     free(m->cells);
     free(m->split_words);
+    free(m->cell_node);
     m->cells = NULL;
     m->split_words = NULL;
+    m->cell_node = NULL;
     m->frontier_end = malloc(((size_t)e + 1) * sizeof *m->frontier_end);
     if (!order || !m->frontier_end) {
         free(order);
@@ -254,10 +256,14 @@ static int lay_out_cells(sl_lod_model *m)
     }
     m->frontier_end[e] = end;
     m->cells = malloc((end ? end : 1) * sizeof *m->cells);
-    if (!m->cells) {
+    if (sl_octree_dual(t))
+        m->cell_node = malloc((end ? end : 1) * sizeof *m->cell_node);
+    if (!m->cells || (sl_octree_dual(t) && !m->cell_node)) {
         free(order);
         return -1;
     }
+    if (m->cell_node)
+        memcpy(m->cell_node, order, (size_t)end * sizeof *order);
     /* The lists' sizes (in the cells' `splits` for now), their offsets, their words. */
 #pragma omp parallel for schedule(static)
     for (uint32_t pos = 0; pos < end; pos++) {
@@ -298,6 +304,30 @@ static int lay_out_cells(sl_lod_model *m)
     return 0;
 }
 
+/* A dual model's vertex table starts as the tree's vertices (sl_lod_draw_states adds the
+ * transition loops' own). */
+static int dual_vertices(sl_lod_model *m)
+{
+    const sl_octree *t = &m->tree;
+    free(m->dual_position);
+    free(m->dual_color);
+    m->dual_position = NULL;
+    m->dual_color = NULL;
+    m->dual_count = 0;
+    if (!sl_octree_dual(t))
+        return 0;
+    size_t count = t->vertex_count ? t->vertex_count : 1;
+    m->dual_position = malloc(count * 3 * sizeof *m->dual_position);
+    m->dual_color = t->vertex_color ? malloc(count * 4) : NULL;
+    if (!m->dual_position || (t->vertex_color && !m->dual_color))
+        return -1;
+    memcpy(m->dual_position, t->vertex_position, (size_t)t->vertex_count * 3 * sizeof(float));
+    if (t->vertex_color)
+        memcpy(m->dual_color, t->vertex_color, (size_t)t->vertex_count * 4);
+    m->dual_count = t->vertex_count;
+    return 0;
+}
+
 int sl_lod_model_prepare(sl_lod_model *m)
 {
     const sl_octree *t = &m->tree;
@@ -321,7 +351,7 @@ int sl_lod_model_prepare(sl_lod_model *m)
     sl_mc_triangles none;
     memset(&empty, 0, sizeof empty);
     sl_mc_triangulate(&empty, &none);
-    if (lay_out_cells(m))
+    if (lay_out_cells(m) || dual_vertices(m))
         return -1;
     return sl_lod_draw_states(m);
 }

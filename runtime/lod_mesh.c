@@ -1,6 +1,8 @@
 /* Welding cells' triangles into an indexed mesh (see lod_mesh.h). */
 #include "runtime/lod_mesh.h"
 
+#include "runtime/lod_dual.h"
+
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -31,6 +33,11 @@ void sl_mesh_scratch_release(sl_mesh_scratch *s)
 {
     free(s->vertex_of_crossing);
     free(s->used);
+    free(s->slots);
+    free(s->touched);
+    free(s->vertex_of_dual);
+    free(s->edge_keys);
+    free(s->polygons);
     memset(s, 0, sizeof *s);
 }
 
@@ -203,6 +210,37 @@ static inline uint32_t *triangle_slots(sl_mesh_builder *b, int count)
     return b->mesh.indices + 3 * (size_t)b->mesh.triangle_count;
 }
 
+uint32_t *sl_mesh_builder_triangle_slots(sl_mesh_builder *b, int count)
+{
+    return triangle_slots(b, count);
+}
+
+int sl_mesh_grow(void **p, uint64_t *cap, uint64_t need, size_t elem)
+{
+    return grow(p, cap, need, elem, 0);
+}
+
+uint32_t sl_mesh_builder_dual_vertex(sl_mesh_builder *b, uint32_t id)
+{
+    sl_mesh_scratch *s = b->scratch;
+    uint32_t v = s->vertex_of_dual[id];
+    if (v != SL_OCTREE_NONE)
+        return v;
+    sl_lod_mesh *m = &b->mesh;
+    if (m->vertex_count >= b->vertex_room && reserve_vertices(b, m->vertex_count + 1, 0)) {
+        b->failed = 1;
+        return 0;
+    }
+    v = (uint32_t)m->vertex_count++;
+    memcpy(m->positions + 3 * (size_t)v, b->dual_position + 3 * (size_t)id, 3 * sizeof(float));
+    zero_normal(m, v);
+    if (m->colors)
+        memcpy(m->colors + 4 * (size_t)v, b->dual_color + 4 * (size_t)id, 4);
+    s->used[v] = id;
+    s->vertex_of_dual[id] = v;
+    return v;
+}
+
 void sl_mesh_builder_add_triangles(sl_mesh_builder *b, int count, const uint8_t *points,
                                    const uint32_t *point_crossing)
 {
@@ -316,9 +354,15 @@ static void reset_scratch(sl_mesh_builder *b)
         return;
     uint64_t made = b->mesh.vertex_count < s->used_capacity ? b->mesh.vertex_count
                                                             : s->used_capacity;
+    uint32_t *map = b->dual_position ? s->vertex_of_dual : s->vertex_of_crossing;
     for (uint64_t v = 0; v < made; v++)
         if (s->used[v] != SL_OCTREE_NONE)
-            s->vertex_of_crossing[s->used[v]] = SL_OCTREE_NONE;
+            map[s->used[v]] = SL_OCTREE_NONE;
+    if (b->dual_position) { /* polygons not made (a failed build) keep their slots */
+        for (uint64_t i = 0; i < s->touched_count; i++)
+            s->vertex_of_crossing[s->touched[i]] = SL_OCTREE_NONE;
+        s->touched_count = s->slot_count = 0;
+    }
 }
 
 /* Resets the scratch and frees what the builder owns (the mesh too when `mesh_too`). */
@@ -335,6 +379,8 @@ static void builder_end(sl_mesh_builder *b, int mesh_too)
 int sl_mesh_builder_finish(sl_mesh_builder *b, sl_lod_mesh *out)
 {
     sl_lod_mesh *m = &b->mesh;
+    if (b->dual_position && !b->failed)
+        sl_mesh_builder_dual_polygons(b);
     if (!b->failed && !b->caller_buffers && !m->normals) { /* no vertex was reserved */
         m->normals = malloc(3 * sizeof(float));
         if (!m->normals)

@@ -25,10 +25,27 @@ void sl_lod_mesh_release(sl_lod_mesh *m);
 /* What a builder needs besides its output, kept between extractions so that repeated
  * ones stay O(m): the crossing -> vertex map (crossing_count entries, all SL_OCTREE_NONE
  * between uses) and the crossing of each vertex made (to reset the map entry by entry). */
+typedef struct sl_dual_slot {
+    uint32_t vertex, prev, next; /* a drawn loop through a crossing: its vertex and the
+                                    crossings before and after this one in it */
+    uint32_t link;               /* the crossing's next slot, or SL_OCTREE_NONE */
+} sl_dual_slot;
+
 typedef struct sl_mesh_scratch {
-    uint32_t *vertex_of_crossing;
-    uint32_t *used;
+    uint32_t *vertex_of_crossing; /* dual mode: the crossing's first slot */
+    uint32_t *used;               /* dual mode: the dual vertex of each vertex made */
     uint64_t used_capacity;
+    /* Dual mode only (lod_dual.h): */
+    sl_dual_slot *slots;
+    uint64_t slot_count, slot_capacity;
+    uint32_t *touched;            /* the crossings with slots, in order of first touch */
+    uint64_t touched_count, touched_capacity;
+    uint32_t *vertex_of_dual;     /* per dual vertex: the vertex made of it, or NONE */
+    uint32_t dual_count;
+    uint64_t *edge_keys;          /* the dual edges made (lod_dual.c) */
+    uint64_t edge_capacity;
+    uint32_t *polygons;           /* the polygons around the crossings */
+    uint64_t polygon_capacity;
 } sl_mesh_scratch;
 
 int sl_mesh_scratch_init(sl_mesh_scratch *s, const sl_octree *tree);
@@ -43,6 +60,8 @@ typedef struct sl_mesh_builder {
     uint64_t vertex_room;         /* vertices that fit both the output and scratch->used */
     int caller_buffers;           /* mesh arrays belong to the caller: never grown or freed */
     int failed;                   /* out of memory, or past the caller's capacity */
+    const float *dual_position;   /* dual mode (lod_dual.h): the vertex table, else NULL */
+    const uint8_t *dual_color;
 } sl_mesh_builder;
 
 /* `scratch` may be NULL (allocated here, O(crossings)) or a caller-kept one. */
@@ -69,6 +88,13 @@ void sl_mesh_builder_add_crossing_triangles(sl_mesh_builder *b, int count,
  * pointers and the counts). Returns -1 when out of memory or past the capacities. */
 int sl_mesh_builder_finish(sl_mesh_builder *b, sl_lod_mesh *out);
 void sl_mesh_builder_abort(sl_mesh_builder *b);
+
+/* For lod_dual.c: the vertex made of dual vertex `id` (made on first use), and room for
+ * `count` more triangles (NULL when failed; the caller fills them and counts them in). */
+uint32_t sl_mesh_builder_dual_vertex(sl_mesh_builder *b, uint32_t id);
+uint32_t *sl_mesh_builder_triangle_slots(sl_mesh_builder *b, int count);
+/* Capacity for `need` elements of size `elem` (doubling); -1 when out of memory. */
+int sl_mesh_grow(void **p, uint64_t *cap, uint64_t need, size_t elem);
 
 /* The uniform mesh of one level (all level-L nodes with the 256-case table). */
 int sl_octree_level_mesh(const sl_octree *tree, uint32_t level, sl_lod_mesh *out);

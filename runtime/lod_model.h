@@ -74,7 +74,10 @@ typedef struct sl_lod_cell_ref {
  * the transition record (the crack compensation points) and the face-rule triangulation:
  * word 0 = triangle count | 1 << 8 when a split lacked data (a crack the report counts),
  * then 3 crossing ids per triangle. Offset SL_OCTREE_NONE: no split, or a configuration
- * with centroid vertices or more than 18 triangles (drawn the general way). */
+ * with centroid vertices or more than 18 triangles (drawn the general way). In a dual
+ * model (lod_dual.h) a drawing is the cell's drawn loops instead: word 0 = loop count |
+ * crack << 8, then per loop its size n, its vertex (an id of dual_position) and its n
+ * crossing ids; every state has one. */
 #define SL_LOD_SPLIT_DIRS 18 /* 6 face and 12 edge neighbours: those that split a cell */
 #define SL_LOD_SPLIT_FACES(w) ((w) & 0x3fu)
 #define SL_LOD_SPLIT_EDGES(w) ((w) >> 6 & 0xfffu)
@@ -103,6 +106,13 @@ typedef struct sl_lod_model {
      * expansion_count + 1 entries. The others (empty band cells) change no mesh, so LOD
      * percents count these alone. */
     uint32_t *surface_before;
+    /* Derived at load, dual models only (lod_dual.h): the node of each cell in LOD order,
+     * and the vertex table generation copies from: the tree's vertices, then one per
+     * transition loop that none of its node's vertices fits (at its crossings' centroid). */
+    uint32_t *cell_node;
+    uint32_t dual_count;
+    float *dual_position;
+    uint8_t *dual_color;
 } sl_lod_model;
 
 void sl_lod_model_init(sl_lod_model *m);

@@ -9,29 +9,116 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "runtime/lod_dual.h"
 #include "runtime/lod_model.h"
 #include "runtime/lod_splits.h"
 #include "runtime/mc_cache.h"
 
-/* A growing run of drawings (one chunk of cells' worth). */
+/* A growing run of drawings (one chunk of cells' worth), and in a dual model the extra
+ * vertices its drawings name (as EXTRA_REF | index in the run until they are placed). */
 typedef struct drawing_run {
     uint32_t *words;
     uint64_t count, capacity;
+    float *extra_position;
+    uint8_t *extra_color;
+    uint32_t extras, extra_capacity;
 } drawing_run;
+
+#define EXTRA_REF 0x80000000u
+
+static int run_reserve(drawing_run *run, uint64_t size)
+{
+    if (run->count + size <= run->capacity)
+        return 0;
+    uint64_t grown = run->capacity ? 2 * run->capacity : 1024;
+    while (grown < run->count + size)
+        grown *= 2;
+    uint32_t *words = realloc(run->words, (size_t)grown * sizeof *words);
+    if (!words)
+        return -1;
+    run->words = words;
+    run->capacity = grown;
+    return 0;
+}
+
+/* A vertex at the centroid of a loop's crossings, in the run; its reference. */
+static int add_extra(drawing_run *run, const sl_octree *t, const uint32_t *ids, int n,
+                     uint32_t *ref)
+{
+    if (run->extras == run->extra_capacity) {
+        uint32_t cap = run->extra_capacity ? 2 * run->extra_capacity : 64;
+        float *p = realloc(run->extra_position, (size_t)cap * 3 * sizeof *p);
+        if (p)
+            run->extra_position = p;
+        uint8_t *c = t->crossing_color ? realloc(run->extra_color, (size_t)cap * 4) : NULL;
+        if (c)
+            run->extra_color = c;
+        if (!p || (t->crossing_color && !c))
+            return -1;
+        run->extra_capacity = cap;
+    }
+    double sum[3] = {0, 0, 0}, col[4] = {0, 0, 0, 0};
+    for (int i = 0; i < n; i++)
+        for (int a = 0; a < 4; a++) {
+            if (a < 3)
+                sum[a] += t->crossing_position[3 * (size_t)ids[i] + a];
+            if (t->crossing_color)
+                col[a] += t->crossing_color[4 * (size_t)ids[i] + a];
+        }
+    uint32_t e = run->extras++;
+    for (int a = 0; a < 3; a++)
+        run->extra_position[3 * (size_t)e + a] = (float)(sum[a] / n);
+    if (t->crossing_color)
+        for (int a = 0; a < 4; a++)
+            run->extra_color[4 * (size_t)e + a] = (uint8_t)(col[a] / n + 0.5);
+    *ref = EXTRA_REF | e;
+    return 0;
+}
+
+/* Appends a dual model's state drawing: the cell's drawn loops, each with its vertex. */
+static int append_loops(drawing_run *run, const sl_lod_model *m, const sl_lod_cell_ref *c,
+                        const sl_mc_cell *cell, int crack,
+                        const uint32_t point_crossing[SL_MC_MAX_POINTS], uint32_t *offset)
+{
+    sl_mc_triangles tri;
+    sl_dual_loops(cell, &tri);
+    uint32_t node = m->cell_node[c - m->cells], vertex[SL_MC_MAX_LOOPS];
+    sl_dual_loop_vertices(&m->tree, node, &tri, point_crossing, vertex);
+    uint64_t size = 1;
+    for (int l = 0; l < tri.loops; l++)
+        if (vertex[l] != SL_DUAL_NOT_DRAWN)
+            size += 2 + tri.loop_sizes[l];
+    if (run_reserve(run, size))
+        return -1;
+    uint32_t at = (uint32_t)run->count, loops = 0;
+    uint32_t *out = run->words + at + 1;
+    for (int l = 0; l < tri.loops; l++) {
+        if (vertex[l] == SL_DUAL_NOT_DRAWN)
+            continue;
+        uint32_t ids[SL_MC_MAX_POINTS];
+        for (int i = 0; i < tri.loop_sizes[l]; i++)
+            ids[i] = point_crossing[tri.loop_points[l][i]];
+        if (vertex[l] == SL_DUAL_EXTRA && add_extra(run, &m->tree, ids, tri.loop_sizes[l], &vertex[l]))
+            return -1;
+        *out++ = tri.loop_sizes[l];
+        *out++ = vertex[l];
+        memcpy(out, ids, tri.loop_sizes[l] * sizeof *ids);
+        out += tri.loop_sizes[l];
+        loops++;
+    }
+    run->words[at] = loops | (uint32_t)(crack ? 1 : 0) << 8;
+    *offset = at;
+    run->count += size;
+    return 0;
+}
 
 /* Appends a transition cell's drawing to the run; *offset = its place in the run. */
 static int append_drawing(drawing_run *run, const sl_mc_cached *t, int crack,
                           const uint32_t point_crossing[SL_MC_MAX_POINTS], uint32_t *offset)
 {
     uint64_t size = 1 + 3 * (uint64_t)t->count;
-    if (run->count + size > run->capacity) {
-        uint64_t grown = run->capacity ? 2 * run->capacity : 1024;
-        uint32_t *words = realloc(run->words, (size_t)grown * sizeof *words);
-        if (!words)
-            return -1;
-        run->words = words;
-        run->capacity = grown;
-    }
+    if (run_reserve(run, size))
+        return -1;
     uint32_t *out = run->words + run->count;
     out[0] = t->count | (uint32_t)(crack ? 1 : 0) << 8;
     for (int i = 0; i < 3 * t->count; i++)
@@ -60,6 +147,11 @@ static int draw_chunk(sl_lod_model *m, sl_mc_cache *configs, uint32_t from, uint
             int crack = sl_lod_frontier_cell(m, k, c, st, &cell, point_crossing, &entry);
             if (!entry)
                 continue;
+            if (m->dual_position) {
+                if (append_loops(run, m, c, &cell, crack, point_crossing, entry))
+                    return -1;
+                continue;
+            }
             if (sl_mc_cache_add(configs, &cell, &id) ||
                 (id != SL_MC_CACHE_NONE &&
                  append_drawing(run, sl_mc_cache_entry(configs, id), crack, point_crossing, entry)))
@@ -110,38 +202,82 @@ typedef struct layout {
     uint64_t *cursor;         /* per start k: where its next drawing goes (pass 1) */
     const uint32_t *run;      /* the chunk's run the entries point into */
     uint32_t *words;          /* split_drawings being filled */
+    int dual;
+    uint32_t extra_base;      /* dual: the id of the chunk's first extra vertex */
 } layout;
 
-static uint32_t drawing_size(const uint32_t *drawing)
+static uint32_t drawing_size(const layout *l, const uint32_t *drawing)
 {
-    return 1 + 3 * (drawing[0] & 0xff);
+    if (!l->dual)
+        return 1 + 3 * (drawing[0] & 0xff);
+    uint32_t size = 1;
+    for (uint32_t i = 0; i < (drawing[0] & 0xff); i++)
+        size += 2 + drawing[size];
+    return size;
 }
 
 static void count_drawing(uint32_t *entry, uint32_t start, void *arg)
 {
     layout *l = arg;
-    l->cursor[start + 1] += drawing_size(l->run + *entry);
+    l->cursor[start + 1] += drawing_size(l, l->run + *entry);
 }
 
 static void place_drawing(uint32_t *entry, uint32_t start, void *arg)
 {
     layout *l = arg;
     const uint32_t *drawing = l->run + *entry;
-    uint32_t size = drawing_size(drawing);
-    memcpy(l->words + l->cursor[start], drawing, size * sizeof *drawing);
+    uint32_t size = drawing_size(l, drawing), *out = l->words + l->cursor[start];
+    memcpy(out, drawing, size * sizeof *drawing);
+    if (l->dual) /* the chunk's extra vertices get their ids in the model's table */
+        for (uint32_t i = 0, at = 1; i < (out[0] & 0xff); i++, at += 2 + out[at])
+            if (out[at + 1] & EXTRA_REF)
+                out[at + 1] = l->extra_base + (out[at + 1] & ~EXTRA_REF);
     *entry = (uint32_t)l->cursor[start];
     l->cursor[start] += size;
+}
+
+/* A dual model's vertex table: the tree's vertices, then the chunks' extra vertices in
+ * chunk order (whose first ids go to extra_base[chunk]). Returns -1 when out of memory. */
+static int dual_table(sl_lod_model *m, const drawing_run *runs, uint32_t *extra_base)
+{
+    const sl_octree *t = &m->tree;
+    uint64_t total = t->vertex_count;
+    for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++) {
+        extra_base[chunk] = (uint32_t)total;
+        total += runs[chunk].extras;
+    }
+    if (total >= EXTRA_REF)
+        return -1;
+    float *p = realloc(m->dual_position, (total ? total : 1) * 3 * sizeof *p);
+    if (p)
+        m->dual_position = p;
+    uint8_t *c = t->crossing_color ? realloc(m->dual_color, (total ? total : 1) * 4) : NULL;
+    if (c)
+        m->dual_color = c;
+    if (!p || (t->crossing_color && !c))
+        return -1;
+    for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++) {
+        const drawing_run *r = &runs[chunk];
+        if (!r->extras)
+            continue;
+        memcpy(p + 3 * (size_t)extra_base[chunk], r->extra_position, 3 * (size_t)r->extras * sizeof *p);
+        if (c)
+            memcpy(c + 4 * (size_t)extra_base[chunk], r->extra_color, 4 * (size_t)r->extras);
+    }
+    m->dual_count = (uint32_t)total;
+    return 0;
 }
 
 int sl_lod_draw_states(sl_lod_model *m)
 {
     uint32_t e = m->expansion_count, end = m->frontier_end[e];
     drawing_run runs[DRAW_CHUNKS];
+    uint32_t extra_base[DRAW_CHUNKS];
     memset(runs, 0, sizeof runs);
     free(m->split_drawings);
     m->split_drawings = NULL;
     m->split_drawing_words = 0;
-    int failed = 0;
+    int failed = 0, dual = m->dual_position != NULL;
 #pragma omp parallel
     {
         /* Each thread triangulates each distinct configuration it meets once. */
@@ -158,21 +294,26 @@ int sl_lod_draw_states(sl_lod_model *m)
     uint64_t total = 0;
     for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++)
         total += runs[chunk].count;
-    layout l = {NULL, NULL, NULL};
-    if (!failed && total < SL_OCTREE_NONE) {
+    layout l = {NULL, NULL, NULL, dual, 0};
+    if (!failed && total < SL_OCTREE_NONE && (!dual || dual_table(m, runs, extra_base) == 0)) {
         l.cursor = calloc((size_t)e + 2, sizeof *l.cursor);
         l.words = malloc((total ? total : 1) * sizeof *l.words);
     }
-    if (!l.cursor || !l.words) { /* out of memory: every transition cell drawn when cut */
+    int rc = 0;
+    if (!l.cursor || !l.words) { /* out of memory: every transition cell drawn when cut,
+                                    which a dual model cannot (its extra vertices are made
+                                    here): its load fails */
         for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++)
             for_each_drawn_state(m, chunk_start(end, chunk), chunk_start(end, chunk + 1),
                                  forget, NULL);
         free(l.cursor);
         free(l.words);
+        rc = dual ? -1 : 0;
     } else {
         for (int pass = 0; pass < 2; pass++) {
             for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++) {
                 l.run = runs[chunk].words;
+                l.extra_base = dual ? extra_base[chunk] : 0;
                 for_each_drawn_state(m, chunk_start(end, chunk), chunk_start(end, chunk + 1),
                                      pass ? place_drawing : count_drawing, &l);
             }
@@ -184,7 +325,10 @@ int sl_lod_draw_states(sl_lod_model *m)
         m->split_drawings = l.words;
         m->split_drawing_words = total;
     }
-    for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++)
+    for (int chunk = 0; chunk < DRAW_CHUNKS; chunk++) {
         free(runs[chunk].words);
-    return 0;
+        free(runs[chunk].extra_position);
+        free(runs[chunk].extra_color);
+    }
+    return rc;
 }

@@ -232,6 +232,60 @@ void sl_mc_triangulate(const sl_mc_cell *cell, sl_mc_triangles *out)
     out->loops = (uint8_t)loops;
 }
 
+/* The face region a segment between points p and q lies in: its face, or for a split face
+ * its sub-face (6 + 4 f + k, the sub-face at corner k); -1 when they share no face. */
+static int segment_region(const sl_mc_cell *cell, int p, int q)
+{
+    unsigned common = ft.point_faces[p] & ft.point_faces[q];
+    if (__builtin_popcount(common) != 1)
+        return -1;
+    int f = __builtin_ctz(common);
+    if (!(cell->split_faces >> f & 1))
+        return f;
+    for (int k = 0; k < 4; k++) {
+        const int pts[4] = {ft.half_start[f][k], SL_MC_SPOKE_POINT(f, k),
+                            SL_MC_SPOKE_POINT(f, (k + 3) % 4), ft.half_end[f][(k + 3) % 4]};
+        int has_p = 0, has_q = 0;
+        for (int i = 0; i < 4; i++) {
+            has_p |= pts[i] == p;
+            has_q |= pts[i] == q;
+        }
+        if (has_p && has_q)
+            return 6 + 4 * f + k;
+    }
+    return -1;
+}
+
+void sl_mc_split_double_passes(const sl_mc_cell *cell, sl_mc_triangles *tri)
+{
+    pthread_once(&ft_once, build_face_tables);
+    for (int l = 0; l < tri->loops; l++) {
+        int n = tri->loop_sizes[l], *x = tri->loop_points[l], i = -1, j = -1;
+        int region[12 + 24];
+        for (int a = 0; a < n; a++)
+            region[a] = segment_region(cell, x[a], x[(a + 1) % n]);
+        for (int a = 0; a < n && j < 0; a++)
+            for (int b = a + 2; b < n && j < 0; b++)
+                if (region[a] >= 0 && region[a] == region[b]) {
+                    i = a;
+                    j = b;
+                }
+        if (j < 0 || tri->loops == SL_MC_MAX_LOOPS)
+            continue;
+        /* x[i+1] .. x[j+1] keeps segment j; x[j+1] .. x[i+1] (around) keeps segment i. */
+        int first[12 + 24], second[12 + 24], n1 = 0, n2 = 0;
+        for (int a = i + 1; a <= j + 1; a++)
+            first[n1++] = x[a % n];
+        for (int a = j + 1; a <= i + 1 + n; a++)
+            second[n2++] = x[a % n];
+        memcpy(x, first, (size_t)n1 * sizeof *x);
+        tri->loop_sizes[l] = (uint8_t)n1;
+        memcpy(tri->loop_points[tri->loops], second, (size_t)n2 * sizeof *x);
+        tri->loop_sizes[tri->loops++] = (uint8_t)n2;
+        l--; /* the shortened loop may pass a face twice yet */
+    }
+}
+
 static sl_mc_triangles uniform_table[256];
 static pthread_once_t uniform_once = PTHREAD_ONCE_INIT;
 

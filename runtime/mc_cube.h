@@ -60,6 +60,14 @@ void sl_mc_triangulate(const sl_mc_cell *cell, sl_mc_triangles *out);
 /* The 256 whole-face configurations (points are edge indices 0..11). */
 const sl_mc_triangles *sl_mc_uniform_table(void);
 
+/* For the dual of the surface (runtime/lod_dual.h): splits every loop that has two
+ * segments on one face (or one sub-face of a split face) into two, along a chord between
+ * the ends of those segments, until none has. Two cells sharing a face both drawing one
+ * loop through it twice would otherwise share two edges, and their two dual vertices two
+ * edges: an edge of four triangles once vertices name edges. Only loop_sizes, loop_points
+ * and loops change (up to SL_MC_MAX_LOOPS; the triangles are left as they were). */
+void sl_mc_split_double_passes(const sl_mc_cell *cell, sl_mc_triangles *tri);
+
 /* Edge/face geometry helpers. */
 static inline int sl_mc_edge_axis(int e) { return e / 4; }
 static inline int sl_mc_edge_c0(int e)

@@ -16,6 +16,11 @@ void sl_octree_release(sl_octree *t)
     free(t->crossing_color);
     free(t->node_crossings);
     free(t->morton);
+    free(t->vertex_first);
+    free(t->vertex_position);
+    free(t->vertex_color);
+    free(t->node_error);
+    free(t->node_area);
     sl_octree_init(t);
 }
 

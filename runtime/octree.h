@@ -11,6 +11,17 @@
  * Layout: nodes sorted by level, root (level `depth`) first, leaves (level 0) last; within
  * a level in Morton order, so the children of a node are contiguous, in octant order
  * (octant o = child at (2x + (o & 1), 2y + (o >> 1 & 1), 2z + (o >> 2))).
+ *
+ * Vertices ([octree] vertices = qef; docs/lod.md "Vertices from quadrics"): optionally each
+ * node also carries one vertex per closed loop of its own (uniform) marching-cube
+ * configuration, placed where the quadric of the input surface inside the cell that the
+ * loop stands for is least, and a mesh is then drawn as the dual of the marching-cube
+ * surface: a vertex per loop, a polygon per crossing. Node n's vertices are
+ * vertex_first[n] .. vertex_first[n + 1] - 1, in the order of the uniform table's loops
+ * (sl_mc_uniform_table()[inside]); their count is the loop count, or 0 when the cell holds
+ * no input surface and the input is open (its loops are trimmed: no surface is grown
+ * across a scan's holes), or 1 for a node without loops whose cell holds surface (the
+ * vertex a transition loop of that cell takes).
  */
 #ifndef SCANLOD_RUNTIME_OCTREE_H
 #define SCANLOD_RUNTIME_OCTREE_H
@@ -56,7 +67,24 @@ typedef struct sl_octree {
     uint32_t *node_crossings;  /* crossing ids, per node in edge order */
     sl_octree_stats stats;
     uint64_t *morton;          /* per node Morton key, derived (not stored): lookups */
+    /* Dual vertices, or all NULL/0 (paper 1's marching-cube triangles). */
+    uint32_t vertex_count;
+    uint32_t *vertex_first;    /* node_count + 1 entries, non-decreasing, last = vertex_count */
+    float *vertex_position;    /* 3 * vertex_count, world, inside the node's cube */
+    uint8_t *vertex_color;     /* 4 * vertex_count RGBA, iff crossing_color */
+    float *node_error;         /* per node: the quadric error of its vertices, summed, plus
+                                  (cell edge / 2)^2 per unit of area of surface it draws no
+                                  loop for (world units^4: area x squared distance) */
+    float *node_area;          /* per node: area of input surface in its cell (world^2) */
 } sl_octree;
+
+#define SL_OCTREE_MAX_NODE_VERTICES 4 /* loops of a uniform configuration, at most */
+
+/* Whether the tree has dual vertices (drawn as the dual of its marching-cube surface). */
+static inline int sl_octree_dual(const sl_octree *t)
+{
+    return t->vertex_first != NULL;
+}
 
 void sl_octree_init(sl_octree *t);
 void sl_octree_release(sl_octree *t);

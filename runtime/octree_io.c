@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "runtime/lod_dual.h"
 #include "runtime/mc_cube.h"
 
 _Static_assert(sizeof(sl_octree_node) == 32, "sl_octree_node is stored as 32 bytes");
@@ -14,7 +15,8 @@ _Static_assert(sizeof(sl_octree_node) == 32, "sl_octree_node is stored as 32 byt
 #error "scanlod's binary formats are little-endian; add byte swapping for this host"
 #endif
 
-#define HEADER_SIZE (4 * 4 + 8 + 8 * 4 + 4 * 2 * SL_OCTREE_MAX_LEVELS + 8 * 6)
+#define HEADER_SIZE (4 * 4 + 8 + 8 * 4 + 4 * 2 * SL_OCTREE_MAX_LEVELS + 8 * 6 + 16)
+#define HAS_VERTICES 1u
 
 static void put_f64(unsigned char *p, double v)
 {
@@ -52,6 +54,9 @@ int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_p
                                t->stats.fallback_crossings};
     for (int i = 0; i < 6; i++, p += 8)
         sl_put_u64(p, stats[i]);
+    sl_put_u32(p, t->vertex_count);
+    sl_put_u32(p + 4, sl_octree_dual(t) ? HAS_VERTICES : 0);
+    sl_put_u64(p + 8, 0);
     int n = 0;
     parts[n++] = (sl_artifact_part){header, HEADER_SIZE};
     parts[n++] = (sl_artifact_part){t->nodes, (size_t)t->node_count * sizeof *t->nodes};
@@ -60,6 +65,14 @@ int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_p
     parts[n++] = (sl_artifact_part){t->crossing_position, (size_t)t->crossing_count * 3 * sizeof(float)};
     if (t->crossing_color)
         parts[n++] = (sl_artifact_part){t->crossing_color, (size_t)t->crossing_count * 4};
+    if (sl_octree_dual(t)) {
+        parts[n++] = (sl_artifact_part){t->vertex_first, ((size_t)t->node_count + 1) * 4};
+        parts[n++] = (sl_artifact_part){t->vertex_position, (size_t)t->vertex_count * 12};
+        if (t->crossing_color)
+            parts[n++] = (sl_artifact_part){t->vertex_color, (size_t)t->vertex_count * 4};
+        parts[n++] = (sl_artifact_part){t->node_error, (size_t)t->node_count * 4};
+        parts[n++] = (sl_artifact_part){t->node_area, (size_t)t->node_count * 4};
+    }
     return n;
 }
 
@@ -186,6 +199,42 @@ static int validate(const sl_octree *t, const char *name, sl_error *err)
     return 0;
 }
 
+/* Dual vertices: each node's count is its uniform loop count (or 0: trimmed), or 1 or 0
+ * for a node without loops; every vertex finite and in its node's cube (give or take
+ * float rounding: the normals' scaling relies on it, lod_mesh.c); errors and areas finite
+ * and not negative. */
+static int validate_vertices(const sl_octree *t, const char *name, sl_error *err)
+{
+    const sl_mc_triangles *table = sl_dual_uniform_table();
+    if (t->vertex_first[0] != 0 || t->vertex_first[t->node_count] != t->vertex_count)
+        return bad(err, name, "vertex ranges do not cover the vertex table");
+    for (uint32_t i = 0; i < t->node_count; i++) /* all in order before any is read */
+        if (t->vertex_first[i + 1] < t->vertex_first[i])
+            return bad(err, name, "vertex ranges out of order");
+    for (uint32_t i = 0; i < t->node_count; i++) {
+        const sl_octree_node *n = &t->nodes[i];
+        uint32_t first = t->vertex_first[i], next = t->vertex_first[i + 1];
+        uint32_t count = next - first, loops = table[n->inside].loops;
+        if (count != 0 && count != (loops ? loops : 1))
+            return bad(err, name, "vertex count does not match the node's loops");
+        if (!isfinite(t->node_error[i]) || !(t->node_error[i] >= 0) ||
+            !isfinite(t->node_area[i]) || !(t->node_area[i] >= 0))
+            return bad(err, name, "node error or area not finite and positive");
+        double lo[3], hi[3];
+        sl_octree_corner_world(t, n, 0, lo);
+        sl_octree_corner_world(t, n, 7, hi);
+        for (uint32_t v = first; v < next; v++)
+            for (int a = 0; a < 3; a++) {
+                double slack = 2 * FLT_EPSILON * fmax(fabs(lo[a]), fabs(hi[a])) +
+                               1e-6 * (hi[a] - lo[a]);
+                double x = t->vertex_position[3 * (size_t)v + (size_t)a];
+                if (!isfinite(x) || !(x >= lo[a] - slack && x <= hi[a] + slack))
+                    return bad(err, name, "vertex outside its node's cube");
+            }
+    }
+    return 0;
+}
+
 static void *copy_out(const unsigned char *src, uint64_t size)
 {
     void *p = malloc(size ? size : 1);
@@ -219,27 +268,51 @@ int sl_octree_parse(const unsigned char *body, uint64_t size, const char *name, 
                           &out->stats.inherited_crossings, &out->stats.fallback_crossings};
     for (int i = 0; i < 6; i++, p += 8)
         *stats[i] = sl_get_u64(p);
-    if (has_color > 1 || out->node_count == 0 || out->node_crossing_count > (uint64_t)1 << 40)
+    uint32_t vertex_count = sl_get_u32(p), flags = sl_get_u32(p + 4);
+    if (has_color > 1 || out->node_count == 0 || out->node_crossing_count > (uint64_t)1 << 40 ||
+        (flags & ~HAS_VERTICES) || sl_get_u64(p + 8) != 0 ||
+        (!(flags & HAS_VERTICES) && vertex_count) ||
+        (uint64_t)vertex_count > (uint64_t)SL_OCTREE_MAX_NODE_VERTICES * out->node_count)
         return bad(err, name, "header counts out of range");
     /* 64-bit sizes: no overflow for 32-bit counts. */
     uint64_t nodes = (uint64_t)out->node_count * sizeof(sl_octree_node);
     uint64_t ids = out->node_crossing_count * 4;
     uint64_t pos = (uint64_t)out->crossing_count * 12;
     uint64_t col = has_color ? (uint64_t)out->crossing_count * 4 : 0;
+    int dual = (flags & HAS_VERTICES) != 0;
+    uint64_t vfirst = dual ? ((uint64_t)out->node_count + 1) * 4 : 0;
+    uint64_t vpos = (uint64_t)vertex_count * 12, vcol = has_color ? (uint64_t)vertex_count * 4 : 0;
+    uint64_t per_node = dual ? (uint64_t)out->node_count * 4 : 0;
     uint64_t need = HEADER_SIZE + nodes + ids + pos + col;
-    if (need > size)
+    uint64_t need_dual = dual ? vfirst + vpos + vcol + 2 * per_node : 0;
+    if (need > size || need_dual > size - need)
         return bad(err, name, "counts exceed the bytes present");
     p = body + HEADER_SIZE;
     out->nodes = copy_out(p, nodes);
     out->node_crossings = copy_out(p + nodes, ids);
     out->crossing_position = copy_out(p + nodes + ids, pos);
     out->crossing_color = has_color ? copy_out(p + nodes + ids + pos, col) : NULL;
-    if (!out->nodes || !out->node_crossings || !out->crossing_position ||
-        (has_color && !out->crossing_color)) {
+    int failed = !out->nodes || !out->node_crossings || !out->crossing_position ||
+                 (has_color && !out->crossing_color);
+    if (dual && !failed) {
+        const unsigned char *q = body + need;
+        out->vertex_count = vertex_count;
+        out->vertex_first = copy_out(q, vfirst);
+        out->vertex_position = copy_out(q + vfirst, vpos);
+        out->vertex_color = has_color ? copy_out(q + vfirst + vpos, vcol) : NULL;
+        out->node_error = copy_out(q + vfirst + vpos + vcol, per_node);
+        out->node_area = copy_out(q + vfirst + vpos + vcol + per_node, per_node);
+        failed = !out->vertex_first || !out->vertex_position ||
+                 (has_color && !out->vertex_color) || !out->node_error || !out->node_area;
+        need += need_dual;
+    }
+    if (failed) {
         sl_octree_release(out);
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
     }
     int rc = validate(out, name, err);
+    if (rc == 0 && dual)
+        rc = validate_vertices(out, name, err);
     if (rc == 0 && sl_octree_index(out))
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
     if (rc) {

@@ -6,6 +6,11 @@
  *   node crossings  node_crossing_count x u32
  *   crossing positions  crossing_count x 3 x f32
  *   crossing colours    crossing_count x 4 x u8 (only if has_color)
+ *   and with dual vertices (format 2, header flag 1; octree.h):
+ *   vertex_first        (node_count + 1) x u32
+ *   vertex positions    vertex_count x 3 x f32
+ *   vertex colours      vertex_count x 4 x u8 (only if has_color)
+ *   node errors, node areas   node_count x f32 each
  *
  * Parsing checks every count against the bytes present and every index against its
  * table (parents, children, crossing ids, level ranges) before anything is trusted, so a
@@ -22,8 +27,9 @@
 #include "runtime/octree.h"
 
 #define SL_OCTREE_MAGIC "SLOCTREE"
-#define SL_OCTREE_FORMAT_VERSION 1u
-#define SL_OCTREE_PARTS 5
+/* 2: the header has a vertex count and flags; optional dual vertices (octree.h). */
+#define SL_OCTREE_FORMAT_VERSION 2u
+#define SL_OCTREE_PARTS 10
 /* Largest |origin| and root cube edge a file may declare (world units); the root cube
  * itself must lie within twice that of zero. Coordinates any scan has (1e15 units is a
  * light-year in millimetres) keep every product generation forms finite. */

@@ -10,7 +10,9 @@
 #include "stages/merge/merge.h"
 #include "stages/priority/priority.h"
 
-#define CRACK_STAGE_VERSION 1u
+/* 2: dual models (runtime/lod_dual.h): their accumulation table counts dual triangles;
+ * model format 2. */
+#define CRACK_STAGE_VERSION 2u
 
 static int crack_configure(const sl_config *cfg, void **out, sl_error *err)
 {

@@ -83,6 +83,8 @@ typedef struct sl_export_result {
     uint32_t k;
     uint64_t triangles, vertices;
     uint64_t boundary_edges, nonmanifold_edges;
+    uint64_t components;          /* connected parts */
+    double largest_area_fraction; /* the largest part's share of the area (0 without area) */
     int watertight, measured;
     double rms, hausdorff, mean; /* fractions of the input's diagonal, when measured */
     double diagonal;             /* the input's bounding-box diagonal (world), when measured */

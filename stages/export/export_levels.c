@@ -162,6 +162,8 @@ static int measure_level(const sl_export_config *c, const sl_mesh *input, const 
         return rc;
     row->boundary_edges = topo.boundary_edges;
     row->nonmanifold_edges = topo.nonmanifold_edges;
+    row->components = topo.components;
+    row->largest_area_fraction = topo.area > 0 ? topo.largest_component_area / topo.area : 0;
     row->watertight = topo.watertight;
     if (!input || mesh->triangle_count == 0)
         return 0;
@@ -386,6 +388,8 @@ void sl_export_report_result(const sl_export_config *c, const sl_export_frame *f
     sl_json_u64(r, "boundary_edges", row->boundary_edges);
     sl_json_u64(r, "nonmanifold_edges", row->nonmanifold_edges);
     sl_json_bool(r, "watertight", row->watertight);
+    sl_json_u64(r, "components", row->components);
+    sl_json_double(r, "largest_component_area_fraction", row->largest_area_fraction);
     if (row->measured) {
         sl_json_double(r, "rms", row->rms);
         sl_json_double(r, "hausdorff", row->hausdorff);

@@ -27,6 +27,9 @@ extern const sl_stage sl_merge_stage;
 /* The resolved [merge] section (options: stages/merge/merge_stage.c). */
 typedef struct sl_merge_config {
     uint64_t max_samples; /* refuse sample grids with more samples (a memory guard) */
+    int qef_vertices;     /* [octree] vertices = qef: dual vertices from quadrics (else mc:
+                             paper 1's marching-cube triangles) */
+    double qef_tau;       /* [octree] qef_tau: the solve's truncation (sl_qef_solve) */
 } sl_merge_config;
 
 /* The section at its option table's defaults (sl_stage_default_config). */
@@ -45,5 +48,25 @@ typedef struct sl_sample_grid {
 /* Builds the octree; deterministic whatever the thread count. */
 int sl_octree_build(const sl_sample_grid *samples, sl_octree *out, sl_progress *progress,
                     sl_error *err);
+
+/* The input surface the vertices are fitted to: triangles (positions indexed by
+ * triangles), or oriented points each standing for `point_area` of surface. */
+typedef struct sl_surface {
+    uint64_t point_count;
+    const float *positions; /* 3 * point_count, world */
+    const float *normals;   /* 3 * point_count (points only; may be NULL with triangles) */
+    const uint8_t *colors;  /* 4 * point_count RGBA, or NULL */
+    uint64_t triangle_count;
+    const uint32_t *triangles;
+    double point_area;      /* world^2 per point, when there are no triangles */
+    int open;               /* trim the loops of cells that hold none of the surface (an
+                               open scan: no surface across its holes) */
+} sl_surface;
+
+/* Dual vertices of every node from the quadrics of `s` (octree_vertices.c; octree.h
+ * "Vertices"): fills vertex_first, vertex_position, vertex_color (when the tree has
+ * colours and `s` has), node_error and node_area. `tau`: sl_qef_solve's truncation.
+ * Deterministic whatever the thread count. */
+int sl_octree_vertices(sl_octree *t, const sl_surface *s, double tau, sl_error *err);
 
 #endif

@@ -2,25 +2,43 @@
 #include <errno.h>
 #include <limits.h>
 #include <stdlib.h>
+#include <string.h>
 
+#include "geometry/mesh_distance.h"
 #include "runtime/octree_io.h"
 #include "shim/vdb_shim.h"
 #include "stages/merge/merge.h"
+#include "stages/range/range.h"
 #include "stages/samples/samples.h"
 
 /* 2: refuses an octree whose grid its readers would refuse (SL_OCTREE_MAX_EXTENT), so a
  * work folder holding such an octree from version 1 rebuilds it and quarantines the item
  * instead of failing at the next stage on every run.
  * 3: refuses samples whose finest level has no triangle (issue 16: such items were
- * published as a success with empty levels); a work folder from version 2 rebuilds. */
-#define MERGE_STAGE_VERSION 3u
+ * published as a success with empty levels); a work folder from version 2 rebuilds.
+ * 4: octree format 2; optional dual vertices from quadrics of the input surface
+ * ([octree] vertices = qef; the default stays mc, paper 1's triangles, until every cut
+ * of a qef model is watertight: docs/lod.md, Vertices from quadrics). */
+#define MERGE_STAGE_VERSION 4u
 
 static const sl_option merge_options[] = {
     {"merge", "max_samples", SL_OPT_INT, "2147483647", 1, 4294967295.0, NULL,
      "Refuse sample grids with more samples than this (memory guard: about 60 bytes per "
      "sample while the octree is built)."},
+    {"octree", "vertices", SL_OPT_ENUM, "mc", 0, 0, "mc|qef",
+     "Where a level's vertices go. 'qef': one vertex per marching-cube loop of a cell, "
+     "where the quadric of the input surface the loop stands for is least (dual "
+     "contouring of the cell's surface: sharp edges and corners kept, vertices on the "
+     "scan, an open scan trimmed at its border; docs/lod.md, Vertices from quadrics). "
+     "'mc' (the default): paper 1's marching-cube triangles, vertices on the cell edges."},
+    {"octree", "qef_tau", SL_OPT_DOUBLE, "0.02", 0.0001, 0.9, NULL,
+     "qef: directions in which the quadric is flatter than this fraction of its steepest "
+     "are left at the surface's mean point (keeps vertices of flat and smooth parts on "
+     "their surface; smaller follows weaker features, and noise)."},
     SL_OPTION_END,
 };
+
+static const char *const merge_sections[] = {"merge", "octree", NULL};
 
 static int merge_configure(const sl_config *cfg, void **out, sl_error *err)
 {
@@ -28,6 +46,8 @@ static int merge_configure(const sl_config *cfg, void **out, sl_error *err)
     if (!c)
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     c->max_samples = (uint64_t)sl_config_int(cfg, "merge", "max_samples");
+    c->qef_vertices = !strcmp(sl_config_string(cfg, "octree", "vertices"), "qef");
+    c->qef_tau = sl_config_double(cfg, "octree", "qef_tau");
     *out = c;
     return 0;
 }
@@ -58,6 +78,49 @@ static void report_octree(sl_json *r, const sl_octree *t)
     sl_json_u64(r, "D_centre", t->stats.sign_case[3]);
     sl_json_object_end(r);
     sl_json_bool(r, "colors", t->crossing_color != NULL);
+    sl_json_string(r, "vertices", sl_octree_dual(t) ? "qef" : "mc");
+    if (sl_octree_dual(t))
+        sl_json_u64(r, "dual_vertices", t->vertex_count);
+}
+
+/* Whether the mesh has boundary edges (an open scan). */
+static int surface_open(const sl_pointset *ps, sl_error *err, int *open)
+{
+    sl_mesh view = sl_mesh_view(ps->count, ps->positions, NULL, NULL, ps->triangle_count,
+                                ps->triangles);
+    sl_mesh_topology topo;
+    int rc = sl_mesh_topology_compute(&view, &topo, err);
+    *open = rc == 0 && topo.boundary_edges > 0;
+    return rc;
+}
+
+/* The quadric vertices, from the range stage's points (and triangles). */
+static int place_vertices(const sl_merge_config *c, const sl_stage_io *io, sl_octree *tree,
+                          sl_error *err)
+{
+    const char *range_dir = sl_stage_dir(io, "range");
+    if (!range_dir)
+        return sl_error_set(err, SL_E_INTERNAL, 0, NULL, "merge needs the range stage's points");
+    char path[PATH_MAX];
+    sl_pointset ps;
+    int rc = sl_stage_path(path, range_dir, SL_POINTSET_FILE, err);
+    if (rc == 0)
+        rc = sl_pointset_read(path, &ps, err);
+    if (rc)
+        return rc;
+    int open = 0;
+    if (ps.triangle_count)
+        rc = surface_open(&ps, err, &open);
+    sl_surface s = {ps.count, ps.positions, ps.normals, ps.colors, ps.triangle_count,
+                    ps.triangles, ps.mean_spacing * ps.mean_spacing, open};
+    if (rc == 0)
+        rc = sl_stage_step(io, "merge: vertices", 0.8, err);
+    if (rc == 0)
+        rc = sl_octree_vertices(tree, &s, c->qef_tau, err);
+    if (rc == 0)
+        sl_json_bool(io->report, "trimmed_open_surface", open);
+    sl_pointset_release(&ps);
+    return rc;
 }
 
 static int merge_run(const void *config, const sl_stage_io *io, sl_error *err)
@@ -81,7 +144,10 @@ static int merge_run(const void *config, const sl_stage_io *io, sl_error *err)
     sl_vdb_samples_release(&samples);
     if (rc)
         return rc;
-    rc = sl_octree_write(out_path, &tree, MERGE_STAGE_VERSION, err);
+    if (c->qef_vertices)
+        rc = place_vertices(c, io, &tree, err);
+    if (rc == 0)
+        rc = sl_octree_write(out_path, &tree, MERGE_STAGE_VERSION, err);
     if (rc == 0)
         report_octree(io->report, &tree);
     sl_octree_release(&tree);
@@ -94,6 +160,7 @@ const sl_stage sl_merge_stage = {
     .description = "signed samples -> marching-cube octree (paper 1 section 2.2)",
     .version = MERGE_STAGE_VERSION,
     .options = merge_options,
+    .sections = merge_sections,
     .configure = merge_configure,
     .release_config = free,
     .run = merge_run,

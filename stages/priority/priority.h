@@ -52,7 +52,10 @@ typedef enum sl_priority_metric {
                               added (greedy rate-distortion); the default */
     SL_PRIORITY_HAUSDORFF, /* largest distance to the finest surface, saturated over the
                               subtree */
-    SL_PRIORITY_AREA       /* the paper's M_r, with the paper's waiting rule */
+    SL_PRIORITY_AREA,      /* the paper's M_r, with the paper's waiting rule */
+    SL_PRIORITY_QEF,       /* dual vertices (octree.h): the quadric error an expansion
+                              removes per triangle it adds */
+    SL_PRIORITY_AUTO       /* qef for an octree with dual vertices, else error */
 } sl_priority_metric;
 
 /* The resolved [priority] section (options: stages/priority/priority_stage.c). */
@@ -63,15 +66,17 @@ typedef struct sl_priority_config {
 /* The section at its option table's defaults (sl_stage_default_config). */
 sl_priority_config sl_priority_default_config(void);
 
-/* "error", "hausdorff", "area" -> metric; -1 for another name. And back. */
+/* "error", "hausdorff", "area", "qef", "auto" -> metric; -1 for another name. And back. */
 int sl_priority_metric_parse(const char *name);
 const char *sl_priority_metric_name(sl_priority_metric metric);
 
-/* M_r and node errors for every node (OpenMP over nodes). */
+/* M_r and node errors for every node (OpenMP over nodes). With dual vertices the node
+ * error is the RMS distance its quadric stands for, sqrt(node_error / node_area) (the
+ * marching-cube error does not describe what is drawn). */
 int sl_priority_metrics(const sl_octree *t, float *area_difference, float *node_error);
 
 /* The expansion key of every node under `metric` (OpenMP over nodes; AREA copies
- * area_difference). Deterministic. -1 on OOM. */
+ * area_difference; QEF needs the tree's dual vertices). Deterministic. -1 on OOM. */
 int sl_priority_keys(const sl_octree *t, sl_priority_metric metric, const float *area_difference,
                      float *key);
 

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "geometry/triangle_bvh.h"
+#include "runtime/lod_dual.h"
 #include "stages/priority/priority.h"
 
 /* The node's uniform marching-cube triangles as world positions; returns the count. */
@@ -78,11 +79,11 @@ static double node_error(const sl_octree *t, const sl_octree_node *n)
     return worst;
 }
 
-static const char *const metric_names[] = {"error", "hausdorff", "area"};
+static const char *const metric_names[] = {"error", "hausdorff", "area", "qef", "auto"};
 
 int sl_priority_metric_parse(const char *name)
 {
-    for (int i = 0; i < 3; i++)
+    for (int i = 0; i < 5; i++)
         if (!strcmp(name, metric_names[i]))
             return i;
     return -1;
@@ -109,7 +110,12 @@ int sl_priority_metrics(const sl_octree *t, float *area_difference, float *error
         for (int c = 0; c < kids; c++)
             sum += area[n->first_child + (uint32_t)c];
         area_difference[i] = kids ? (float)(sum - area[i]) : 0.0f;
-        error[i] = kids ? (float)node_error(t, n) : 0.0f;
+        if (sl_octree_dual(t))
+            error[i] = kids && t->node_area[i] > 0
+                           ? (float)sqrt((double)t->node_error[i] / t->node_area[i])
+                           : 0.0f;
+        else
+            error[i] = kids ? (float)node_error(t, n) : 0.0f;
     }
     free(area);
     return 0;
@@ -194,12 +200,43 @@ static void saturate(const sl_octree *t, float *key)
     }
 }
 
+/* Loops a node draws in a uniform cut: its own, unless it has no vertex. */
+static int drawn_loops(const sl_octree *t, uint32_t i)
+{
+    if (t->vertex_first[i + 1] == t->vertex_first[i])
+        return 0;
+    return sl_dual_uniform_table()[t->nodes[i].inside].loops;
+}
+
+/* qef: the quadric error expanding r removes, per triangle it adds (a dual mesh has about
+ * two triangles per vertex, one vertex per drawn loop). */
+static void qef_keys(const sl_octree *t, float *key)
+{
+#pragma omp parallel for schedule(static)
+    for (uint32_t i = 0; i < t->node_count; i++) {
+        const sl_octree_node *r = &t->nodes[i];
+        int kids = __builtin_popcount(r->child_mask), loops = -drawn_loops(t, i);
+        double removed = t->node_error[i];
+        for (int c = 0; c < kids; c++) {
+            removed -= t->node_error[r->first_child + (uint32_t)c];
+            loops += drawn_loops(t, r->first_child + (uint32_t)c);
+        }
+        key[i] = kids ? (float)(removed / fmax(2.0 * loops, 1.0)) : 0.0f;
+    }
+}
+
 int sl_priority_keys(const sl_octree *t, sl_priority_metric metric, const float *area_difference,
                      float *key)
 {
     uint32_t n = t->node_count;
     if (metric == SL_PRIORITY_AREA) {
         memcpy(key, area_difference, (size_t)n * sizeof *key);
+        return 0;
+    }
+    if (metric == SL_PRIORITY_QEF) {
+        if (!sl_octree_dual(t))
+            return -1;
+        qef_keys(t, key);
         return 0;
     }
     double *worst = malloc((n ? n : 1) * sizeof *worst), *squares = malloc((n ? n : 1) * sizeof *squares);

@@ -10,7 +10,8 @@
 #include "stages/merge/merge.h"
 #include "stages/priority/priority.h"
 
-#define PRIORITY_STAGE_VERSION 2u /* 2: error-driven order by default */
+#define PRIORITY_STAGE_VERSION 3u /* 2: error-driven order by default; 3: metric auto (qef
+                                      on octrees with dual vertices) by default */
 #define PRIORITY_MAGIC "SLPRIORI"
 #define PRIORITY_FORMAT_VERSION 1u
 
@@ -120,9 +121,12 @@ int sl_priority_read(const char *path, const sl_octree *t, sl_priority *out, sl_
 }
 
 static const sl_option priority_options[] = {
-    {"priority", "metric", SL_OPT_ENUM, "error", 0, 0, "error|hausdorff|area",
+    {"priority", "metric", SL_OPT_ENUM, "auto", 0, 0, "auto|qef|error|hausdorff|area",
      "What orders the node expansions, so what the levels between the coarsest and the "
-     "finest look like. error: the squared distance to the finest surface that an "
+     "finest look like. auto: qef when the octree has quadric vertices ([octree] vertices "
+     "= qef), else error. qef: the quadric error (squared distance of the input surface to "
+     "the vertices' tangent planes) an expansion removes, per triangle it adds. error: "
+     "the squared distance to the finest surface that an "
      "expansion removes, per triangle it adds (lowest RMS at a triangle count); hausdorff: "
      "the largest distance to the finest surface anywhere below a node first; area: the "
      "paper's area difference M_r, in the paper's order (docs/lod.md, \"The priority "
@@ -165,6 +169,14 @@ static int priority_run(const void *config, const sl_stage_io *io, sl_error *err
         rc = sl_octree_read(in_path, &tree, err);
     if (rc)
         return rc;
+    sl_priority_metric metric = c->metric;
+    if (metric == SL_PRIORITY_AUTO)
+        metric = sl_octree_dual(&tree) ? SL_PRIORITY_QEF : SL_PRIORITY_ERROR;
+    if (metric == SL_PRIORITY_QEF && !sl_octree_dual(&tree)) {
+        sl_octree_release(&tree);
+        return sl_error_set(err, SL_E_CONFIG, 0, "[priority] metric",
+                            "qef needs quadric vertices: set [octree] vertices = qef");
+    }
     sl_priority p;
     memset(&p, 0, sizeof p);
     p.node_count = tree.node_count;
@@ -184,12 +196,12 @@ static int priority_run(const void *config, const sl_stage_io *io, sl_error *err
     if (rc == 0)
         rc = sl_stage_step(io, "priority: keys", 0.4, err);
     float *key = rc == 0 ? malloc((tree.node_count ? tree.node_count : 1) * sizeof *key) : NULL;
-    if (rc == 0 && (!key || sl_priority_keys(&tree, c->metric, p.area_difference, key)))
+    if (rc == 0 && (!key || sl_priority_keys(&tree, metric, p.area_difference, key)))
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     if (rc == 0)
         rc = sl_stage_step(io, "priority: order", 0.8, err);
     if (rc == 0)
-        rc = sl_priority_order(&tree, &p.neighbours, key, c->metric != SL_PRIORITY_AREA,
+        rc = sl_priority_order(&tree, &p.neighbours, key, metric != SL_PRIORITY_AREA,
                                p.lod_array, &p.expansion_count, err);
     free(key);
     if (rc == 0)
@@ -200,7 +212,7 @@ static int priority_run(const void *config, const sl_stage_io *io, sl_error *err
             total += p.area_difference[p.lod_array[i]];
             top = fmax(top, p.area_difference[p.lod_array[i]]);
         }
-        sl_json_string(io->report, "metric", sl_priority_metric_name(c->metric));
+        sl_json_string(io->report, "metric", sl_priority_metric_name(metric));
         sl_json_u64(io->report, "expansions", p.expansion_count);
         sl_json_double(io->report, "area_difference_total", total);
         sl_json_double(io->report, "area_difference_max", top);

@@ -55,6 +55,14 @@ check "model: the finest cut's triangles ($finest) as the report says" grep -qx 
 for key in grid nodes crossings "lod array" error "transition records"; do
   check "model: says its $key" grep -q "^$key: " <<<"$out"
 done
+check "model: says its vertices are paper 1's (the default)" grep -q "^vertices: mc (" <<<"$out"
+# With quadric vertices: how many, and the finest cut as the report says.
+"$SCANLOD" run "$TMP/c.ini" -q -s octree.vertices=qef -s run.output="$TMP/out-qef"
+inspect "$TMP/out-qef/bun_zipper_res4.ply/model.slod"
+check "qef model: exit 0 ($err)" [ "$rc" -eq 0 ]
+check "qef model: says how many quadric vertices it has ($out)" grep -Eq "^vertices: qef, [1-9][0-9]* quadric vertices" <<<"$out"
+finest=$(python3 -c "import json; print(json.load(open('$TMP/out-qef/bun_zipper_res4.ply/report.json'))['stages']['export']['triangles_finest'])")
+check "qef model: the finest cut's triangles ($finest) as the report says" grep -qx "triangles: [0-9]* at the root, $finest at the finest cut" <<<"$out"
 head -c 4000 "$model" >"$TMP/cut.slod"
 inspect "$TMP/cut.slod"
 check "truncated model: exit 65, one line naming it ($err)" [ "$rc" -eq 65 ] && grep -q "^scanlod: $TMP/cut.slod: header declares" <<<"$err"

@@ -10,7 +10,8 @@
  * terms (docs/formats.md): the LOD array reordered, table entries, transition record
  * bits, neighbour masks and indices, crossing ids and positions, corner signs with their
  * edge mask recomputed, the grid's leaf size and origin, the grid collapsed onto one
- * point. They keep the counts the reader checks and change what it trusts.
+ * point, and in a model with dual vertices their positions, ranges, errors and areas.
+ * They keep the counts the reader checks and change what it trusts.
  */
 #include <math.h>
 #include <stdint.h>
@@ -37,12 +38,13 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 /* Counts and byte offsets of the body's sections (layout_of fails when the body does not
  * hold them exactly). */
 typedef struct body_layout {
-    uint64_t n, cc, e, nbc, tc;
+    uint64_t n, cc, e, nbc, tc, vc;
     size_t nodes, node_crossings, ncc, positions;
+    size_t vertex_first, vertex_positions, node_error; /* dual vertices (vc > 0) */
     size_t lod_array, accumulation, error_after, nb_mask, nb_index, tr_base, tr_words;
 } body_layout;
 
-#define OCTREE_HEADER 272
+#define OCTREE_HEADER 288
 #define LOD_HEADER 24
 
 static int layout_of(const uint8_t *d, size_t size, body_layout *l)
@@ -55,10 +57,22 @@ static int layout_of(const uint8_t *d, size_t size, body_layout *l)
     l->ncc = sl_get_u64(d + 16);
     if (l->ncc > size || l->n > size)
         return -1;
+    l->vc = sl_get_u32(d + 272);
+    int dual = sl_get_u32(d + 276) & 1;
+    if (l->vc > size)
+        return -1;
     l->nodes = OCTREE_HEADER;
     l->node_crossings = l->nodes + 32 * l->n;
     l->positions = l->node_crossings + 4 * l->ncc;
     size_t lod = l->positions + (12 + colour) * l->cc;
+    if (dual) {
+        l->vertex_first = lod;
+        l->vertex_positions = l->vertex_first + 4 * (l->n + 1);
+        l->node_error = l->vertex_positions + (12 + colour) * l->vc;
+        lod = l->node_error + 8 * l->n;
+    } else {
+        l->vc = 0;
+    }
     if (lod + LOD_HEADER > size)
         return -1;
     l->e = sl_get_u32(d + lod);
@@ -101,7 +115,7 @@ static uint32_t node_with_record(const uint8_t *d, const body_layout *l, uint64_
 static void mutate_in_terms(uint8_t *d, const body_layout *l, uint64_t *s)
 {
     uint64_t r = next(s);
-    switch (r % 12) {
+    switch (r % 13) {
     case 0: /* two nearby LOD array entries swapped */
         if (l->e >= 2) {
             uint64_t i = next(s) % (l->e - 1), j = i + 1 + next(s) % 8;
@@ -190,6 +204,23 @@ static void mutate_in_terms(uint8_t *d, const body_layout *l, uint64_t *s)
             if (next(s) & 1)
                 v = nextafterf(v, INFINITY);
             memcpy(d + l->positions + 4 * i, &v, 4);
+        }
+        break;
+    }
+    case 11: { /* a dual vertex: a coordinate extreme or another's; a range end moved; a
+                  node error or area negative, huge or not a number */
+        if (!l->vc)
+            break;
+        static const float values[] = {0.0f, 1e30f, -3.4e38f, 1e-40f, -1.0f, NAN};
+        uint64_t what = next(s) % 3;
+        float v = values[next(s) % 6];
+        if (what == 0) {
+            memcpy(d + l->vertex_positions + 4 * (next(s) % (3 * l->vc)), &v, 4);
+        } else if (what == 1) {
+            size_t at = l->vertex_first + 4 * (1 + next(s) % l->n);
+            put32(d, at, get32(d, at) + (next(s) & 1 ? 1u : UINT32_MAX));
+        } else {
+            memcpy(d + l->node_error + 4 * (next(s) % (2 * l->n)), &v, 4);
         }
         break;
     }

@@ -36,6 +36,21 @@ static inline uint64_t bad_edges(const sl_lod_mesh *m)
     return bad;
 }
 
+/* Volume enclosed by a closed mesh, positive when its triangles face outwards. */
+static inline double signed_volume(const sl_lod_mesh *m)
+{
+    double v = 0;
+    for (uint64_t t = 0; t < m->triangle_count; t++) {
+        const float *a = m->positions + 3 * (size_t)m->indices[3 * t];
+        const float *b = m->positions + 3 * (size_t)m->indices[3 * t + 1];
+        const float *c = m->positions + 3 * (size_t)m->indices[3 * t + 2];
+        v += ((double)a[0] * ((double)b[1] * c[2] - (double)b[2] * c[1]) -
+              (double)a[1] * ((double)b[0] * c[2] - (double)b[2] * c[0]) +
+              (double)a[2] * ((double)b[0] * c[1] - (double)b[1] * c[0])) / 6;
+    }
+    return v;
+}
+
 /* Does some frontier cell touch a frontier cell 2 or more levels coarser? For each of the 26
  * positions around frontier cell a (at a's level), walk up from level a + 1 to the first
  * node that exists over the position: if it is expanded, what covers the position is finer

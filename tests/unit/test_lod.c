@@ -2,7 +2,9 @@
  * count K: neighbouring frontier cells differ by less than 2 levels, the accumulation table
  * equals the triangles actually generated, every mesh is watertight (no cracks), and a
  * .slod roundtrip is exact and hostile files are refused. The order is the same on 1
- * and 2 threads. */
+ * and 2 threads. Under the qef metric the models have quadric vertices (the dual of the
+ * marching-cube surface, runtime/lod_dual.h), fitted to the finest marching-cube surface,
+ * and their meshes face outwards. */
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
@@ -81,6 +83,25 @@ static int build_model(sdf_fn sdf, int n, sl_priority_metric metric, sl_lod_mode
     int rc = sl_octree_build(&g, &m->tree, NULL, &err);
     free(coords);
     free(dist);
+    if (rc == 0 && metric == SL_PRIORITY_QEF) { /* vertices fitted to the finest surface */
+        sl_lod_mesh leaves;
+        rc = sl_octree_level_mesh(&m->tree, 0, &leaves);
+        sl_surface surface = {leaves.vertex_count, leaves.positions, NULL, NULL,
+                              leaves.triangle_count, leaves.indices, 0, 0};
+        omp_set_num_threads(1);
+        rc = rc || sl_octree_vertices(&m->tree, &surface, 0.02, &err);
+        uint32_t vertices_one = m->tree.vertex_count;
+        float *one = malloc((vertices_one ? vertices_one : 1) * 12);
+        if (!rc)
+            memcpy(one, m->tree.vertex_position, vertices_one * 12);
+        omp_set_num_threads(2);
+        rc = rc || sl_octree_vertices(&m->tree, &surface, 0.02, &err);
+        CHECK_MSG(rc || (vertices_one == m->tree.vertex_count &&
+                         memcmp(one, m->tree.vertex_position, vertices_one * 12) == 0),
+                  "the vertices differ between 1 and 2 threads");
+        free(one);
+        sl_lod_mesh_release(&leaves);
+    }
     if (rc)
         return rc;
     uint32_t nodes = m->tree.node_count;
@@ -226,6 +247,36 @@ static void test_hostile_files(sl_lod_model *m, const char *path)
     sl_lod_model_release(&back);
 }
 
+/* A dual model's hostile vertex sections: a vertex outside its node's cube, a node with
+ * more vertices than loops, ranges out of order, a negative node area; each refused. */
+static void test_hostile_vertices(sl_lod_model *m, const char *path)
+{
+    sl_octree *t = &m->tree;
+    uint32_t node = SL_OCTREE_NONE;
+    for (uint32_t i = 0; i < t->node_count && node == SL_OCTREE_NONE; i++)
+        if (t->vertex_first[i + 1] > t->vertex_first[i] && t->nodes[i].level > 0)
+            node = i;
+    CHECK(node != SL_OCTREE_NONE);
+    if (node == SL_OCTREE_NONE)
+        return;
+    uint32_t v = t->vertex_first[node];
+    float saved = t->vertex_position[3 * v];
+    t->vertex_position[3 * v] += (float)(4 * t->leaf_size * (double)(1u << t->nodes[node].level));
+    expect_refused(m, path, "vertex outside its cube", "vertex outside its node's cube");
+    t->vertex_position[3 * v] = saved;
+    t->vertex_first[node + 1]++; /* one vertex more, taken from the next node */
+    expect_refused(m, path, "more vertices than loops", "vertex count does not match");
+    t->vertex_first[node + 1]--;
+    uint32_t first = t->vertex_first[node];
+    t->vertex_first[node] = t->vertex_first[node + 1] + 1;
+    expect_refused(m, path, "ranges out of order", "vertex");
+    t->vertex_first[node] = first;
+    float area = t->node_area[node];
+    t->node_area[node] = -1;
+    expect_refused(m, path, "negative area", "node error or area");
+    t->node_area[node] = area;
+}
+
 static void test_model(sdf_fn sdf, int n, sl_priority_metric metric, const char *shape)
 {
     char name[64];
@@ -257,6 +308,14 @@ static void test_model(sdf_fn sdf, int n, sl_priority_metric metric, const char 
     CHECK_MSG(incomplete_total == 0, "%s: %llu cells lacked transition data", name,
               (unsigned long long)incomplete_total);
     CHECK(m.accumulation[0] < m.accumulation[m.expansion_count]);
+    if (sl_octree_dual(&m.tree)) { /* counter-clockwise seen from outside at every 10 % */
+        for (int p = 10; p <= 100; p += 10) {
+            sl_lod_mesh mesh;
+            CHECK(sl_lod_generate(&m, sl_lod_expansions_for_percent(&m, p), &mesh, NULL) == 0);
+            CHECK_MSG(signed_volume(&mesh) > 0, "%s at %d %%: the dual faces inwards", name, p);
+            sl_lod_mesh_release(&mesh);
+        }
+    }
     /* Error table: non-increasing, zero at the finest level, and K(E) meets E. */
     for (uint32_t k = 0; k < m.expansion_count; k++)
         CHECK(m.error_after[k] >= m.error_after[k + 1]);
@@ -362,6 +421,10 @@ static void test_model(sdf_fn sdf, int n, sl_priority_metric metric, const char 
         test_hostile_files(&m, path);
         test_level_check_catches_a_dive(&m);
     }
+    if (metric == SL_PRIORITY_QEF) {
+        test_hostile_vertices(&m, path);
+        test_hostile_files(&m, path);
+    }
     unlink(path);
     sl_lod_model_release(&m);
 }
@@ -375,7 +438,7 @@ static void write_fuzz_seeds(const char *dir)
     const char *names[] = {"tiny", "sphere", "torus"};
     int sizes[] = {3, 5, 7};
     for (int s = 0; s < 3; s++)
-        for (int metric = SL_PRIORITY_ERROR; metric <= SL_PRIORITY_AREA; metric++) {
+        for (int metric = SL_PRIORITY_ERROR; metric <= SL_PRIORITY_QEF; metric++) {
             sl_lod_model m;
             char path[1200], seed[1200];
             snprintf(path, sizeof path, "%s/%s-%s.slod", dir, names[s],
@@ -406,7 +469,10 @@ int main(void)
         write_fuzz_seeds(seed_dir);
         return check_report();
     }
-    for (int metric = SL_PRIORITY_ERROR; metric <= SL_PRIORITY_AREA; metric++) {
+    const char *only = getenv("SCANLOD_TEST_METRIC"); /* one metric, when iterating on it */
+    for (int metric = SL_PRIORITY_ERROR; metric <= SL_PRIORITY_QEF; metric++) {
+        if (only && only[0] && strcmp(only, sl_priority_metric_name((sl_priority_metric)metric)))
+            continue;
         test_model(blob_sdf, 13, (sl_priority_metric)metric, "blob");
         test_model(torus_sdf, 14, (sl_priority_metric)metric, "torus");
     }
