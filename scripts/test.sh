@@ -23,9 +23,8 @@ grep -q "^nothing to do" "$demo_log" || { cat "$demo_log"; echo "demo rerun did 
 
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-# The unoptimised sanitizer build checks memory safety; the 200 expansion counts of the
-# large shared models are checked by the first pass (test_lod_shared).
-export SCANLOD_LOD_CHECK_SAMPLES=20
+# The unoptimised sanitizer build checks memory safety on small data: its tests get
+# SCANLOD_LIGHT=1 (tests/CMakeLists.txt); the large inputs and every K are the first pass's.
 "$root/scripts/build.sh" "$root/build-asan" -DSCANLOD_SANITIZE=ON -DSCANLOD_BENCH=OFF \
   -DCMAKE_BUILD_TYPE=Debug
 # Tests labelled release-only (a Slurm cluster of their own) run in the first pass only.
