@@ -215,7 +215,7 @@ static int extract_level(const request *r)
     }
     sl_lod_mesh mesh;
     int rc = sl_octree_level_mesh(&tree, (uint32_t)r->count, &mesh);
-    if (rc == 0 && sl_export_write_mesh(r->output, &mesh, NULL, &err) == 0)
+    if (rc == 0 && sl_export_write_mesh(r->output, &mesh, NULL, NULL, NULL, &err) == 0)
         printf("level %llu: %llu triangles, %llu vertices -> %s\n", (unsigned long long)r->count,
                (unsigned long long)mesh.triangle_count, (unsigned long long)mesh.vertex_count,
                r->output);
@@ -370,7 +370,7 @@ int sl_cmd_extract(int argc, char **argv)
     else if (r.repeat)
         snprintf(warm, sizeof warm, ", then %ld more in median %.7f s (min %.7f s, %s)",
                  r.repeat, median, min, r.hot ? "back to back" : "caches flushed");
-    if (err.code == SL_OK && sl_export_write_mesh(r.output, &mesh, extras, &err) == 0)
+    if (err.code == SL_OK && sl_export_write_mesh(r.output, &mesh, extras, NULL, NULL, &err) == 0)
         printf("expansions %u of %u: %llu triangles, %llu vertices, max error %.6g, "
                "generated in %.7f s%s -> %s\n",
                k, model.expansion_count, (unsigned long long)mesh.triangle_count,

@@ -33,6 +33,8 @@ typedef struct sl_mesh {
     int64_t *grid_index;
 
     char texture_file[256];  /* from `comment TextureFile NAME`, "" if none */
+    char units[4];           /* `comment units NAME`: "mm", "cm", "m", "in", "ft"; "" if none */
+    char up_axis;            /* `comment up AXIS`: 'y' or 'z'; 0 if none */
     int has_viewpoint;       /* the file states where the scanner was */
     double viewpoint[3];     /* world */
 

@@ -181,3 +181,21 @@ int sl_ply_read(const char *path, const sl_ply_limits *limits, sl_mesh *out, sl_
         munmap(map, size);
     return rc;
 }
+
+/* A texture name must stay inside the PLY's directory tree. */
+static int texture_name_inside(const char *name)
+{
+    if (!name[0] || name[0] == '/')
+        return 0;
+    for (const char *p = name; *p; p++)
+        if (p[0] == '.' && p[1] == '.' && (p == name || p[-1] == '/') && (p[2] == '/' || !p[2]))
+            return 0;
+    return 1;
+}
+
+int sl_ply_texture_path(const char *dir, const char *name, char *out, size_t size)
+{
+    if (!dir || !texture_name_inside(name))
+        return -1;
+    return snprintf(out, size, "%s/%s", dir, name) < (int)size ? 0 : -2;
+}

@@ -66,6 +66,12 @@ int sl_ply_read_memory(const void *data, size_t size, const char *name,
                        const sl_ply_limits *limits, sl_mesh *out, sl_ply_info *info,
                        sl_error *err);
 
+/* The texture file a PLY names (`comment TextureFile NAME`, sl_mesh.texture_file): NAME
+ * relative to `dir`, the PLY's directory, into `out`. -1 for an absolute name or one with
+ * a `..` component (a scan must not make us read outside its folder), -2 when the path
+ * does not fit; 0 otherwise. */
+int sl_ply_texture_path(const char *dir, const char *name, char *out, size_t size);
+
 /* Writes a binary little-endian PLY with positions, and normals/colours when present,
  * through the atomic-write helper (nothing visible at `path` until complete). */
 int sl_ply_write(const char *path, const sl_mesh *mesh, sl_error *err);

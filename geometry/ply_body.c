@@ -358,6 +358,8 @@ static int alloc_mesh(ply_reader *r)
     snprintf(m->texture_file, sizeof m->texture_file, "%s", h->texture_file);
     m->has_viewpoint = h->has_viewpoint;
     memcpy(m->viewpoint, h->viewpoint, sizeof m->viewpoint);
+    memcpy(m->units, h->units, sizeof m->units);
+    m->up_axis = h->up_axis;
     return rc;
 }
 

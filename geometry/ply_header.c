@@ -352,6 +352,45 @@ static void handle_viewpoint(header_parser *hp)
     hp->h->has_viewpoint = 1;
 }
 
+/* `t` equals one of the '|'-separated words of `words`, ignoring case and one trailing
+ * ':' or '=' ("Units:" reads as "units"). */
+static int tok_among(const token *t, const char *words)
+{
+    size_t n = t->n && strchr(":=", t->s[t->n - 1]) ? t->n - 1 : t->n;
+    for (const char *w = words; *w;) {
+        size_t len = strcspn(w, "|");
+        if (len == n && n && strncasecmp(w, t->s, n) == 0)
+            return 1;
+        w += len + (w[len] == '|');
+    }
+    return 0;
+}
+
+/* Unit and up-axis hints (docs/glb.md "Units and up axis"): `comment units mm` (or unit,
+ * with the unit's name spelt out, singular or plural) and `comment up z` (or up_axis,
+ * upaxis, up-axis; also a lone `comment Z-up`). Any other comment is free text. */
+static void handle_frame_hint(header_parser *hp)
+{
+    static const struct { const char *canonical, *words; } units[] = {
+        {"mm", "mm|millimeter|millimeters|millimetre|millimetres"},
+        {"cm", "cm|centimeter|centimeters|centimetre|centimetres"},
+        {"m", "m|meter|meters|metre|metres"},
+        {"in", "in|inch|inches"},
+        {"ft", "ft|foot|feet"}};
+    const token *key = &hp->tok[1], *value = hp->ntok >= 3 ? &hp->tok[2] : NULL;
+    if (hp->ntok == 2 && tok_among(key, "y-up|z-up"))
+        hp->h->up_axis = (char)(key->s[0] | 0x20);
+    if (hp->ntok != 3)
+        return;
+    if (tok_among(key, "units|unit")) {
+        for (size_t i = 0; i < sizeof units / sizeof units[0]; i++)
+            if (tok_among(value, units[i].words))
+                snprintf(hp->h->units, sizeof hp->h->units, "%s", units[i].canonical);
+    } else if (tok_among(key, "up|up_axis|upaxis|up-axis") && tok_among(value, "y|z|+y|+z")) {
+        hp->h->up_axis = (char)(value->s[value->n - 1] | 0x20);
+    }
+}
+
 static int handle_comment(header_parser *hp)
 {
     ply_header *h = hp->h;
@@ -361,6 +400,7 @@ static int handle_comment(header_parser *hp)
         handle_viewpoint(hp);
         return 0;
     }
+    handle_frame_hint(hp);
     if (hp->ntok < 3 || hp->tok[1].n != 11 || strncasecmp(hp->tok[1].s, "TextureFile", 11) != 0)
         return 0;
     const char *s = hp->tok[2].s, *e = hp->line_end;

@@ -71,6 +71,8 @@ typedef struct ply_header {
     int has_viewpoint;              /* from a comment/obj_info line */
     double viewpoint[3];
     char texture_file[256];
+    char units[4];                  /* from `comment units NAME`, canonical ("mm"), or "" */
+    char up_axis;                   /* from `comment up AXIS`: 'y', 'z', or 0 */
     /* indices into elements, -1 when absent; only the first camera/range_grid counts */
     int vertex_element, face_element, camera_element, grid_element;
     uint8_t role_seen[ROLE_COUNT_];   /* roles present in vertex/face/camera/grid */

@@ -1,7 +1,12 @@
 /* The collection summary: OUTPUT/summary.json (every published item's report, and the
- * quarantined items with their reasons) and OUTPUT/summary.md (per item the export stage's
- * summary-item.md: a Table-1-style table and the thumbnails; then the quarantine list). Both are
- * rewritten atomically at the end of every `scanlod run`. */
+ * quarantined items with their reasons), OUTPUT/summary.md (per item the export stage's
+ * summary-item.md: a Table-1-style table and the thumbnails; then the quarantine list) and
+ * OUTPUT/summary.html (the same from each item's summary-item.html, with a 3D view per
+ * item: docs/formats.md, "The HTML report"). All are rewritten atomically at the end of
+ * every `scanlod run`.
+ *
+ * summary.html runs the viewer bundle from OUTPUT/scanlod-viewer.js, a copy of the first
+ * published item's own (every item carries one, so that its folder works alone). */
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -9,6 +14,7 @@
 #include <unistd.h>
 
 #include "core/atomicfile.h"
+#include "core/html.h"
 #include "core/json.h"
 #include "core/log.h"
 #include "core/markdown.h"
@@ -40,15 +46,55 @@ static int quarantined(sl_engine *e, const char *item, sl_ticket *t)
     return 0;
 }
 
+#define VIEWER_FILE "scanlod-viewer.js" /* stages/export/export_html.c */
+
+static void html_begin(sl_engine *e, FILE *out)
+{
+    sl_html_page_begin(out, "scanlod collection summary");
+    fprintf(out, "<h1>scanlod collection summary</h1>\n<p>%llu items in <code>",
+            (unsigned long long)e->item_count);
+    sl_html_text(out, e->input);
+    fputs("</code>.</p>\n<p>Per item, its levels as in Table 1 of the paper (k = expansions of "
+          "the LOD array; RMS and Hausdorff distance to the input in % of its bounding-box "
+          "diagonal, symmetric), the Voyager quality each serves (<code>scene.svx.json</code>), "
+          "its files, thumbnails and a 3D view. Everything per level: "
+          "<code>ITEM/report.json</code>; each item's own page: <code>ITEM/index.html</code>."
+          "</p>\n<h2>Items</h2>\n",
+          out);
+}
+
+/* OUTPUT/scanlod-viewer.js from the first published item that has one; 0 when none has. */
+static int copy_viewer(sl_engine *e, sl_error *err)
+{
+    for (uint64_t i = 0; i < e->item_count; i++) {
+        char from[PATH_MAX], to[PATH_MAX];
+        sl_engine_path(from, sizeof from, "%s/%s/" VIEWER_FILE, e->output, e->items[i]);
+        if (access(from, R_OK) != 0)
+            continue;
+        sl_engine_path(to, sizeof to, "%s/" VIEWER_FILE, e->output);
+        int rc = sl_copy_file(from, to, err);
+        return rc ? rc : 1;
+    }
+    return 0;
+}
+
 int sl_engine_write_summary(sl_engine *e, sl_error *err)
 {
     sl_json js;
     sl_json_init(&js, 1);
     char *md = NULL;
     size_t md_size = 0;
+    char *html = NULL;
+    size_t html_size = 0;
     FILE *out = open_memstream(&md, &md_size);
-    if (!out)
+    FILE *page = out ? open_memstream(&html, &html_size) : NULL;
+    if (!page) {
+        if (out)
+            fclose(out);
+        free(md);
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory");
+    }
+    html_begin(e, page);
     fprintf(out, "# scanlod collection summary\n\n%llu items in `%s`.\n\n",
             (unsigned long long)e->item_count, e->input);
     fprintf(out, "Per item, its levels as in Table 1 of the paper (k = expansions of the LOD "
@@ -78,11 +124,24 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
             fputs("\n\n(no levels)\n\n", out);
         }
         free(section);
+        sl_engine_path(path, sizeof path, "%s/%s/summary-item.html", e->output, e->items[i]);
+        section = read_optional(path);
+        if (section)
+            fputs(section, page);
+        else {
+            fputs("<section class=\"item\">\n<h2>", page);
+            sl_html_text(page, e->items[i]);
+            fputs("</h2>\n<p>(no levels)</p>\n</section>\n", page);
+        }
+        free(section);
     }
     sl_json_array_end(&js);
-    if (!published)
+    if (!published) {
         fprintf(out, "None published.\n\n");
+        fputs("<p>None published.</p>\n", page);
+    }
     fprintf(out, "## Quarantined\n\n");
+    fputs("<h2>Quarantined</h2>\n<ul>\n", page);
     sl_json_array_begin(&js, "quarantined");
     uint64_t bad = 0;
     for (uint64_t i = 0; i < e->item_count; i++) {
@@ -95,6 +154,11 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
         fprintf(out, " (%s): ", t.cls);
         sl_md_text(out, t.reason);
         fputc('\n', out);
+        fputs("<li>", page);
+        sl_html_text(page, e->items[i]);
+        fprintf(page, " (%s): ", t.cls);
+        sl_html_text(page, t.reason);
+        fputs("</li>\n", page);
         sl_json_object_begin(&js, NULL);
         sl_json_string(&js, "item", e->items[i]);
         sl_json_string(&js, "class", t.cls);
@@ -103,19 +167,28 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
     }
     if (!bad)
         fprintf(out, "None.\n");
+    fputs(bad ? "</ul>\n" : "<li>None.</li>\n</ul>\n", page);
     sl_json_array_end(&js);
     sl_json_u64(&js, "items_total", e->item_count);
     sl_json_u64(&js, "items_published", published);
     sl_json_u64(&js, "items_quarantined", bad);
     sl_json_object_end(&js);
     fclose(out);
+    int viewer = copy_viewer(e, err);
+    sl_html_page_end(page, viewer > 0 ? VIEWER_FILE : NULL);
+    fclose(page);
     char path[PATH_MAX];
-    int rc = js.failed ? sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory") : 0;
+    int rc = viewer < 0 ? viewer : 0;
+    if (rc == 0 && (js.failed || !md || !html))
+        rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory");
     if (rc == 0 && sl_engine_path(path, sizeof path, "%s/summary.json", e->output) == 0)
         rc = sl_write_file_atomic(path, js.buf, js.len, err);
     if (rc == 0 && sl_engine_path(path, sizeof path, "%s/summary.md", e->output) == 0)
         rc = sl_write_file_atomic(path, md, md_size, err);
+    if (rc == 0 && sl_engine_path(path, sizeof path, "%s/summary.html", e->output) == 0)
+        rc = sl_write_file_atomic(path, html, html_size, err);
     sl_json_release(&js);
     free(md);
+    free(html);
     return rc;
 }

@@ -7,17 +7,22 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 packages=(
   build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev
   libopenvdb-dev libboost-iostreams-dev libtbb-dev
-  libopenimageio-dev libinih-dev libxxhash-dev libmeshoptimizer-dev
+  libopenimageio-dev libinih-dev libxxhash-dev libmeshoptimizer-dev libdraco-dev
   zlib1g-dev time gnuplot-nox
+  # tests/export/test_glb_render.sh: three.js in headless Chromium
+  chromium
   # tests/cluster/: a throwaway single-node Slurm (its own config; no service is enabled)
   slurm-wlm munge iproute2
+  # tests/export/test_html_report.sh: the HTML reports in a real (headless) browser
+  chromium
 )
 
 missing=()
 for p in "${packages[@]}"; do
   [ "$(dpkg-query -W -f='${Status}' "$p" 2>/dev/null)" = 'install ok installed' ] || missing+=("$p")
 done
-# node + npm run the Khronos glTF validator in the tests (Debian ships npm separately).
+# node + npm run the Khronos glTF validator in the tests and build the HTML reports' viewer
+# bundle (Debian ships npm separately).
 command -v node >/dev/null || missing+=(nodejs)
 command -v npm >/dev/null || missing+=(npm)
 
@@ -38,4 +43,15 @@ fi
 # The glTF validator (npm package gltf-validator, pinned by scripts/gltf/package-lock.json).
 if [ ! -f "$root/scripts/gltf/node_modules/gltf-validator/package.json" ]; then
   npm ci --prefix "$root/scripts/gltf" --no-audit --no-fund --loglevel=error
+fi
+
+# The HTML reports' viewer: three.js and esbuild, bundled at build time
+# (scripts/viewer/viewer.cmake), and the browser test's playwright-core, gltfpack and
+# glTF-Transform (render.cjs: the GLB render test), all pinned by
+# scripts/viewer/package-lock.json. Rebuild scanlod after
+# this step so that the bundle gets compiled in.
+if [ ! -f "$root/scripts/viewer/node_modules/.package-lock.json" ] ||
+   ! cmp -s "$root/scripts/viewer/package-lock.json" "$root/scripts/viewer/node_modules/.package-lock.json.ci" 2>/dev/null; then
+  npm ci --prefix "$root/scripts/viewer" --no-audit --no-fund --loglevel=error
+  cp "$root/scripts/viewer/package-lock.json" "$root/scripts/viewer/node_modules/.package-lock.json.ci"
 fi

@@ -13,6 +13,7 @@ extern "C" {
 }
 #include "shim/oiio_shim.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 #include <atomic>
@@ -24,6 +25,7 @@ extern "C" {
 #include <memory>
 #include <mutex>
 #include <string>
+#include <vector>
 #include <unistd.h>
 
 namespace {
@@ -186,6 +188,48 @@ extern "C" int sl_image_write(const char *path, int width, int height, int chann
                             width, height, channels);
     return guarded(path, SL_E_IO, err,
                    [&] { return write_image(path, width, height, channels, pixels, err); });
+}
+
+namespace {
+int encode_image(const char *format, int width, int height, int channels, const float *pixels,
+                 int quality, void **out, size_t *out_size, sl_error *err)
+{
+    std::vector<unsigned char> bytes;
+    OIIO::Filesystem::IOVecOutput proxy(bytes);
+    const std::string name = std::string("image.") + format; // OIIO picks the plugin by name
+    auto o = OIIO::ImageOutput::create(name, &proxy);
+    if (!o || !o->supports("ioproxy"))
+        return fail(err, SL_E_INTERNAL, nullptr,
+                    std::string("OpenImageIO cannot encode ") + format + " in memory");
+    OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
+    if (!std::strcmp(format, "jpg"))
+        spec.attribute("Compression", "jpeg:" + std::to_string(quality));
+    bool ok = o->open(name, spec) &&
+              o->write_image(OIIO::TypeDesc::FLOAT, pixels);
+    ok = o->close() && ok;
+    if (!ok)
+        return fail(err, SL_E_INTERNAL, nullptr, "encoding failed: " + o->geterror());
+    *out = std::malloc(bytes.size() ? bytes.size() : 1);
+    if (!*out)
+        return sl_error_set(err, SL_E_NOMEM, 0, nullptr, "out of memory for an image");
+    std::memcpy(*out, bytes.data(), bytes.size());
+    *out_size = bytes.size();
+    return SL_OK;
+}
+} // namespace
+
+extern "C" int sl_image_encode(const char *format, int width, int height, int channels,
+                               const float *pixels, int quality, void **out, size_t *out_size,
+                               sl_error *err)
+{
+    *out = nullptr;
+    *out_size = 0;
+    if (width <= 0 || height <= 0 || channels <= 0)
+        return sl_error_set(err, SL_E_INTERNAL, 0, nullptr, "image encode: bad size %dx%dx%d",
+                            width, height, channels);
+    return guarded(nullptr, SL_E_INTERNAL, err, [&] {
+        return encode_image(format, width, height, channels, pixels, quality, out, out_size, err);
+    });
 }
 
 extern "C" void sl_image_release(sl_image *img)

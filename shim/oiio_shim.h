@@ -31,6 +31,12 @@ int sl_image_read(const char *path, uint64_t max_pixels, sl_image *out, sl_error
 int sl_image_write(const char *path, int width, int height, int channels, const float *pixels,
                    sl_error *err);
 
+/* Encodes `pixels` (float in [0, 1], values as stored: sRGB stays sRGB) as an 8-bit image
+ * in memory: `format` "jpg" (at `quality` 1..100) or "png". *out (OUT) is malloc'd,
+ * *out_size bytes; free() it. SL_E_INTERNAL when OpenImageIO cannot, SL_E_NOMEM. */
+int sl_image_encode(const char *format, int width, int height, int channels, const float *pixels,
+                    int quality, void **out, size_t *out_size, sl_error *err);
+
 void sl_image_release(sl_image *img);
 
 #ifdef __cplusplus

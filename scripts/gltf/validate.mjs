@@ -3,6 +3,9 @@
 // JS) over each FILE.glb given and prints one JSON line per file:
 //   {"file":..., "numErrors":N, "numWarnings":N, "numInfos":N, "numHints":N, "issues":[...]}
 // `issues` lists the errors and warnings (code, severity, pointer, message), at most 20.
+// --infos: list the infos too (the compressed files' UNSUPPORTED_EXTENSION and
+// UNUSED_OBJECT: the validator cannot look inside EXT_meshopt_compression or
+// KHR_draco_mesh_compression streams, docs/glb.md).
 // Exit status: 0 when no file has an error, 1 when some file has one, 2 on usage errors or
 // an unreadable file. Warnings do not fail the run unless --strict is given, because a
 // warning (e.g. an unused accessor) is valid glTF that every conforming viewer loads.
@@ -23,9 +26,10 @@ try {
 
 const args = process.argv.slice(2);
 const strict = args.includes('--strict');
-const files = args.filter((a) => a !== '--strict');
+const infos = args.includes('--infos');
+const files = args.filter((a) => a !== '--strict' && a !== '--infos');
 if (files.length === 0) {
-  console.error('usage: validate.mjs [--strict] FILE.glb...');
+  console.error('usage: validate.mjs [--strict] [--infos] FILE.glb...');
   process.exit(2);
 }
 
@@ -52,7 +56,7 @@ for (const file of files) {
   }
   const is = report.issues;
   const issues = is.messages
-    .filter((m) => m.severity <= 1)
+    .filter((m) => m.severity <= (infos ? 2 : 1))
     .slice(0, 20)
     .map((m) => ({ code: m.code, severity: SEVERITY[m.severity], pointer: m.pointer,
                    message: m.message }));

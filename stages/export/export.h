@@ -6,7 +6,12 @@
  *
  * Levels: every `[export] lod_percents` (paper Table 1: k = P% of the LOD array) and every
  * named triangle budget `[export] budgets` (name:triangles; a budget above the finest level
- * gives the finest, marked "clamped").
+ * gives the finest, marked "clamped"). Levels whose meshes are identical (a clamped budget
+ * and lod100) are published once, under one of their names (docs/formats.md).
+ *
+ * Also per item: `scene.svx.json` (a Smithsonian Voyager scene of the GLBs, mapped to
+ * Voyager's qualities by triangle count) and `index.html` (the item's page with a 3D view
+ * of each level), and the item's sections of the collection's summaries.
  */
 #ifndef SCANLOD_STAGES_EXPORT_H
 #define SCANLOD_STAGES_EXPORT_H
@@ -14,6 +19,7 @@
 #include <stdint.h>
 
 #include "core/error.h"
+#include "geometry/glb.h"
 #include "pipeline/stage.h"
 #include "runtime/lod_mesh.h"
 
@@ -29,6 +35,15 @@ typedef struct sl_export_level {
     uint64_t budget; /* else: the largest level with at most this many triangles */
 } sl_export_level;
 
+/* How a level's GLB is written (docs/glb.md): the encoding, and the map from the input's
+ * frame to glTF's (metres, +Y up), baked into the positions and normals. */
+typedef struct sl_export_glb {
+    sl_glb_options options;
+    double to_metres; /* metres per input unit (mm: 0.001) */
+    int z_up;         /* the input's up is +Z: (x, y, z) -> (x, z, -y), a rotation */
+    const float *texcoords; /* per vertex (OpenGL convention) with options.image, or NULL */
+} sl_export_glb;
+
 /* The resolved [export] section (options: stages/export/export_stage.c). */
 typedef struct sl_export_config {
     int level_count;                            /* lod_percents, then budgets */
@@ -37,14 +52,30 @@ typedef struct sl_export_config {
     int thumbnail_size;                         /* PNG edge in pixels; 0 = none */
     int fidelity;                               /* measure every level against the input */
     uint64_t fidelity_samples;                  /* area samples per surface for that */
+    sl_glb_options glb;                         /* compression, quantize, *_bits */
+    double units_to_metres;                     /* [export] units; 0 = auto (the header) */
+    char units[8];                              /* its name: "auto", "mm", ... */
+    char up;                                    /* [export] up: 'y', 'z', or 0 = auto */
+    int texture;                                /* [export] texture = auto: bake atlases */
+    int texture_png;                            /* texture_format png, else jpeg */
+    int texture_quality;                        /* JPEG quality */
+    int texture_size;                           /* atlas edge of levels not listed below */
+    char texture_sizes[256];                    /* "name:edge,..." */
+    int viewer; /* index.html gets a 3D view per level: viewer bundle + NAME.glb.js copies */
 } sl_export_config;
 
 /* The section at its option table's defaults (sl_stage_default_config). */
 sl_export_config sl_export_default_config(void);
 
 /* Writes `mesh` to `path` in the format its extension names (.ply, .glb, .obj).
- * `extras_json` (may be NULL) goes into the GLB's extras. */
+ * `extras_json` (may be NULL) goes into the GLB's extras. A GLB is written per `glb` (NULL:
+ * the [export] defaults, the input taken as metres, +Y up), in meshoptimizer's vertex-cache
+ * and fetch order, and `stats` (OUT, may be NULL) says what it holds; PLY and OBJ keep the
+ * input's units and axes. */
 int sl_export_write_mesh(const char *path, const sl_lod_mesh *mesh, const char *extras_json,
-                         sl_error *err);
+                         const sl_export_glb *glb, sl_glb_stats *stats, sl_error *err);
+
+/* Metres per unit of `name` ("mm", "cm", "m", "in", "ft"), or 0 for another name. */
+double sl_export_unit_metres(const char *name);
 
 #endif

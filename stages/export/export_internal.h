@@ -5,7 +5,9 @@
 #include <stdint.h>
 
 #include "geometry/mesh.h"
+#include "geometry/triangle_bvh.h"
 #include "pipeline/stage.h"
+#include "shim/oiio_shim.h"
 #include "runtime/lod_model.h"
 #include "stages/export/export.h"
 
@@ -13,16 +15,109 @@
  * measurements read. */
 sl_mesh sl_export_mesh_view(const sl_lod_mesh *m);
 
-/* Renders the level's PNG thumbnail (geometry/raster.h). */
-int sl_export_thumbnail(const char *path, const sl_lod_mesh *mesh, int size, sl_error *err);
+/* Renders the level's PNG thumbnail (geometry/raster.h), upright for a Z-up input. */
+int sl_export_thumbnail(const char *path, const sl_lod_mesh *mesh, int size, int z_up,
+                        sl_error *err);
+
+/* An item's frame: what [export] units/up say, else the input header's hints, else the
+ * coordinates as given (metres, +Y up). `input` may be NULL (no header read). */
+typedef struct sl_export_frame {
+    char units[4];
+    double to_metres;
+    const char *units_from; /* "config", "header" or "default" */
+    char up;                /* 'y' or 'z' */
+    const char *up_from;
+} sl_export_frame;
+
+void sl_export_resolve_frame(const sl_export_config *c, const sl_mesh *input,
+                             sl_export_frame *f);
 
 /* "20,40" and "low:20000,high:500000" -> levels; SL_E_CONFIG on a malformed entry. */
 int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_config *c,
                            sl_error *err);
 
+/* The input's texture, ready to bake level atlases from (export_texture.c). */
+typedef struct sl_export_texture {
+    const sl_mesh *input; /* NULL: no texture */
+    sl_image image;       /* as stored (sRGB) */
+    sl_triangle_bvh bvh;  /* over the input's triangles */
+} sl_export_texture;
+
+/* 1 when `input` (read from a PLY in `dir`) has a texture to bake from, else 0 with the
+ * reason in `why` (a warning in the report, never a failure). */
+int sl_export_texture_open(const sl_mesh *input, const char *dir, sl_export_texture *t,
+                           char *why, size_t why_size);
+void sl_export_texture_close(sl_export_texture *t);
+
+/* A level with its own atlas: three vertices per triangle (each triangle is a chart). */
+typedef struct sl_export_baked {
+    uint64_t vertex_count, triangle_count;
+    float *positions, *normals, *texcoords; /* texcoords: OpenGL convention (v up) */
+    uint32_t *triangles;
+    void *image;                            /* the encoded atlas */
+    size_t image_size;
+    const char *mime_type;
+    int size, cell;                         /* atlas edge, chart cell edge (texels) */
+    double texel_efficiency;                /* texels on the surface / all texels */
+} sl_export_baked;
+
+/* Bakes `level`'s atlas, at most `max_size` texels wide: 0, 1 when the level has too many
+ * triangles for that atlas (it keeps its vertex colours), or SL_E_NOMEM/SL_E_INTERNAL. */
+int sl_export_bake(const sl_export_texture *src, const sl_lod_mesh *level, int max_size,
+                   int png, int quality, sl_export_baked *out, sl_error *err);
+void sl_export_baked_release(sl_export_baked *b);
+
+/* The atlas edge for level `name`: [export] texture_sizes, else texture_size. */
+int sl_export_texture_size(const sl_export_config *c, const char *name);
+
 /* Generates, writes and measures every level; fills io->report. `input` may be NULL (no
  * fidelity). */
 int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_mesh *input,
+                     const sl_export_frame *frame, const sl_export_texture *texture,
                      const sl_stage_io *io, sl_error *err);
+
+/* What became of one level: the facts the summaries, the manifest and the pages show. */
+typedef struct sl_export_result {
+    uint32_t k;
+    uint64_t triangles, vertices;
+    uint64_t boundary_edges, nonmanifold_edges;
+    int watertight, measured;
+    double rms, hausdorff, mean; /* fractions of the input's diagonal, when measured */
+    double diagonal;             /* the input's bounding-box diagonal (world), when measured */
+    sl_glb_stats glb;            /* what the GLB writer did (compression, quantisation) */
+    /* The level's atlas: 1 baked, -1 too many triangles for it, 0 no texture. */
+    int texture, texture_size, texture_cell;
+    const char *texture_mime;
+    uint64_t texture_bytes;
+    double texel_efficiency;
+    /* The level whose files hold this mesh: this level's own index, or that of another
+     * level with the identical mesh (lod100 for a budget clamped at the finest level, say),
+     * so the mesh is published once; -1 when the level has no triangles, so no files. */
+    int file;
+} sl_export_result;
+
+/* The size of the level file NAME.EXT this stage wrote, 0 when there is none. */
+uint64_t sl_export_file_bytes(const sl_stage_io *io, const char *name, const char *ext);
+
+/* Voyager's derivative qualities used, coarsest first (docs/formats.md, "scene.svx.json"). */
+#define SL_EXPORT_QUALITIES 5
+extern const char *const sl_export_quality_names[SL_EXPORT_QUALITIES];
+
+/* For each quality, the level whose GLB serves it, or -1 when no level has a GLB. */
+void sl_export_map_qualities(const sl_export_config *c, const sl_export_result *results,
+                             int level_of_quality[SL_EXPORT_QUALITIES]);
+
+/* scene.svx.json (when GLBs are written) and the report's "files" and "manifest"
+ * sections, after every level is written. */
+int sl_export_manifest(const sl_export_config *c, const sl_export_result *results,
+                       const int level_of_quality[SL_EXPORT_QUALITIES], const sl_stage_io *io,
+                       sl_error *err);
+
+/* index.html and summary-item.html (the item's section of OUTPUT/summary.html), and with
+ * [export] viewer the viewer bundle and NAME.glb.js per GLB (export_html.c). */
+int sl_export_html(const sl_export_config *c, const sl_lod_model *model, const sl_mesh *input,
+                   const sl_export_result *results,
+                   const int level_of_quality[SL_EXPORT_QUALITIES], const sl_stage_io *io,
+                   sl_error *err);
 
 #endif

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "core/atomicfile.h"
+#include "core/hash.h"
 #include "core/markdown.h"
 #include "geometry/mesh_distance.h"
 #include "stages/export/export_internal.h"
@@ -78,10 +79,29 @@ int sl_export_parse_levels(const char *percents, const char *budgets, sl_export_
     return 0;
 }
 
-static int write_files(const sl_export_config *c, const sl_export_level *lv,
-                       const sl_lod_mesh *mesh, const char *extras, const sl_stage_io *io,
-                       sl_error *err)
+/* The level's GLB geometry: the level itself, or with a baked atlas its per-triangle
+ * charts (three vertices per triangle) with texture coordinates and the image. */
+static sl_lod_mesh glb_geometry(const sl_lod_mesh *mesh, const sl_export_baked *baked,
+                                sl_export_glb *glb)
 {
+    if (!baked || !baked->image)
+        return *mesh;
+    glb->texcoords = baked->texcoords;
+    glb->options.image = baked->image;
+    glb->options.image_size = baked->image_size;
+    glb->options.image_mime_type = baked->mime_type;
+    sl_lod_mesh g = {baked->vertex_count, baked->triangle_count, baked->positions,
+                     baked->normals, NULL, baked->triangles};
+    return g; /* vertex colours would multiply the texture: left out */
+}
+
+static int write_files(const sl_export_config *c, const sl_export_level *lv,
+                       const sl_lod_mesh *mesh, const sl_export_baked *baked, const char *extras,
+                       const sl_export_glb *level_glb, sl_glb_stats *stats,
+                       const sl_stage_io *io, sl_error *err)
+{
+    sl_export_glb glb = *level_glb;
+    sl_lod_mesh textured = glb_geometry(mesh, baked, &glb);
     static const char *const exts[4] = {"ply", "glb", "obj", "png"};
     const int wanted[4] = {c->write_ply, c->write_glb, c->write_obj, c->thumbnail_size > 0};
     int rc = 0;
@@ -92,31 +112,54 @@ static int write_files(const sl_export_config *c, const sl_export_level *lv,
         snprintf(file, sizeof file, "%s.%s", lv->name, exts[i]);
         rc = sl_stage_path(path, io->out_dir, file, err);
         if (rc == 0)
-            rc = i < 3 ? sl_export_write_mesh(path, mesh, extras, err)
-                       : sl_export_thumbnail(path, mesh, c->thumbnail_size, err);
+            rc = i == 1 ? sl_export_write_mesh(path, &textured, extras, &glb, stats, err)
+                 : i < 3 ? sl_export_write_mesh(path, mesh, extras, &glb, NULL, err)
+                         : sl_export_thumbnail(path, mesh, c->thumbnail_size, glb.z_up, err);
     }
     return rc;
 }
 
-/* One level's line of the collection summary. */
-typedef struct level_row {
-    uint32_t k;
-    uint64_t triangles, vertices;
-    int watertight, measured, thumbnail;
-    double rms, hausdorff; /* fractions of the input's diagonal, when measured */
-} level_row;
+/* The GLB's encoding and what quantisation did to it, in the input's units and as
+ * fractions of the input's diagonal (0 when not measured): the bound is added to the
+ * level's errors, since no point of the published surface is further than it from the
+ * point of the unquantised level it came from. */
+static void report_glb(sl_json *r, const sl_export_config *c, const sl_glb_stats *g,
+                       double to_metres, double max_error, double diagonal,
+                       double hausdorff, int measured)
+{
+    static const char *const names[] = {"none", "meshopt", "draco"};
+    double bound = g->position_bound / to_metres, worst = g->position_error_max / to_metres;
+    sl_json_object_begin(r, "glb");
+    sl_json_string(r, "compression", names[c->glb.compression]);
+    sl_json_bool(r, "quantized", c->glb.quantize || c->glb.compression == SL_GLB_DRACO);
+    sl_json_u64(r, "vertices", g->vertices);
+    sl_json_u64(r, "triangles", g->triangles);
+    sl_json_double(r, "position_step_world", g->position_step / to_metres);
+    sl_json_double(r, "quantization_bound_world", bound);
+    sl_json_double(r, "quantization_error_world", worst);
+    sl_json_double(r, "quantization_rms_world", g->position_error_rms / to_metres);
+    if (diagonal > 0) {
+        sl_json_double(r, "quantization_bound", bound / diagonal);
+        sl_json_double(r, "quantization_error", worst / diagonal);
+    }
+    sl_json_double(r, "normal_error_deg", g->normal_error_max_deg);
+    sl_json_double(r, "color_error_srgb_steps", g->color_error_max);
+    sl_json_double(r, "max_error", max_error + bound);
+    if (measured)
+        sl_json_double(r, "hausdorff", hausdorff + bound / diagonal);
+    sl_json_object_end(r);
+}
 
 static int measure_level(const sl_export_config *c, const sl_mesh *input, const sl_lod_mesh *mesh,
-                         const sl_stage_io *io, sl_json *r, level_row *row, sl_error *err)
+                         const sl_stage_io *io, sl_export_result *row, sl_error *err)
 {
     sl_mesh view = sl_export_mesh_view(mesh);
     sl_mesh_topology topo;
     int rc = sl_mesh_topology_compute(&view, &topo, err);
     if (rc)
         return rc;
-    sl_json_u64(r, "boundary_edges", topo.boundary_edges);
-    sl_json_u64(r, "nonmanifold_edges", topo.nonmanifold_edges);
-    sl_json_bool(r, "watertight", topo.watertight);
+    row->boundary_edges = topo.boundary_edges;
+    row->nonmanifold_edges = topo.nonmanifold_edges;
     row->watertight = topo.watertight;
     if (!input || mesh->triangle_count == 0)
         return 0;
@@ -131,20 +174,41 @@ static int measure_level(const sl_export_config *c, const sl_mesh *input, const 
         return rc;
     }
     if (rc == 0) {
-        sl_json_double(r, "rms", d.fraction.rms);
-        sl_json_double(r, "hausdorff", d.fraction.hausdorff);
-        sl_json_double(r, "mean", d.fraction.mean);
         row->measured = 1;
         row->rms = d.fraction.rms;
         row->hausdorff = d.fraction.hausdorff;
+        row->mean = d.fraction.mean;
+        row->diagonal = d.diagonal;
     }
     return 0;
+}
+
+/* What identifies a generated mesh: counts and the XXH3-128 of every array. Two levels
+ * with equal digests have the same vertices, normals, colours and triangles in the same
+ * order, so they would write byte-identical files. */
+typedef struct mesh_digest {
+    uint64_t vertices, triangles;
+    sl_hash positions, normals, colors, indices;
+} mesh_digest;
+
+static mesh_digest digest_mesh(const sl_lod_mesh *m)
+{
+    mesh_digest d;
+    memset(&d, 0, sizeof d); /* no padding bytes left undefined: digests are compared whole */
+    d.vertices = m->vertex_count;
+    d.triangles = m->triangle_count;
+    size_t v = (size_t)m->vertex_count, t = (size_t)m->triangle_count;
+    d.positions = sl_hash_bytes(m->positions, v * 3 * sizeof *m->positions);
+    d.normals = m->normals ? sl_hash_bytes(m->normals, v * 3 * sizeof *m->normals) : d.normals;
+    d.colors = m->colors ? sl_hash_bytes(m->colors, v * 4) : d.colors;
+    d.indices = sl_hash_bytes(m->indices, t * 3 * sizeof *m->indices);
+    return d;
 }
 
 /* The item's section of OUTPUT/summary.md: paper Table 1 for this item (a row per level)
  * and its thumbnails, linked relative to OUTPUT/. The engine concatenates the sections. */
 static int write_summary_section(const sl_export_config *c, const sl_lod_model *model,
-                                 const sl_mesh *input, const level_row *rows,
+                                 const sl_mesh *input, const sl_export_result *rows,
                                  const sl_stage_io *io, sl_error *err)
 {
     char *text = NULL;
@@ -159,10 +223,10 @@ static int write_summary_section(const sl_export_config *c, const sl_lod_model *
             (unsigned long long)model->accumulation[model->expansion_count]);
     if (input)
         fprintf(md, "; input: %llu triangles", (unsigned long long)input->triangle_count);
-    fprintf(md, ".\n\n| level | k | triangles | vertices | RMS | Hausdorff | watertight |\n"
-                "|---|---:|---:|---:|---:|---:|---|\n");
+    fprintf(md, ".\n\n| level | k | triangles | vertices | RMS | Hausdorff | watertight | files |\n"
+                "|---|---:|---:|---:|---:|---:|---|---|\n");
     for (int i = 0; i < c->level_count; i++) {
-        const level_row *w = &rows[i];
+        const sl_export_result *w = &rows[i];
         fputs("| ", md);
         sl_md_text(md, c->levels[i].name);
         fprintf(md, " | %u | %llu | %llu |", w->k, (unsigned long long)w->triangles,
@@ -171,12 +235,17 @@ static int write_summary_section(const sl_export_config *c, const sl_lod_model *
             fprintf(md, " %.3f %% | %.3f %% |", 100 * w->rms, 100 * w->hausdorff);
         else
             fputs(" – | – |", md);
-        fprintf(md, " %s |\n", w->watertight ? "yes" : "no");
+        fprintf(md, " %s | ", w->watertight ? "yes" : "no");
+        if (w->file >= 0)
+            sl_md_text(md, c->levels[w->file].name);
+        else
+            fputs("–", md);
+        fputs(" |\n", md);
     }
     fputc('\n', md);
     int thumbnails = 0;
     for (int i = 0; i < c->level_count; i++)
-        if (rows[i].thumbnail) {
+        if (rows[i].file == i && c->thumbnail_size > 0) {
             fputs(thumbnails++ ? " ![" : "![", md);
             sl_md_text(md, io->item);
             fputc(' ', md);
@@ -199,62 +268,193 @@ static int write_summary_section(const sl_export_config *c, const sl_lod_model *
     return rc;
 }
 
+/* Of two levels with one mesh, the one whose name the files take: a percent level before
+ * a budget (lod100 is the finest level's name whatever the budgets), the larger percent
+ * first, else the earlier budget. */
+static int names_files_before(const sl_export_config *c, int a, int b)
+{
+    const sl_export_level *x = &c->levels[a], *y = &c->levels[b];
+    if (x->by_percent != y->by_percent)
+        return x->by_percent;
+    if (x->by_percent && x->percent != y->percent)
+        return x->percent > y->percent;
+    return a < b;
+}
+
+/* First pass: every level's k, counts and mesh digest; then which levels share a mesh and
+ * whose name their files take (rows[i].file). Generation is O(m), so cutting a level twice
+ * costs little next to writing and measuring it. */
+static int plan_levels(const sl_export_config *c, sl_lod_model *model, const sl_stage_io *io,
+                       sl_export_result *rows, uint64_t *cracks, sl_error *err)
+{
+    mesh_digest *digests = calloc((size_t)c->level_count + 1, sizeof *digests);
+    if (!digests)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    for (int i = 0; i < c->level_count; i++) {
+        const sl_export_level *lv = &c->levels[i];
+        int rc = sl_stage_step(io, "export", 0, err);
+        if (rc) {
+            free(digests);
+            return rc;
+        }
+        rows[i].k = lv->by_percent ? sl_lod_expansions_for_percent(model, lv->percent)
+                                   : sl_lod_expansions_for_triangles(model, lv->budget);
+        sl_lod_mesh mesh;
+        if (sl_lod_generate(model, rows[i].k, &mesh, &cracks[i])) {
+            free(digests);
+            return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+        }
+        rows[i].triangles = mesh.triangle_count;
+        rows[i].vertices = mesh.vertex_count;
+        digests[i] = digest_mesh(&mesh);
+        sl_lod_mesh_release(&mesh);
+    }
+    for (int i = 0; i < c->level_count; i++) {
+        rows[i].file = rows[i].triangles ? i : -1;
+        for (int j = 0; j < c->level_count && rows[i].triangles; j++)
+            if (!memcmp(&digests[j], &digests[i], sizeof *digests) &&
+                names_files_before(c, j, rows[i].file))
+                rows[i].file = j;
+    }
+    free(digests);
+    return 0;
+}
+
+/* Bakes the level's atlas when the input has a texture (and GLBs are written); reports
+ * what it made in the row. 0, or SL_E_NOMEM/SL_E_INTERNAL. */
+static int bake_level(const sl_export_config *c, const sl_export_texture *texture,
+                      const sl_export_level *lv, const sl_lod_mesh *mesh, sl_export_result *row,
+                      sl_export_baked *baked, sl_error *err)
+{
+    memset(baked, 0, sizeof *baked);
+    if (!texture || !c->write_glb || mesh->triangle_count == 0)
+        return 0;
+    int wanted = sl_export_texture_size(c, lv->name);
+    int rc = sl_export_bake(texture, mesh, wanted, c->texture_png, c->texture_quality, baked, err);
+    if (rc < 0)
+        return rc;
+    row->texture = rc == 1 ? -1 : 1;
+    if (rc == 0) {
+        row->texture_size = baked->size;
+        row->texture_mime = baked->mime_type;
+        row->texture_bytes = baked->image_size;
+        row->texture_cell = baked->cell;
+        row->texel_efficiency = baked->texel_efficiency;
+    }
+    return 0;
+}
+
+/* The level's atlas, as bake_level left it in the row. */
+static void report_texture(const sl_export_result *row, sl_json *r)
+{
+    sl_json_object_begin(r, "texture");
+    if (row->texture < 0) {
+        sl_json_string(r, "warning", "too many triangles for the atlas: vertex colours only");
+    } else {
+        sl_json_u64(r, "size", (uint64_t)row->texture_size);
+        sl_json_string(r, "mime_type", row->texture_mime);
+        sl_json_u64(r, "image_bytes", row->texture_bytes);
+        sl_json_u64(r, "cell_texels", (uint64_t)row->texture_cell);
+        sl_json_double(r, "texel_efficiency", row->texel_efficiency);
+    }
+    sl_json_object_end(r);
+}
+
+static void report_level(const sl_export_config *c, const sl_lod_model *model,
+                         const sl_export_frame *frame, int i, const sl_export_result *row,
+                         uint64_t cracks, sl_json *r)
+{
+    const sl_export_level *lv = &c->levels[i];
+    sl_json_object_begin(r, NULL);
+    sl_json_string(r, "name", lv->name);
+    if (lv->by_percent)
+        sl_json_double(r, "lod_percent", lv->percent);
+    else {
+        sl_json_u64(r, "budget", lv->budget);
+        sl_json_bool(r, "clamped", lv->budget >= model->accumulation[model->expansion_count]);
+    }
+    sl_json_u64(r, "expansions", row->k);
+    sl_json_u64(r, "triangles", row->triangles);
+    sl_json_u64(r, "vertices", row->vertices);
+    sl_json_double(r, "max_error", model->error_after[row->k]);
+    sl_json_u64(r, "unpatched_cells", cracks);
+    sl_json_u64(r, "boundary_edges", row->boundary_edges);
+    sl_json_u64(r, "nonmanifold_edges", row->nonmanifold_edges);
+    sl_json_bool(r, "watertight", row->watertight);
+    if (row->measured) {
+        sl_json_double(r, "rms", row->rms);
+        sl_json_double(r, "hausdorff", row->hausdorff);
+        sl_json_double(r, "mean", row->mean);
+    }
+    /* The level whose files hold this mesh (docs/formats.md); null without triangles. */
+    sl_json_string(r, "file", row->file >= 0 ? c->levels[row->file].name : NULL);
+    if (row->texture)
+        report_texture(row, r);
+    if (row->triangles && c->write_glb)
+        report_glb(r, c, &row->glb, frame->to_metres, model->error_after[row->k], row->diagonal,
+                   row->hausdorff, row->measured);
+    sl_json_object_end(r);
+}
+
 int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_mesh *input,
+                     const sl_export_frame *frame, const sl_export_texture *texture,
                      const sl_stage_io *io, sl_error *err)
 {
+    sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z', NULL};
     sl_json *r = io->report;
-    uint64_t finest = model->accumulation[model->expansion_count];
     sl_json_u64(r, "expansions", model->expansion_count);
-    sl_json_u64(r, "triangles_finest", finest);
+    sl_json_u64(r, "triangles_finest", model->accumulation[model->expansion_count]);
     sl_json_bool(r, "fidelity_measured", input != NULL);
-    sl_json_array_begin(r, "levels");
-    level_row *rows = calloc((size_t)c->level_count + 1, sizeof *rows);
-    if (!rows)
-        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    int rc = 0;
+    sl_export_result *rows = calloc((size_t)c->level_count + 1, sizeof *rows);
+    uint64_t *cracks = calloc((size_t)c->level_count + 1, sizeof *cracks);
+    int rc = rows && cracks ? 0 : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    if (rc == 0)
+        rc = plan_levels(c, model, io, rows, cracks, err);
+    /* Each distinct mesh: its files and its measures, once. */
     for (int i = 0; i < c->level_count && rc == 0; i++) {
         const sl_export_level *lv = &c->levels[i];
-        uint32_t k = lv->by_percent ? sl_lod_expansions_for_percent(model, lv->percent)
-                                    : sl_lod_expansions_for_triangles(model, lv->budget);
         if ((rc = sl_stage_step(io, "export", (double)i / c->level_count, err)))
             break;
+        if (rows[i].file != i)
+            continue;
         sl_lod_mesh mesh;
-        uint64_t cracks = 0;
-        if (sl_lod_generate(model, k, &mesh, &cracks)) {
+        if (sl_lod_generate(model, rows[i].k, &mesh, NULL)) {
             rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
             break;
         }
         char extras[256];
         snprintf(extras, sizeof extras,
-                 "{\"scanlod\":{\"level\":\"%s\",\"expansions\":%u,\"of\":%u}}", lv->name, k,
-                 model->expansion_count);
-        sl_json_object_begin(r, NULL);
-        sl_json_string(r, "name", lv->name);
-        if (lv->by_percent)
-            sl_json_double(r, "lod_percent", lv->percent);
-        else {
-            sl_json_u64(r, "budget", lv->budget);
-            sl_json_bool(r, "clamped", lv->budget >= finest);
-        }
-        sl_json_u64(r, "expansions", k);
-        sl_json_u64(r, "triangles", mesh.triangle_count);
-        sl_json_u64(r, "vertices", mesh.vertex_count);
-        sl_json_double(r, "max_error", model->error_after[k]);
-        sl_json_u64(r, "unpatched_cells", cracks);
-        level_row *row = &rows[i];
-        row->k = k;
-        row->triangles = mesh.triangle_count;
-        row->vertices = mesh.vertex_count;
-        row->thumbnail = mesh.triangle_count && c->thumbnail_size > 0;
-        rc = mesh.triangle_count ? write_files(c, lv, &mesh, extras, io, err) : 0;
+                 "{\"scanlod\":{\"level\":\"%s\",\"expansions\":%u,\"of\":%u}}", lv->name,
+                 rows[i].k, model->expansion_count);
+        sl_export_baked baked;
+        rc = bake_level(c, texture, lv, &mesh, &rows[i], &baked, err);
         if (rc == 0)
-            rc = measure_level(c, input, &mesh, io, r, row, err);
-        sl_json_object_end(r);
+            rc = write_files(c, lv, &mesh, &baked, extras, &glb, &rows[i].glb, io, err);
+        sl_export_baked_release(&baked);
+        if (rc == 0)
+            rc = measure_level(c, input, &mesh, io, &rows[i], err);
         sl_lod_mesh_release(&mesh);
     }
+    for (int i = 0; i < c->level_count && rc == 0; i++)
+        if (rows[i].file >= 0 && rows[i].file != i) {
+            sl_export_result own = rows[i];
+            rows[i] = rows[own.file]; /* the same mesh: the same files and measures */
+            rows[i].k = own.k;
+        }
+    sl_json_array_begin(r, "levels");
+    for (int i = 0; i < c->level_count && rc == 0; i++)
+        report_level(c, model, frame, i, &rows[i], cracks[i], r);
     sl_json_array_end(r);
-    if (rc == 0)
+    free(cracks);
+    int level_of_quality[SL_EXPORT_QUALITIES];
+    if (rc == 0) {
+        sl_export_map_qualities(c, rows, level_of_quality);
         rc = write_summary_section(c, model, input, rows, io, err);
+    }
+    if (rc == 0)
+        rc = sl_export_manifest(c, rows, level_of_quality, io, err);
+    if (rc == 0)
+        rc = sl_export_html(c, model, input, rows, level_of_quality, io, err);
     free(rows);
     return rc;
 }

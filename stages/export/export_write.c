@@ -1,5 +1,7 @@
 /* Mesh files by extension, and thumbnails (export.h). GLB vertices are put in
- * meshoptimizer's vertex-cache order, then its fetch order, as GPUs like them. */
+ * meshoptimizer's vertex-cache order, then its fetch order, as GPUs like them and as its
+ * codecs need them to compress well; GLB and thumbnail geometry is in glTF's frame
+ * (metres, +Y up). */
 #include <errno.h>
 #include <meshoptimizer.h>
 #include <stdlib.h>
@@ -25,8 +27,42 @@ sl_mesh sl_export_mesh_view(const sl_lod_mesh *m)
                         m->indices);
 }
 
+double sl_export_unit_metres(const char *name)
+{
+    static const struct { const char *name; double metres; } units[] = {
+        {"mm", 0.001}, {"cm", 0.01}, {"m", 1}, {"in", 0.0254}, {"ft", 0.3048}};
+    for (size_t i = 0; i < sizeof units / sizeof units[0]; i++)
+        if (!strcmp(name, units[i].name))
+            return units[i].metres;
+    return 0;
+}
+
+/* Input frame -> glTF's: scale to metres, and for Z-up inputs the rotation by -90 degrees
+ * about X, (x, y, z) -> (x, z, -y) (determinant +1: windings and outsides stay). Normals
+ * rotate alike; a uniform scale does not change their direction. */
+static void to_gltf_frame(float *pos, float *nrm, uint64_t n, double to_metres, int z_up)
+{
+    for (uint64_t i = 0; i < n; i++) {
+        float *p = pos + 3 * i;
+        double x = p[0] * to_metres, y = p[1] * to_metres, z = p[2] * to_metres;
+        p[0] = (float)x, p[1] = (float)(z_up ? z : y), p[2] = (float)(z_up ? -y : z);
+        if (nrm && z_up) {
+            float *q = nrm + 3 * i, y0 = q[1];
+            q[1] = q[2], q[2] = -y0;
+        }
+    }
+}
+
+static sl_export_glb default_glb(void)
+{
+    sl_export_config c = sl_export_default_config();
+    sl_export_glb g = {c.glb, 1.0, 0, NULL};
+    return g;
+}
+
 /* GLB in meshoptimizer's vertex-cache and vertex-fetch order (same surface, same welds). */
-static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras, sl_error *err)
+static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
+                     const sl_export_glb *glb, sl_glb_stats *stats, sl_error *err)
 {
     size_t indices = (size_t)m->triangle_count * 3, vertices = (size_t)m->vertex_count;
     uint32_t *order = malloc((indices ? indices : 1) * sizeof *order);
@@ -34,8 +70,9 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
     float *pos = malloc((vertices ? vertices : 1) * 3 * sizeof *pos);
     float *nrm = malloc((vertices ? vertices : 1) * 3 * sizeof *nrm);
     uint8_t *col = m->colors ? malloc((vertices ? vertices : 1) * 4) : NULL;
+    float *uv = glb->texcoords ? malloc((vertices ? vertices : 1) * 2 * sizeof *uv) : NULL;
     int rc;
-    if (!order || !remap || !pos || !nrm || (m->colors && !col)) {
+    if (!order || !remap || !pos || !nrm || (m->colors && !col) || (glb->texcoords && !uv)) {
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
     } else {
         meshopt_optimizeVertexCache(order, m->indices, indices, vertices);
@@ -45,34 +82,58 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
         meshopt_remapVertexBuffer(nrm, m->normals, vertices, 3 * sizeof(float), remap);
         if (col)
             meshopt_remapVertexBuffer(col, m->colors, vertices, 4, remap);
+        if (uv)
+            meshopt_remapVertexBuffer(uv, glb->texcoords, vertices, 2 * sizeof *uv, remap);
+        to_gltf_frame(pos, nrm, used, glb->to_metres, glb->z_up);
         sl_mesh g = sl_mesh_view(used, pos, nrm, col, m->triangle_count, order);
-        rc = sl_glb_write(path, &g, extras, err);
+        g.texcoords = uv;
+        rc = sl_glb_write(path, &g, extras, &glb->options, stats, err);
     }
     free(order);
     free(remap);
     free(pos);
     free(nrm);
     free(col);
+    free(uv);
     return rc;
 }
 
 int sl_export_write_mesh(const char *path, const sl_lod_mesh *mesh, const char *extras_json,
-                         sl_error *err)
+                         const sl_export_glb *glb, sl_glb_stats *stats, sl_error *err)
 {
     const char *ext = extension(path);
+    sl_export_glb defaults = default_glb();
     sl_mesh view = sl_export_mesh_view(mesh);
     if (strcasecmp(ext, "ply") == 0)
         return sl_ply_write(path, &view, err);
     if (strcasecmp(ext, "glb") == 0)
-        return write_glb(path, mesh, extras_json, err);
+        return write_glb(path, mesh, extras_json, glb ? glb : &defaults, stats, err);
     if (strcasecmp(ext, "obj") == 0)
         return sl_obj_write(path, &view, NULL, err);
     return sl_error_set(err, SL_E_USAGE, 0, path,
                         "unknown output format '.%s' (use .ply, .glb or .obj)", ext);
 }
 
-int sl_export_thumbnail(const char *path, const sl_lod_mesh *mesh, int size, sl_error *err)
+/* Rendered upright: the renderer's camera looks about +Y, glTF's up. */
+int sl_export_thumbnail(const char *path, const sl_lod_mesh *mesh, int size, int z_up,
+                        sl_error *err)
 {
     sl_mesh view = sl_export_mesh_view(mesh);
-    return sl_write_thumbnail(path, &view, size, err);
+    if (!z_up)
+        return sl_write_thumbnail(path, &view, size, err);
+    size_t n = (size_t)mesh->vertex_count;
+    float *pos = malloc((n ? n : 1) * 3 * sizeof *pos);
+    float *nrm = mesh->normals ? malloc((n ? n : 1) * 3 * sizeof *nrm) : NULL;
+    if (!pos || (mesh->normals && !nrm)) {
+        free(pos), free(nrm);
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    }
+    memcpy(pos, mesh->positions, n * 3 * sizeof *pos);
+    if (nrm)
+        memcpy(nrm, mesh->normals, n * 3 * sizeof *nrm);
+    to_gltf_frame(pos, nrm, n, 1.0, 1);
+    view.positions = pos, view.normals = nrm;
+    int rc = sl_write_thumbnail(path, &view, size, err);
+    free(pos), free(nrm);
+    return rc;
 }

@@ -16,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry/ply.h"
 #include "shim/oiio_shim.h"
 #include "stages/range/range_internal.h"
 
@@ -107,17 +108,6 @@ static void sum_vertex_colors(const sl_mesh *mesh, const range_clean *clean, col
     }
 }
 
-/* A texture name must stay inside the PLY's directory tree. */
-static int safe_name(const char *name)
-{
-    if (!name[0] || name[0] == '/')
-        return 0;
-    for (const char *p = name; *p; p++)
-        if (p[0] == '.' && p[1] == '.' && (p == name || p[-1] == '/') && (p[2] == '/' || !p[2]))
-            return 0;
-    return 1;
-}
-
 /* Loads the texture; 1 on success, 0 after recording a warning. */
 static int load_texture(const sl_mesh *mesh, const char *texture_dir, sl_image *img,
                         sl_range_counts *counts)
@@ -127,12 +117,13 @@ static int load_texture(const sl_mesh *mesh, const char *texture_dir, sl_image *
         warn(counts, "texture %s%s: the file has no texture coordinates", name, "");
         return 0;
     }
-    if (!texture_dir || !safe_name(name)) {
+    char path[1024];
+    int where = sl_ply_texture_path(texture_dir, name, path, sizeof path);
+    if (where == -1) {
         warn(counts, "texture %s%s: not a name inside the input's directory", name, "");
         return 0;
     }
-    char path[1024];
-    if (snprintf(path, sizeof path, "%s/%s", texture_dir, name) >= (int)sizeof path) {
+    if (where) {
         warn(counts, "texture %s%s: path too long", name, "");
         return 0;
     }

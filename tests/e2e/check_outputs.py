@@ -5,7 +5,8 @@ promises (docs/formats.md "Published per item"), item by item:
 - report.json: input counts, and per level name, k, triangles, vertices, watertight, edge
   counts, and (with fidelity) RMS <= Hausdorff, both finite and >= 0;
 - every level's PLY says in its header the vertex and face counts the report gives, and its
-  GLB and PNG exist when the config asks for them;
+  GLB and PNG exist when the config asks for them; a level whose mesh is another's
+  ("file" names that level) has no files of its own but that level's;
 - timings.json: wall and CPU seconds and peak RSS for every stage;
 - summary.json lists every item's report; summary.md has each item's section with one
   table row per level (matching the report) and links to thumbnails that exist.
@@ -90,22 +91,28 @@ def check_item(out, item, formats, thumbnails, fidelity, summary_md):
                                        lv.get("nonmanifold_edges") == 0 and tri > 0),
               f"{item}/{name}: watertight agrees with the edge counts")
         if tri == 0:
+            check(lv.get("file") is None, f"{item}/{name}: no triangles, no files")
             continue
+        own = lv.get("file")
+        check(own in {l.get("name") for l in levels}, f"{item}/{name}: its files are a level's ({own})")
+        if own != name:
+            check(not any(os.path.exists(os.path.join(folder, f"{name}.{e}")) for e in ("ply", "glb", "png")),
+                  f"{item}/{name}: no files of its own (the same mesh as {own})")
         if fidelity:
             rms, hd = lv.get("rms"), lv.get("hausdorff")
             check(rms is not None and hd is not None and math.isfinite(rms) and
                   math.isfinite(hd) and 0 <= rms <= hd, f"{item}/{name}: RMS {rms} <= Hausdorff {hd}")
         if "ply" in formats:
-            v, f = ply_counts(os.path.join(folder, name + ".ply"))
-            check((v, f) == (ver, tri), f"{item}/{name}.ply: header counts {(v, f)} = report {(ver, tri)}")
+            v, f = ply_counts(os.path.join(folder, own + ".ply"))
+            check((v, f) == (ver, tri), f"{item}/{own}.ply: header counts {(v, f)} = report {(ver, tri)}")
         if "glb" in formats:
-            check(os.path.getsize(os.path.join(folder, name + ".glb")) > 0, f"{item}/{name}.glb written")
-        png = os.path.join(folder, name + ".png")
+            check(os.path.getsize(os.path.join(folder, own + ".glb")) > 0, f"{item}/{own}.glb written")
+        png = os.path.join(folder, own + ".png")
         if thumbnails:
             check(os.path.isfile(png) and open(png, "rb").read(8) == b"\x89PNG\r\n\x1a\n",
-                  f"{item}/{name}.png is a PNG")
-            check(f"(<{md_link(item)}/{md_link(name)}.png>)" in summary_md,
-                  f"summary.md shows {item}/{name}.png")
+                  f"{item}/{own}.png is a PNG")
+            check(f"(<{md_link(item)}/{md_link(own)}.png>)" in summary_md,
+                  f"summary.md shows {item}/{own}.png")
         row = f"| {md_text(name)} | {lv.get('expansions')} | {tri} | {ver} |"
         check(row in summary_md, f"summary.md has the row {row}")
     check(f"### {md_text(item)}\n" in summary_md, f"summary.md has a section for {item}")

@@ -35,11 +35,14 @@ for item in "${closed[@]}"; do
   reported=$(report_value "$item" "[l for l in r['stages']['export']['levels'] if l['name']=='lod100'][0]['boundary_edges']")
   counted=$("$SCANLOD" compare "$TMP/out/$item.ply/lod100.ply" "$TMP/out/$item.ply/lod100.ply" | sed -n 's/.*edges: \([0-9]*\) boundary.*/\1/p')
   check "$item: reported boundary edges ($reported) = compare's count ($counted)" [ "$reported" = "$counted" ]
-  for name in lod20 lod60 lod100 thumb big; do
+  for name in lod20 lod60 lod100 thumb; do
     check "$item: $name.ply, .glb and .png published" [ -s "$TMP/out/$item.ply/$name.ply" -a -s "$TMP/out/$item.ply/$name.glb" -a -s "$TMP/out/$item.ply/$name.png" ]
   done
   clamped=$(report_value "$item" "[l for l in r['stages']['export']['levels'] if l['name']=='big'][0]['clamped']")
   check "$item: a budget above the finest is clamped" [ "$clamped" = "True" ]
+  # ... so it is the finest mesh, published once: under lod100's name (test_duplicate_levels.sh).
+  shared=$(report_value "$item" "[l for l in r['stages']['export']['levels'] if l['name']=='big'][0]['file']")
+  check "$item: the clamped budget shares lod100's files ($shared)" [ "$shared" = lod100 -a ! -e "$TMP/out/$item.ply/big.glb" ]
   rms=$(report_value "$item" "[l for l in r['stages']['export']['levels'] if l['name']=='lod100'][0]['rms']")
   check "$item: finest RMS under 0.5% of the diagonal ($rms)" python3 -c "import sys; sys.exit(0 if $rms < 0.005 else 1)"
 done
@@ -53,13 +56,13 @@ check "published outputs agree with the reports" python3 "$SCANLOD_SOURCE_DIR/te
 gltf="$SCANLOD_SOURCE_DIR/scripts/gltf"
 if gltf_validator_ready; then
   mapfile -t glbs < <(find "$TMP/out" -name '*.glb' | sort)
-  levels_drawn=$(python3 -c "import json; print(sum(1 for i in '${items[*]}'.split() for l in json.load(open('$TMP/out/'+i+'.ply/report.json'))['stages']['export']['levels'] if l['triangles'] > 0))")
+  levels_drawn=$(python3 -c "import json; print(sum(1 for i in '${items[*]}'.split() for l in json.load(open('$TMP/out/'+i+'.ply/report.json'))['stages']['export']['levels'] if l['triangles'] > 0 and l['file'] == l['name']))")
   set +e
   node "$gltf/validate.mjs" "${glbs[@]}" >"$TMP/glb.jsonl" 2>"$TMP/glb.err"
   vrc=$?
   set -e
   check "validator on ${#glbs[@]} exported GLBs: exit 0 ($(head -c 300 "$TMP/glb.err"))" [ "$vrc" -eq 0 ]
-  check "exported GLBs: one per level with triangles ($levels_drawn), each validated" \
+  check "exported GLBs: one per distinct level with triangles ($levels_drawn), each validated" \
     [ "${#glbs[@]}" -eq "$levels_drawn" -a "$(wc -l <"$TMP/glb.jsonl")" -eq "$levels_drawn" ]
   check "exported GLBs: every one 0 errors" [ "$(grep -c '"numErrors":0,' "$TMP/glb.jsonl")" -eq "$levels_drawn" ]
   check "exported GLBs: every one 0 warnings" [ "$(grep -c '"numWarnings":0,' "$TMP/glb.jsonl")" -eq "$levels_drawn" ]

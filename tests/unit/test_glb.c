@@ -7,6 +7,7 @@
  * into that directory for tests/export/test_glb.sh to run the Khronos validator on.
  */
 #include <errno.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -20,6 +21,12 @@
 #include "json_validate.h"
 
 static char tmpdir[512];
+
+/* IEC 61966-2-1, written here again so that the test does not trust the writer's. */
+static double glb_test_linear_to_srgb(double l)
+{
+    return l <= 0.0031308 ? 12.92 * l : 1.055 * pow(l, 1 / 2.4) - 0.055;
+}
 
 typedef struct glb_file {
     char *data;
@@ -99,28 +106,38 @@ static void test_cube_layout(void)
     path_in_tmp("cube.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    CHECK(sl_glb_write(path, &m, "{\"lod_percent\":20,\"triangles\":12}", &err) == 0);
+    CHECK(sl_glb_write(path, &m, "{\"lod_percent\":20,\"triangles\":12}", NULL, NULL,
+                       &err) == 0);
     glb_file f;
     if (glb_read(path, &f) == 0) {
-        /* 24 positions + 24 normals (12 bytes each), 24 colours (4), 36 short indices. */
-        CHECK_EQ_U64(f.bin_length, 288 + 288 + 96 + 72);
+        /* 24 positions + 24 normals (12 bytes each), 24 linear colours (4 x 16 bits), 36
+         * short indices. */
+        CHECK_EQ_U64(f.bin_length, 288 + 288 + 192 + 72);
         CHECK(strstr(f.json, "\"generator\":\"scanlod\"") != NULL);
         CHECK(strstr(f.json, "\"attributes\":{\"POSITION\":0,\"NORMAL\":1,\"COLOR_0\":2}"));
         CHECK(strstr(f.json, "\"indices\":3") != NULL);
         CHECK(strstr(f.json, "\"min\":[-1,-1,-1],\"max\":[2,2,2]") != NULL);
         CHECK(strstr(f.json, "\"componentType\":5123,\"count\":36,\"type\":\"SCALAR\""));
-        CHECK(strstr(f.json, "\"componentType\":5121,\"count\":24,\"type\":\"VEC4\","
-                             "\"normalized\":true"));
+        CHECK(strstr(f.json, "\"componentType\":5123,\"normalized\":true,\"count\":24,"
+                             "\"type\":\"VEC4\""));
+        CHECK(strstr(f.json, "extensionsUsed") == NULL); /* plain glTF 2.0 */
         CHECK(strstr(f.json, "\"extras\":{\"lod_percent\":20,\"triangles\":12}") != NULL);
         CHECK_EQ_U64(json_number_after(f.json, "\"byteOffset\":", 1), 288);
         CHECK_EQ_U64(json_number_after(f.json, "\"byteOffset\":", 2), 576);
-        CHECK_EQ_U64(json_number_after(f.json, "\"byteOffset\":", 3), 672);
+        CHECK_EQ_U64(json_number_after(f.json, "\"byteOffset\":", 3), 768);
         CHECK_EQ_U64(json_number_after(f.json, "\"target\":", 3), 34963);
         CHECK(memcmp(f.bin, m.positions, 288) == 0); /* the tests run on little-endian hosts */
-        CHECK(memcmp(f.bin + 576, m.colors, 96) == 0);
+        /* Colours are linear (glTF): sRGB 200 comes back as 200 after linear -> sRGB. */
+        int colors_ok = 1;
+        for (int i = 0; i < 24 * 4; i++) {
+            double v = (f.bin[576 + 2 * i] | f.bin[577 + 2 * i] << 8) / 65535.0;
+            double back = i % 4 == 3 ? v * 255 : 255 * glb_test_linear_to_srgb(v);
+            colors_ok &= fabs(back - m.colors[i]) <= 0.5;
+        }
+        CHECK(colors_ok);
         int same = 1;
         for (int i = 0; i < 36; i++)
-            same &= f.bin[672 + 2 * i] + 256u * f.bin[673 + 2 * i] == m.triangles[i];
+            same &= f.bin[768 + 2 * i] + 256u * f.bin[769 + 2 * i] == m.triangles[i];
         CHECK(same);
         glb_free(&f);
     }
@@ -137,7 +154,7 @@ static void test_padding_and_minimal(void)
     path_in_tmp("one.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    CHECK(sl_glb_write(path, &g, NULL, &err) == 0);
+    CHECK(sl_glb_write(path, &g, NULL, NULL, NULL, &err) == 0);
     glb_file f;
     if (glb_read(path, &f) == 0) {
         CHECK_EQ_U64(f.bin_length, 36 + 8);
@@ -170,7 +187,7 @@ static void test_large_indices_and_normals(void)
     path_in_tmp("grid.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    CHECK(sl_glb_write(path, &m, NULL, &err) == 0);
+    CHECK(sl_glb_write(path, &m, NULL, NULL, NULL, &err) == 0);
     glb_file f;
     if (glb_read(path, &f) == 0) {
         uint64_t v = m.vertex_count, t = m.triangle_count;
@@ -196,7 +213,7 @@ static void expect_rejected(const sl_mesh *g, int code, const char *message_part
     path_in_tmp("rejected.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    CHECK_MSG(sl_glb_write(path, g, NULL, &err) == code, "%s", sl_error_name(err.code));
+    CHECK_MSG(sl_glb_write(path, g, NULL, NULL, NULL, &err) == code, "%s", sl_error_name(err.code));
     CHECK_MSG(strstr(err.message, message_part) != NULL, "%s", err.message);
     CHECK(access(path, F_OK) != 0 && errno == ENOENT);
     sl_error_init(&err);
@@ -228,7 +245,7 @@ static void test_rejections(void)
     path_in_tmp("rejected.glb", path, sizeof path);
     sl_error err;
     sl_error_init(&err);
-    CHECK(sl_glb_write(path, &not_object, "\"lod\"", &err) == SL_E_INTERNAL);
+    CHECK(sl_glb_write(path, &not_object, "\"lod\"", NULL, NULL, &err) == SL_E_INTERNAL);
     CHECK(access(path, F_OK) != 0);
 }
 
@@ -244,7 +261,8 @@ static void test_deterministic(void)
     sl_error err;
     sl_error_init(&err);
     const char *extras = "{\"level\":1}";
-    CHECK(sl_glb_write(a, &m, extras, &err) == 0 && sl_glb_write(b, &m, extras, &err) == 0);
+    CHECK(sl_glb_write(a, &m, extras, NULL, NULL, &err) == 0 &&
+          sl_glb_write(b, &m, extras, NULL, NULL, &err) == 0);
     char *da = NULL, *db = NULL;
     size_t na = 0, nb = 0;
     CHECK(sl_read_file(a, 1 << 24, &da, &na, &err) == 0);
@@ -299,17 +317,17 @@ static void write_samples(const char *dir)
     for (size_t i = 0; i < sizeof cubes / sizeof cubes[0]; i++) {
         meshes_cube(&m, -0.5f, 0.5f, cubes[i].normals, cubes[i].colors);
         snprintf(path, sizeof path, "%s/%s.glb", dir, cubes[i].name);
-        CHECK(sl_glb_write(path, &m, "{\"scanlod\":{\"level\":0}}", &err) == 0);
+        CHECK(sl_glb_write(path, &m, "{\"scanlod\":{\"level\":0}}", NULL, NULL, &err) == 0);
         sl_mesh_release(&m);
     }
     float one_pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, one_nrm[9] = {0, 0, 3, 0, 0, 3, 0, 0, 3};
     uint32_t one_idx[3] = {0, 1, 2};
     sl_mesh one = sl_mesh_view(3, one_pos, one_nrm, NULL, 1, one_idx);
     snprintf(path, sizeof path, "%s/one_triangle.glb", dir);
-    CHECK(sl_glb_write(path, &one, NULL, &err) == 0);
+    CHECK(sl_glb_write(path, &one, NULL, NULL, NULL, &err) == 0);
     meshes_grid(&m, 300, 1, 1);
     snprintf(path, sizeof path, "%s/grid_uint32.glb", dir);
-    CHECK(sl_glb_write(path, &m, NULL, &err) == 0);
+    CHECK(sl_glb_write(path, &m, NULL, NULL, NULL, &err) == 0);
     sl_mesh_release(&m);
     const char *scans[] = {"cow", "fandisk", "bun_zipper_res3", "rocker_arm"};
     for (size_t i = 0; i < sizeof scans / sizeof scans[0]; i++) {
@@ -320,7 +338,8 @@ static void write_samples(const char *dir)
         meshes_vertex_normals(&m);
         snprintf(path, sizeof path, "%s/%s.glb", dir, scans[i]);
         const char *extras = "{\"scanlod\":{\"item\":\"scan\",\"lod_percent\":100}}";
-        CHECK_MSG(sl_glb_write(path, &m, extras, &err) == 0, "%s: %s", scans[i], err.message);
+        CHECK_MSG(sl_glb_write(path, &m, extras, NULL, NULL, &err) == 0, "%s: %s", scans[i],
+                  err.message);
         sl_mesh_release(&m);
     }
 }

@@ -479,6 +479,40 @@ static void test_info(void)
     sl_mesh_release(&m);
 }
 
+/* Unit and up-axis hints in comments (docs/glb.md "Units and up axis"); anything else
+ * in a comment is free text and leaves them unset. */
+static void test_frame_hints(void)
+{
+    static const struct { const char *lines, *units; char up; } cases[] = {
+        {"comment units mm\ncomment up z\n", "mm", 'z'},
+        {"comment Units: Millimeters\ncomment up_axis: +Z\n", "mm", 'z'},
+        {"comment unit= inch\ncomment Y-up\n", "in", 'y'},
+        {"comment units feet\ncomment upaxis Y\n", "ft", 'y'},
+        {"comment units metres\ncomment up-axis z\n", "m", 'z'},
+        {"comment units parsecs\ncomment up x\n", "", 0},
+        {"comment scanned in mm, z is up\ncomment units\n", "", 0},
+        {"comment Z-up model\ncomment units cm extra\n", "", 0}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        plyb b;
+        plyb_init(&b, SL_PLY_ASCII);
+        plyb_begin(&b);
+        plyb_text(&b, "%selement vertex 1\nproperty float x\nproperty float y\n"
+                      "property float z\nend_header\n", cases[i].lines);
+        for (int k = 0; k < 3; k++)
+            plyb_val(&b, "float", k);
+        plyb_eol(&b);
+        sl_mesh m;
+        sl_error err;
+        char name[64];
+        snprintf(name, sizeof name, "frame_%zu", i);
+        if (read_case(&b, name, &m, &err) == 0)
+            CHECK_MSG(!strcmp(m.units, cases[i].units) && m.up_axis == cases[i].up,
+                      "case %zu: units '%s' up '%c'", i, m.units, m.up_axis ? m.up_axis : '-');
+        sl_mesh_release(&m);
+        plyb_free(&b);
+    }
+}
+
 int main(void)
 {
     const char *tmp = getenv("TMPDIR");
@@ -498,6 +532,7 @@ int main(void)
         test_nonfinite_kept(formats[f]);
     }
     test_empty_rows();
+    test_frame_hints();
     test_info();
     if (__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__ && sizeof(size_t) == 8)
         test_beyond_4gib();

@@ -69,8 +69,10 @@ def equal_counts(ctx, name, m, work):
     points = []   # scanlod meshes: (triangles, ply)
     for lv in m["levels"]:
         if lv.get("lod_percent") is not None:
+            # A level identical to an earlier one is published under that one's name.
             points.append((lv["triangles"], os.path.join(os.path.dirname(m["slod"]),
-                                                         lv["name"] + ".ply"), lv["name"]))
+                                                         lv.get("file", lv["name"]) + ".ply"),
+                           lv["name"]))
     for f in ctx.curve_extra:
         n = max(8, int(round(f * m["finest_triangles"])))
         ply = os.path.join(work, "budget_%d.ply" % n)

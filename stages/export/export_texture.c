@@ -1,0 +1,282 @@
+/* Texture atlases for the levels of a textured input (docs/glb.md "Textures").
+ *
+ * An octree level's vertices are not input vertices, so the input's texture coordinates
+ * do not carry over: each level gets its own atlas, baked from the input texture.
+ *
+ * Charts: one per triangle, two triangles per square cell of c x c texels, cells in rows
+ * in triangle order (the level's triangles come in vertex-cache order, so neighbours in
+ * the atlas are mostly neighbours on the surface, which keeps mipmap averaging between
+ * cells plausible). In a cell at (x0, y0), triangle A has its corners at (x0+1, y0+1),
+ * (x0+c-3, y0+1), (x0+1, y0+c-3), triangle B the mirror image from the opposite corner:
+ * a one-texel gutter at the cell's edges and two texels between the hypotenuses, so a
+ * bilinear lookup anywhere in a triangle reads only texels of that triangle. Every texel
+ * of the cell belongs to the triangle on its side of the diagonal and is baked at the
+ * point of that triangle nearest to the texel centre (the gutter repeats the edge colour,
+ * for filtering). Texel efficiency: (c-4)^2 of each c^2 cell hold the surface.
+ *
+ * Baking a texel: its point on the level triangle -> the closest point of the input
+ * surface (geometry/triangle_bvh.h) -> that point's texture coordinates, interpolated
+ * from its input triangle's corners -> the input texture, bilinear (the OpenGL convention
+ * of the range stage: v = 0 is the bottom row, coordinates wrap). Texels are independent,
+ * so the bake is parallel over cells and the same on any thread count.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "geometry/mesh_distance.h"
+#include "geometry/ply.h"
+#include "stages/export/export_internal.h"
+
+#define TEXTURE_MAX_PIXELS (1ull << 28) /* 16k x 16k, as the range stage */
+#define MIN_CELL 6                      /* texels: below this a chart holds (c-4)^2 < 4 */
+
+int sl_export_texture_open(const sl_mesh *input, const char *dir, sl_export_texture *t,
+                           char *why, size_t why_size)
+{
+    memset(t, 0, sizeof *t);
+    char path[1024];
+    sl_error err;
+    sl_error_init(&err);
+    if (!input->texture_file[0]) {
+        snprintf(why, why_size, "the input names no texture");
+        return 0;
+    }
+    if (!input->texcoords && !input->face_texcoords) {
+        snprintf(why, why_size, "the input has no texture coordinates");
+        return 0;
+    }
+    if (sl_ply_texture_path(dir, input->texture_file, path, sizeof path)) {
+        snprintf(why, why_size, "texture %.200s: not a name inside the input's directory",
+                 input->texture_file);
+        return 0;
+    }
+    if (input->triangle_count == 0 || sl_mesh_check_surface(input, NULL, &err) != 0) {
+        snprintf(why, why_size, "the input has no surface to bake from");
+        return 0;
+    }
+    if (sl_image_read(path, TEXTURE_MAX_PIXELS, &t->image, &err)) {
+        char msg[1400];
+        snprintf(why, why_size, "texture %.200s: %.600s", input->texture_file,
+                 sl_error_format(&err, msg, sizeof msg));
+        return 0;
+    }
+    if (sl_triangle_bvh_build(&t->bvh, input, &err)) {
+        sl_image_release(&t->image);
+        snprintf(why, why_size, "no memory for the input's triangle tree");
+        return 0;
+    }
+    t->input = input;
+    return 1;
+}
+
+void sl_export_texture_close(sl_export_texture *t)
+{
+    if (t->input) {
+        sl_image_release(&t->image);
+        sl_triangle_bvh_release(&t->bvh);
+    }
+    memset(t, 0, sizeof *t);
+}
+
+void sl_export_baked_release(sl_export_baked *b)
+{
+    free(b->positions), free(b->normals), free(b->texcoords), free(b->triangles);
+    free(b->image);
+    memset(b, 0, sizeof *b);
+}
+
+/* The input's texture coordinate at corner k of input triangle `tri`. */
+static void corner_uv(const sl_mesh *in, uint32_t tri, int k, double uv[2])
+{
+    if (in->face_texcoords) {
+        uv[0] = in->face_texcoords[6 * (uint64_t)tri + 2 * k];
+        uv[1] = in->face_texcoords[6 * (uint64_t)tri + 2 * k + 1];
+    } else {
+        uint32_t v = in->triangles[3 * (uint64_t)tri + k];
+        uv[0] = in->texcoords[2 * (uint64_t)v], uv[1] = in->texcoords[2 * (uint64_t)v + 1];
+    }
+}
+
+static int wrap(int64_t i, int n)
+{
+    int64_t m = i % n;
+    return (int)(m < 0 ? m + n : m);
+}
+
+/* Bilinear RGB lookup at (u, v), OpenGL convention, wrapping. */
+static void sample(const sl_image *img, double u, double v, float rgb[3])
+{
+    if (!isfinite(u) || !isfinite(v))
+        u = v = 0;
+    double x = u * img->width - 0.5, y = (1.0 - v) * img->height - 0.5;
+    double x0 = floor(x), y0 = floor(y), fx = x - x0, fy = y - y0;
+    int xs[2] = {wrap((int64_t)x0, img->width), wrap((int64_t)x0 + 1, img->width)};
+    int ys[2] = {wrap((int64_t)y0, img->height), wrap((int64_t)y0 + 1, img->height)};
+    for (int c = 0; c < 3; c++) {
+        double acc = 0;
+        for (int j = 0; j < 2; j++)
+            for (int i = 0; i < 2; i++) {
+                const float *px = img->pixels + ((uint64_t)ys[j] * img->width + xs[i]) * img->channels;
+                double w = (i ? fx : 1 - fx) * (j ? fy : 1 - fy);
+                acc += w * px[img->channels >= 3 ? c : 0];
+            }
+        rgb[c] = (float)acc;
+    }
+}
+
+/* Barycentric weights of p in triangle (a, b, c) (any dimension 3), least squares. */
+static void barycentric(const double p[3], const double a[3], const double b[3],
+                        const double c[3], double w[3])
+{
+    double e0[3], e1[3], d[3];
+    for (int k = 0; k < 3; k++)
+        e0[k] = b[k] - a[k], e1[k] = c[k] - a[k], d[k] = p[k] - a[k];
+    double d00 = 0, d01 = 0, d11 = 0, d20 = 0, d21 = 0;
+    for (int k = 0; k < 3; k++) {
+        d00 += e0[k] * e0[k], d01 += e0[k] * e1[k], d11 += e1[k] * e1[k];
+        d20 += d[k] * e0[k], d21 += d[k] * e1[k];
+    }
+    double den = d00 * d11 - d01 * d01;
+    if (!(fabs(den) > 0)) {
+        w[0] = 1, w[1] = w[2] = 0;
+        return;
+    }
+    w[1] = (d11 * d20 - d01 * d21) / den;
+    w[2] = (d00 * d21 - d01 * d20) / den;
+    w[0] = 1 - w[1] - w[2];
+}
+
+/* The chart corners of triangle t in texel space (x right, y down). */
+static void chart(uint64_t t, int n, int c, double q[3][3])
+{
+    uint64_t cell = t / 2;
+    double x0 = (double)(cell % (uint64_t)n) * c, y0 = (double)(cell / (uint64_t)n) * c;
+    double near = 1, far = c - 3;
+    if (t % 2 == 0) {
+        double a[3][2] = {{near, near}, {far, near}, {near, far}};
+        for (int k = 0; k < 3; k++)
+            q[k][0] = x0 + a[k][0], q[k][1] = y0 + a[k][1], q[k][2] = 0;
+    } else {
+        double a[3][2] = {{c - near, c - near}, {c - far, c - near}, {c - near, c - far}};
+        for (int k = 0; k < 3; k++)
+            q[k][0] = x0 + a[k][0], q[k][1] = y0 + a[k][1], q[k][2] = 0;
+    }
+}
+
+/* Bakes the texels of triangle t's half of its cell into `rgb` (size x size x 3). */
+static void bake_triangle(const sl_export_texture *src, const sl_lod_mesh *level, uint64_t t,
+                          int n, int c, int size, float *rgb)
+{
+    double q[3][3], v[3][3];
+    chart(t, n, c, q);
+    for (int k = 0; k < 3; k++)
+        for (int d = 0; d < 3; d++)
+            v[k][d] = level->positions[3 * (uint64_t)level->indices[3 * t + k] + d];
+    uint64_t cell = t / 2;
+    int x0 = (int)(cell % (uint64_t)n) * c, y0 = (int)(cell / (uint64_t)n) * c;
+    uint32_t hint = UINT32_MAX;
+    for (int j = 0; j < c; j++)
+        for (int i = 0; i < c; i++) {
+            int side = (i + j + 1 >= c); /* texel centre sum vs the cell's diagonal */
+            if (side != (int)(t % 2))
+                continue;
+            double p[3] = {x0 + i + 0.5, y0 + j + 0.5, 0}, on[3], w[3], x[3] = {0, 0, 0};
+            sl_closest_point_triangle(p, q[0], q[1], q[2], on);
+            barycentric(on, q[0], q[1], q[2], w);
+            for (int k = 0; k < 3; k++)
+                for (int d = 0; d < 3; d++)
+                    x[d] += w[k] * v[k][d];
+            sl_closest hit;
+            sl_triangle_bvh_closest(&src->bvh, x, hint, &hit);
+            hint = hit.triangle;
+            const float *corner = src->bvh.corners + 9 * (uint64_t)hit.triangle;
+            double a[3] = {corner[0], corner[1], corner[2]}, b[3] = {corner[3], corner[4], corner[5]};
+            double cc[3] = {corner[6], corner[7], corner[8]}, wi[3], uv[2] = {0, 0};
+            barycentric(hit.point, a, b, cc, wi);
+            uint32_t tri = src->bvh.source[hit.triangle];
+            for (int k = 0; k < 3; k++) {
+                double cuv[2];
+                corner_uv(src->input, tri, k, cuv);
+                uv[0] += wi[k] * cuv[0], uv[1] += wi[k] * cuv[1];
+            }
+            sample(&src->image, uv[0], uv[1], rgb + 3 * ((uint64_t)(y0 + j) * size + x0 + i));
+        }
+}
+
+/* The atlas edge: the configured one, or less when the level's cells would be larger
+ * than 64 texels (a small level needs no large image). 0 when cells would be too small. */
+static int atlas_size(uint64_t triangles, int configured, int *n, int *c)
+{
+    uint64_t cells = (triangles + 1) / 2;
+    *n = (int)ceil(sqrt((double)cells));
+    int size = configured;
+    while (size > 64 && size / 2 / *n >= 64)
+        size /= 2;
+    *c = size / *n;
+    return *c >= MIN_CELL ? size : 0;
+}
+
+int sl_export_bake(const sl_export_texture *src, const sl_lod_mesh *level, int max_size,
+                   int png, int quality, sl_export_baked *out, sl_error *err)
+{
+    memset(out, 0, sizeof *out);
+    int n, c, size = atlas_size(level->triangle_count, max_size, &n, &c);
+    if (!size)
+        return 1; /* too many triangles for this atlas: the level keeps vertex colours */
+    uint64_t t_count = level->triangle_count, v_count = 3 * t_count;
+    float *rgb = calloc((size_t)size * size, 3 * sizeof *rgb);
+    out->positions = malloc(v_count * 3 * sizeof(float));
+    out->normals = malloc(v_count * 3 * sizeof(float));
+    out->texcoords = malloc(v_count * 2 * sizeof(float));
+    out->triangles = malloc(v_count * sizeof(uint32_t));
+    if (!rgb || !out->positions || !out->normals || !out->texcoords || !out->triangles) {
+        free(rgb);
+        sl_export_baked_release(out);
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory for a %d px atlas", size);
+    }
+#pragma omp parallel for schedule(dynamic, 64)
+    for (int64_t t = 0; t < (int64_t)t_count; t++)
+        bake_triangle(src, level, (uint64_t)t, n, c, size, rgb);
+    for (uint64_t t = 0; t < t_count; t++) {
+        double q[3][3];
+        chart(t, n, c, q);
+        for (int k = 0; k < 3; k++) {
+            uint64_t o = 3 * t + (uint64_t)k, v = level->indices[o];
+            memcpy(out->positions + 3 * o, level->positions + 3 * v, 3 * sizeof(float));
+            memcpy(out->normals + 3 * o, level->normals + 3 * v, 3 * sizeof(float));
+            out->texcoords[2 * o] = (float)(q[k][0] / size);
+            out->texcoords[2 * o + 1] = (float)(1.0 - q[k][1] / size); /* OpenGL: v up */
+            out->triangles[o] = (uint32_t)o;
+        }
+    }
+    out->vertex_count = v_count;
+    out->triangle_count = t_count;
+    int rc = sl_image_encode(png ? "png" : "jpg", size, size, 3, rgb, quality, &out->image,
+                             &out->image_size, err);
+    free(rgb);
+    if (rc) {
+        sl_export_baked_release(out);
+        return rc;
+    }
+    out->mime_type = png ? "image/png" : "image/jpeg";
+    out->size = size;
+    out->cell = c;
+    out->texel_efficiency = (double)t_count / 2 * (c - 4) * (c - 4) / ((double)size * size);
+    return 0;
+}
+
+int sl_export_texture_size(const sl_export_config *c, const char *level)
+{
+    const char *p = c->texture_sizes;
+    size_t len = strlen(level);
+    while (p && *p) {
+        size_t n = strcspn(p, ",");
+        if (n > len && p[len] == ':' && !strncmp(p, level, len))
+            return atoi(p + len + 1);
+        p += n + (p[n] == ',');
+    }
+    return c->texture_size;
+}

@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# Levels that come out identical are published once (issue 15, item 7): budgets above the
+# finest level (low, medium, high, highest here, on a scan whose finest level has ~3,900
+# triangles) give the same mesh as lod100, so they get no files of their own; the report
+# and the manifest say which levels and Voyager qualities share lod100's files. Also: no
+# two published files of the item are byte-identical, every level's facts stay in the
+# report, and a rerun is a no-op with the same bytes.
+source "$(dirname "$0")/../lib.sh"
+
+mkdir -p "$TMP/in"
+cp "$SCANS/bun_zipper_res3.ply" "$TMP/in/"
+write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out" "[export]" \
+  "budgets = thumb:1000,low:20000,medium:100000,high:500000,highest:2000000" \
+  "thumbnail_size = 64" "fidelity = false"
+run_scanlod run "$TMP/c.ini" -q
+check "run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
+item="$TMP/out/bun_zipper_res3.ply"
+
+set +e
+python3 - "$item" <<'EOF'
+import hashlib, json, os, sys
+folder = sys.argv[1]
+r = json.load(open(os.path.join(folder, "report.json")))["stages"]["export"]
+bad = 0
+def check(ok, what):
+    global bad
+    if not ok:
+        bad += 1
+        print("FAIL: " + what, file=sys.stderr)
+levels = {lv["name"]: lv for lv in r["levels"]}
+finest = r["triangles_finest"]
+shared = ["low", "medium", "high", "highest"]
+check(levels["lod100"]["file"] == "lod100", "lod100 has its own files")
+for name in shared:
+    lv = levels[name]
+    check(lv["clamped"] and lv["triangles"] == finest, f"{name}: clamped at the finest level ({lv['triangles']})")
+    check(lv["file"] == "lod100", f"{name}: published as lod100's files (file = {lv['file']!r})")
+    for ext in ("ply", "glb", "png", "glb.js"):
+        check(not os.path.exists(os.path.join(folder, f"{name}.{ext}")), f"{name}.{ext} is not published")
+    check(all(lv[k] == levels["lod100"][k] for k in ("triangles", "vertices", "watertight", "boundary_edges")),
+          f"{name}: the report keeps its facts (those of lod100)")
+# The dedup compares meshes, not expansion counts: lod100 stops at the last expansion that
+# changes the surface, the clamped budgets run to the end of the LOD array.
+check(levels["lod100"]["expansions"] != levels["medium"]["expansions"],
+      "lod100 and medium have different k but one mesh")
+files = {f["name"]: f for f in r["files"]}
+check(sorted(files) == sorted(["lod20", "lod40", "lod60", "lod80", "lod100", "thumb"]),
+      f"one file entry per distinct mesh ({sorted(files)})")
+check(files["lod100"]["levels"] == ["lod100"] + shared, f"lod100's entry lists its levels {files['lod100']['levels']}")
+check(files["lod100"]["qualities"] == ["Low", "Medium", "High", "Highest"],
+      f"lod100 serves Low..Highest ({files['lod100']['qualities']})")
+check(files["thumb"]["qualities"] == ["Thumb"], "thumb serves Thumb")
+man = {d["quality"]: d for d in r["manifest"]["derivatives"]}
+check(all(man[q]["uri"] == "lod100.glb" for q in ("Low", "Medium", "High", "Highest")),
+      "the manifest gives Low..Highest lod100.glb")
+svx = json.load(open(os.path.join(folder, "scene.svx.json")))
+uris = [d["assets"][0]["uri"] for d in svx["models"][0]["derivatives"]]
+check(uris == ["thumb.glb"] + ["lod100.glb"] * 4, f"scene.svx.json: {uris}")
+# No duplicate files at all.
+digests = {}
+for f in sorted(os.listdir(folder)):
+    h = hashlib.sha256(open(os.path.join(folder, f), "rb").read()).hexdigest()
+    check(h not in digests, f"{f} and {digests.get(h)} are identical")
+    digests[h] = f
+md = open(os.path.join(folder, "summary-item.md")).read()
+check("| medium | %d | %d |" % (levels["medium"]["expansions"], finest) in md and
+      md.count(" | lod100 |\n") == 5, "summary-item.md: medium's row, five rows served by lod100's files")
+html = open(os.path.join(folder, "index.html")).read()
+check(html.count("the same mesh as lod100") == 4, "index.html: four levels point to lod100's files")
+check(html.count('<figure class="sl-view"') == len(files), "index.html: one 3D view per published mesh")
+sys.exit(1 if bad else 0)
+EOF
+prc=$?
+set -e
+check "duplicate levels published once, named in report and manifest" [ "$prc" -eq 0 ]
+
+# The work folder holds no copies either: the export stage never wrote them.
+check "no medium.* artifact" [ -z "$(find "$TMP/work/artifacts/export" -name 'medium.*')" ]
+
+digest=$(tree_digest "$TMP/work" "$TMP/out")
+run_scanlod run "$TMP/c.ini" -q
+check "rerun: nothing to do ($out)" contains "nothing to do" "$out"
+check "rerun: the same bytes" same_digest "$digest" "$TMP/work" "$TMP/out"
+finish
