@@ -2,6 +2,7 @@
  *
  *   scanlod extract MODEL.slod (--expansions K | --triangles N | --lod-percent P |
  *                               --max-error E) -o OUT.{ply,glb,obj}
+ *   scanlod extract MODEL.slod (...) --morph-to M [--morph-weight W] -o OUT.{ply,glb,obj}
  *   scanlod extract OCTREE.slot --level L -o OUT.ply      (a uniform octree level)
  */
 #include <errno.h>
@@ -11,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -18,11 +20,14 @@
 #include "core/error.h"
 #include "runtime/lod_io.h"
 #include "runtime/octree_io.h"
+#include "geometry/morph_target.h"
 #include "stages/export/export.h"
 
 static const char usage[] =
     "usage: scanlod extract MODEL.slod (--expansions K | --triangles N | --lod-percent P |\n"
     "                                   --max-error E) -o OUT.{ply,glb,obj} [--repeat R [--hot]]\n"
+    "       scanlod extract MODEL.slod (--triangles N | ...) --morph-to M [--morph-weight W]\n"
+    "                                   -o OUT.{ply,glb,obj}\n"
     "       scanlod extract OCTREE.slot --level L -o OUT.{ply,glb,obj}\n"
     "Cuts one level of detail from a model built by `scanlod run` (published as\n"
     "OUTPUT/ITEM/model.slod): K expansions of the LOD array, the largest level within N\n"
@@ -34,7 +39,11 @@ static const char usage[] =
     "the runtime API does, each after flushing the CPU caches (a viewer renders between\n"
     "two cuts), and prints their median and minimum (for benchmarks). --hot times them\n"
     "back to back instead, after one untimed extraction: the model as far into the caches\n"
-    "as its size lets it (the cost of the work itself, without a cold start).\n";
+    "as its size lets it (the cost of the work itself, without a cold start).\n"
+    "--morph-to M morphs the level towards the largest level within M triangles, which\n"
+    "must be coarser (docs/morphing.md): each vertex goes to its closest point on that\n"
+    "level. A .glb gets the morph target (weight 0: the level, 1: on the coarser level);\n"
+    "a .ply or .obj is the mesh at weight W (--morph-weight, in [0, 1], default 1).\n";
 
 typedef struct request {
     const char *input, *output;
@@ -43,6 +52,10 @@ typedef struct request {
     double value;   /* p, e: the number given */
     long repeat;    /* --repeat: warm extractions timed after the first */
     int hot;        /* --hot: those back to back, caches not flushed */
+    int morph;      /* --morph-to given */
+    uint64_t morph_to; /* its triangle count */
+    int has_weight; /* --morph-weight given */
+    double weight;  /* its value (default 1) */
 } request;
 
 static int bad_request(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
@@ -134,6 +147,29 @@ static int check_value(const request *r)
     }
 }
 
+/* --morph-to and --morph-weight: with a model, not with --repeat; a weight in [0, 1] and
+ * only where the output is one mesh at that weight (not a .glb, which holds the target). */
+static int check_morph(request *r)
+{
+    if (!r->morph && !r->has_weight)
+        return 0;
+    const char *dot = strrchr(r->output, '.');
+    if (!r->morph)
+        return bad_request("--morph-weight needs --morph-to");
+    if (r->kind == 'l' || r->repeat)
+        return bad_request("--morph-to applies to a model's level, without --repeat");
+    if (r->morph_to < 1)
+        return bad_request("--morph-to must be a whole number >= 1 (got 0)");
+    if (r->has_weight && !(r->weight >= 0 && r->weight <= 1))
+        return bad_request("--morph-weight must be in [0, 1] (got %g)", r->weight);
+    if (r->has_weight && dot && !strcasecmp(dot, ".glb"))
+        return bad_request("--morph-weight applies to .ply and .obj output; a .glb holds the "
+                           "morph target itself (its weight is the viewer's)");
+    if (!r->has_weight)
+        r->weight = 1;
+    return 0;
+}
+
 /* 0; -1 when the command line is malformed (the caller prints the usage); the usage exit
  * code when a value is bad (said here, in one line naming the flag). */
 static int parse(int argc, char **argv, request *r)
@@ -173,6 +209,14 @@ static int parse(int argc, char **argv, request *r)
             r->repeat = (long)repeat;
         } else if (!strcmp(argv[i], "--hot")) {
             r->hot = 1;
+        } else if (!strcmp(argv[i], "--morph-to") && i + 1 < argc) {
+            if (parse_count("--morph-to", argv[++i], &r->morph_to))
+                return SL_EXIT_USAGE;
+            r->morph = 1;
+        } else if (!strcmp(argv[i], "--morph-weight") && i + 1 < argc) {
+            if (parse_number("--morph-weight", argv[++i], &r->weight))
+                return SL_EXIT_USAGE;
+            r->has_weight = 1;
         } else if (argv[i][0] != '-' && !r->input)
             r->input = argv[i];
         else
@@ -181,7 +225,7 @@ static int parse(int argc, char **argv, request *r)
     if (!(r->input && r->output && r->kind && !(r->repeat && r->kind == 'l') &&
           !(r->hot && !r->repeat)))
         return -1;
-    return check_value(r);
+    return check_value(r) ? SL_EXIT_USAGE : check_morph(r);
 }
 
 /* One line "scanlod: FILE: cause". The model is the user's file: failing to read it is
@@ -296,6 +340,56 @@ static int time_warm(sl_lod_model *m, uint32_t k, long repeat, int hot, double *
     return rc;
 }
 
+/* --morph-to: writes `mesh` morphed towards the largest level within r->morph_to
+ * triangles: a .glb with the morph target, another format at weight r->weight. Says what
+ * it did in `note`. Returns 0, the usage exit code (printed), or -1 with `err` set. */
+static int write_morph(const request *r, sl_lod_model *m, const sl_lod_mesh *mesh,
+                       const char *extras, char *note, size_t note_size, sl_error *err)
+{
+    uint32_t k = sl_lod_expansions_for_triangles(m, r->morph_to);
+    if (m->accumulation[k] >= mesh->triangle_count)
+        return bad_request("--morph-to %llu: the level within it has %llu triangles, not fewer "
+                           "than the level's %llu (morph towards a coarser level)",
+                           (unsigned long long)r->morph_to,
+                           (unsigned long long)m->accumulation[k],
+                           (unsigned long long)mesh->triangle_count);
+    sl_lod_mesh coarser;
+    if (sl_lod_generate(m, k, &coarser, NULL)) {
+        sl_error_set(err, SL_E_NOMEM, ENOMEM, r->input, "out of memory");
+        return -1;
+    }
+    const char *dot = strrchr(r->output, '.');
+    int rc = 0;
+    double moved = 0;
+    if (dot && !strcasecmp(dot, ".glb")) {
+        sl_export_glb glb = {sl_export_default_config().glb, 1.0, 0, NULL, &coarser};
+        rc = sl_export_write_mesh(r->output, mesh, extras, &glb, NULL, err);
+        snprintf(note, note_size, ", morph target to expansions %u (%llu triangles)", k,
+                 (unsigned long long)coarser.triangle_count);
+    } else {
+        size_t n = (size_t)mesh->vertex_count;
+        float *target = malloc((n ? n : 1) * 3 * sizeof *target);
+        sl_mesh to = sl_mesh_view(coarser.vertex_count, coarser.positions, NULL, NULL,
+                                  coarser.triangle_count, coarser.indices);
+        rc = target ? 0 : sl_error_set(err, SL_E_NOMEM, ENOMEM, r->input, "out of memory");
+        if (rc == 0)
+            rc = sl_morph_closest_points(&to, mesh->positions, mesh->vertex_count, target,
+                                         &moved, err);
+        if (rc == 0) {
+            sl_morph_blend(mesh->positions, target, mesh->vertex_count, r->weight, target);
+            sl_lod_mesh at = *mesh;
+            at.positions = target;
+            rc = sl_export_write_mesh(r->output, &at, extras, NULL, NULL, err);
+        }
+        free(target);
+        snprintf(note, note_size,
+                 ", morphed to expansions %u (%llu triangles) at weight %g (moves up to %.6g)",
+                 k, (unsigned long long)coarser.triangle_count, r->weight, moved);
+    }
+    sl_lod_mesh_release(&coarser);
+    return rc ? -1 : 0;
+}
+
 /* Turns the request into an expansion count, or prints why it cannot. */
 static int choose_k(const request *r, const sl_lod_model *m, uint32_t *k)
 {
@@ -370,13 +464,20 @@ int sl_cmd_extract(int argc, char **argv)
     else if (r.repeat)
         snprintf(warm, sizeof warm, ", then %ld more in median %.7f s (min %.7f s, %s)",
                  r.repeat, median, min, r.hot ? "back to back" : "caches flushed");
-    if (err.code == SL_OK && sl_export_write_mesh(r.output, &mesh, extras, NULL, NULL, &err) == 0)
+    char note[160] = "";
+    int written = err.code == SL_OK ? 0 : -1;
+    if (written == 0)
+        written = r.morph ? write_morph(&r, &model, &mesh, extras, note, sizeof note, &err)
+                          : sl_export_write_mesh(r.output, &mesh, extras, NULL, NULL, &err);
+    if (written == 0)
         printf("expansions %u of %u: %llu triangles, %llu vertices, max error %.6g, "
-               "generated in %.7f s%s -> %s\n",
+               "generated in %.7f s%s%s -> %s\n",
                k, model.expansion_count, (unsigned long long)mesh.triangle_count,
                (unsigned long long)mesh.vertex_count, (double)model.error_after[k], generate_s,
-               warm, r.output);
+               warm, note, r.output);
     sl_lod_mesh_release(&mesh);
     sl_lod_model_release(&model);
+    if (written > 0)
+        return written;
     return err.code ? fail(&err, 0) : SL_EXIT_OK;
 }

@@ -13,6 +13,7 @@ int sl_cmd_verify(int argc, char **argv);  /* every commit record matches its fi
 int sl_cmd_inspect(int argc, char **argv); /* what a PLY or .slod holds, validated */
 int sl_cmd_compare(int argc, char **argv); /* fidelity: Hausdorff/RMS between meshes */
 int sl_cmd_extract(int argc, char **argv); /* any LOD from a model, O(m) */
+int sl_cmd_simplify(int argc, char **argv); /* one mesh, papers 2/3 */
 int sl_cmd_config_reference(int argc, char **argv); /* prints config/reference.ini */
 
 #endif

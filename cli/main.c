@@ -18,6 +18,7 @@ static const command commands[] = {
     {"verify", sl_cmd_verify, "check every commit record against its files"},
     {"inspect", sl_cmd_inspect, "what a file holds, validated"},
     {"extract", sl_cmd_extract, "any level of detail from a built model (.slod), O(m)"},
+    {"simplify", sl_cmd_simplify, "one mesh simplified by a paper's method (cluster: paper 2)"},
     {"compare", sl_cmd_compare, "Hausdorff and RMS distance between two meshes"},
     {"config-reference", sl_cmd_config_reference, "print the commented reference config"},
 };

@@ -48,7 +48,8 @@ static const char style[] =
     "figure.sl-view figcaption{font-size:.9em;margin-top:.3em}\n"
     "figure.sl-view button{margin:.3em .3em 0 0;font:inherit;font-size:.85em}\n"
     "figure.sl-view button.on{font-weight:bold}\n"
-    ".sl-error{color:#a00}.note{color:#555;font-size:.92em}\n";
+    ".sl-error{color:#a00}.note{color:#555;font-size:.92em}\n"
+    ".stale{background:#fff3cd;border-left:4px solid #d9a400;padding:.4em .8em}\n";
 
 void sl_html_page_begin(FILE *out, const char *title)
 {

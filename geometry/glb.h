@@ -20,7 +20,8 @@
  *     quantized), an uncompressed-size fallback buffer without data;
  *   - compression DRACO: KHR_draco_mesh_compression (edgebreaker; Draco quantises float
  *     attributes to the same bits itself); the accessors describe the decoded mesh, whose
- *     vertex count and order Draco may change.
+ *     vertex count and order Draco may change;
+ *   - morph_positions: one morph target (POSITION displacements), see below.
  * The files pass the Khronos glTF validator with 0 errors and 0 warnings
  * (tests/export/test_gltf_validator.sh; it cannot look inside compressed streams, so the
  * tests also decode them).
@@ -69,6 +70,15 @@ typedef struct sl_glb_options {
     const void *image;
     uint64_t image_size;
     const char *image_mime_type; /* "image/jpeg" or "image/png" */
+    /* One morph target (docs/morphing.md): where each vertex of the mesh goes at weight 1
+     * (3 floats per vertex, the mesh's frame), or NULL for none. Written as the primitive's
+     * targets[0].POSITION, a displacement: float in float files; in quantised files
+     * integer steps of the positions' own grid (SHORT, float when a displacement exceeds
+     * 32767 steps); in Draco files float displacements from the decoded positions, stored
+     * beside the Draco stream (KHR_draco_mesh_compression compresses no targets), each
+     * decoded vertex taking the target of the nearest vertex given. The mesh's default
+     * weight is 0: a viewer that ignores targets draws the mesh as given. */
+    const float *morph_positions;
 } sl_glb_options;
 
 /* Float attributes, no compression: the plainest file, what sl_glb_write(.., NULL, ..)
@@ -86,6 +96,9 @@ typedef struct sl_glb_stats {
     double position_error_max, position_error_rms; /* measured vertex displacement */
     double normal_error_max_deg;   /* largest angle between a written and a given normal */
     double color_error_max;        /* largest |decoded -> sRGB - given|, in 1/255 steps */
+    int morph;                     /* the file has a morph target */
+    double morph_error_max;        /* largest distance, decoded vertex + decoded displacement
+                                      to the target given (world) */
 } sl_glb_stats;
 
 /* `extras_json`: a JSON object text ("{...}") for mesh.extras, or NULL. `options`: NULL

@@ -22,7 +22,7 @@ enum {
 };
 
 #define GLB_MAX_VIEWS 8
-#define GLB_MAX_ACCESSORS 6
+#define GLB_MAX_ACCESSORS 8
 
 /* One bufferView. `data` is what a reader sees after decoding (stride x count bytes), or
  * for a meshopt stream the bytes fed to the encoder (filtered normals); `packed` is the
@@ -51,6 +51,7 @@ typedef struct glb_accessor {
     int has_bounds;        /* POSITION: min/max */
     double min[3], max[3];
     int draco_id;          /* Draco attribute unique id, or -1 */
+    int morph;             /* the primitive's targets[0] attribute `semantic` */
 } glb_accessor;
 
 typedef struct glb_doc {
@@ -65,6 +66,7 @@ typedef struct glb_doc {
     int quantized;         /* KHR_mesh_quantization is used */
     int node_transform;    /* the node dequantises positions: */
     float translation[3], scale;
+    float *decoded_positions; /* Draco: the decoded mesh's positions (3 x stats.vertices) */
     sl_glb_stats stats;
 } glb_doc;
 
@@ -73,6 +75,18 @@ typedef struct glb_doc {
  * range, an encoder failure). */
 int glb_doc_build(glb_doc *d, const sl_mesh *m, sl_error *err);
 void glb_doc_release(glb_doc *d);
+
+/* The document model's builders (glb_streams.c). glb_add_view takes ownership of `data`;
+ * `mode` is the meshopt mode, used in meshopt files only. */
+int glb_add_view(glb_doc *d, unsigned char *data, uint64_t size, uint32_t stride,
+                 uint64_t count, int target, const char *mode);
+glb_accessor *glb_add_accessor(glb_doc *d, const char *semantic, int view, int component,
+                               const char *type, int normalized, uint64_t count);
+
+/* Adds the morph target of d->opt->morph_positions (glb_morph.c): after the positions
+ * (quantised or not) are built, before meshopt packs the views, after Draco replaced
+ * them. SL_E_NOMEM. */
+int glb_morph_target(glb_doc *d, const sl_mesh *m, sl_error *err);
 
 /* Linear value of an sRGB byte (IEC 61966-2-1), and its inverse on [0, 1]. */
 double glb_srgb_to_linear(double srgb);

@@ -47,8 +47,8 @@ static int nomem(sl_error *err)
 }
 
 /* Takes ownership of `data`. */
-static int add_view(glb_doc *d, unsigned char *data, uint64_t size, uint32_t stride,
-                    uint64_t count, int target, const char *mode)
+int glb_add_view(glb_doc *d, unsigned char *data, uint64_t size, uint32_t stride,
+                 uint64_t count, int target, const char *mode)
 {
     glb_view *v = &d->views[d->view_count];
     memset(v, 0, sizeof *v);
@@ -58,8 +58,8 @@ static int add_view(glb_doc *d, unsigned char *data, uint64_t size, uint32_t str
     return d->view_count++;
 }
 
-static glb_accessor *add_accessor(glb_doc *d, const char *semantic, int view, int component,
-                                  const char *type, int normalized, uint64_t count)
+glb_accessor *glb_add_accessor(glb_doc *d, const char *semantic, int view, int component,
+                               const char *type, int normalized, uint64_t count)
 {
     glb_accessor *a = &d->accessors[d->accessor_count++];
     memset(a, 0, sizeof *a);
@@ -115,9 +115,9 @@ static int float_positions(glb_doc *d, const sl_mesh *m, sl_error *err)
     if (!data)
         return nomem(err);
     memcpy(data, m->positions, 12 * m->vertex_count); /* little-endian hosts only */
-    int v = add_view(d, data, 12 * m->vertex_count, 12, m->vertex_count, GLTF_ARRAY_BUFFER,
+    int v = glb_add_view(d, data, 12 * m->vertex_count, 12, m->vertex_count, GLTF_ARRAY_BUFFER,
                      "ATTRIBUTES");
-    glb_accessor *a = add_accessor(d, "POSITION", v, GLTF_FLOAT, "VEC3", 0, m->vertex_count);
+    glb_accessor *a = glb_add_accessor(d, "POSITION", v, GLTF_FLOAT, "VEC3", 0, m->vertex_count);
     float lo[3], hi[3];
     bounds(m, lo, hi);
     a->has_bounds = 1;
@@ -163,9 +163,9 @@ static int quantized_positions(glb_doc *d, const sl_mesh *m, sl_error *err)
         sum2 += d2;
         max2 = d2 > max2 ? d2 : max2;
     }
-    int v = add_view(d, data, stride * m->vertex_count, stride, m->vertex_count,
+    int v = glb_add_view(d, data, stride * m->vertex_count, stride, m->vertex_count,
                      GLTF_ARRAY_BUFFER, "ATTRIBUTES");
-    glb_accessor *a = add_accessor(d, "POSITION", v, wide ? GLTF_UNSIGNED_SHORT
+    glb_accessor *a = glb_add_accessor(d, "POSITION", v, wide ? GLTF_UNSIGNED_SHORT
                                                           : GLTF_UNSIGNED_BYTE,
                                    "VEC3", 0, m->vertex_count);
     a->has_bounds = 1;
@@ -198,9 +198,9 @@ static int float_normals(glb_doc *d, const sl_mesh *m, sl_error *err)
         return nomem(err);
     for (uint64_t i = 0; i < m->vertex_count; i++)
         unit_normal(m->normals + 3 * i, data + 3 * i);
-    int v = add_view(d, (unsigned char *)data, 12 * m->vertex_count, 12, m->vertex_count,
+    int v = glb_add_view(d, (unsigned char *)data, 12 * m->vertex_count, 12, m->vertex_count,
                      GLTF_ARRAY_BUFFER, "ATTRIBUTES");
-    add_accessor(d, "NORMAL", v, GLTF_FLOAT, "VEC3", 0, m->vertex_count);
+    glb_add_accessor(d, "NORMAL", v, GLTF_FLOAT, "VEC3", 0, m->vertex_count);
     return 0;
 }
 
@@ -253,10 +253,10 @@ static int quantized_normals(glb_doc *d, const sl_mesh *m, sl_error *err)
     if (oct)
         free(decoded);
     free(unit);
-    int v = add_view(d, data, stride * m->vertex_count, stride, m->vertex_count,
+    int v = glb_add_view(d, data, stride * m->vertex_count, stride, m->vertex_count,
                      GLTF_ARRAY_BUFFER, "ATTRIBUTES");
     d->views[v].filter = oct ? "OCTAHEDRAL" : NULL;
-    add_accessor(d, "NORMAL", v, wide ? GLTF_SHORT : GLTF_BYTE, "VEC3", 1, m->vertex_count);
+    glb_add_accessor(d, "NORMAL", v, wide ? GLTF_SHORT : GLTF_BYTE, "VEC3", 1, m->vertex_count);
     d->quantized = 1;
     return 0;
 }
@@ -292,9 +292,9 @@ static int colors(glb_doc *d, const sl_mesh *m, sl_error *err)
                 data[stride * i + k] = (unsigned char)c;
         }
     d->stats.color_error_max = worst;
-    int v = add_view(d, data, stride * m->vertex_count, stride, m->vertex_count,
+    int v = glb_add_view(d, data, stride * m->vertex_count, stride, m->vertex_count,
                      GLTF_ARRAY_BUFFER, "ATTRIBUTES");
-    add_accessor(d, "COLOR_0", v, wide ? GLTF_UNSIGNED_SHORT : GLTF_UNSIGNED_BYTE, "VEC4", 1,
+    glb_add_accessor(d, "COLOR_0", v, wide ? GLTF_UNSIGNED_SHORT : GLTF_UNSIGNED_BYTE, "VEC4", 1,
                  m->vertex_count);
     return 0;
 }
@@ -325,9 +325,9 @@ static int texcoords(glb_doc *d, const sl_mesh *m, int quantize, sl_error *err)
             else
                 memcpy(data + 8 * i + 4 * k, &t, 4);
         }
-    int v = add_view(d, data, stride * m->vertex_count, stride, m->vertex_count,
+    int v = glb_add_view(d, data, stride * m->vertex_count, stride, m->vertex_count,
                      GLTF_ARRAY_BUFFER, "ATTRIBUTES");
-    add_accessor(d, "TEXCOORD_0", v, unit ? GLTF_UNSIGNED_SHORT : GLTF_FLOAT, "VEC2", unit,
+    glb_add_accessor(d, "TEXCOORD_0", v, unit ? GLTF_UNSIGNED_SHORT : GLTF_FLOAT, "VEC2", unit,
                  m->vertex_count);
     d->quantized |= unit;
     return 0;
@@ -345,9 +345,9 @@ static int indices(glb_doc *d, const sl_mesh *m, sl_error *err)
             put16(data + 2 * i, m->triangles[i]);
         else
             memcpy(data + 4 * i, &m->triangles[i], 4);
-    int v = add_view(d, data, size, shorts ? 2 : 4, n, GLTF_ELEMENT_ARRAY_BUFFER, "TRIANGLES");
+    int v = glb_add_view(d, data, size, shorts ? 2 : 4, n, GLTF_ELEMENT_ARRAY_BUFFER, "TRIANGLES");
     d->indices = d->accessor_count;
-    add_accessor(d, NULL, v, shorts ? GLTF_UNSIGNED_SHORT : GLTF_UNSIGNED_INT, "SCALAR", 0, n);
+    glb_add_accessor(d, NULL, v, shorts ? GLTF_UNSIGNED_SHORT : GLTF_UNSIGNED_INT, "SCALAR", 0, n);
     return 0;
 }
 
@@ -357,7 +357,7 @@ static int image(glb_doc *d, sl_error *err)
     if (!data)
         return nomem(err);
     memcpy(data, d->opt->image, d->opt->image_size);
-    d->image_view = add_view(d, data, d->opt->image_size, 0, 0, 0, NULL);
+    d->image_view = glb_add_view(d, data, d->opt->image_size, 0, 0, 0, NULL);
     return 0;
 }
 
@@ -492,6 +492,13 @@ static int draco_pack(glb_doc *d, const sl_mesh *m, sl_error *err)
     }
     d->stats.vertices = out.vertex_count;
     d->stats.triangles = out.triangle_count;
+    if (rc == 0 && d->opt->morph_positions) { /* the morph target's base */
+        d->decoded_positions = malloc(12 * out.vertex_count);
+        if (d->decoded_positions)
+            memcpy(d->decoded_positions, out.attributes[0].data, 12 * out.vertex_count);
+        else
+            rc = nomem(err);
+    }
     sl_draco_mesh_release(&out);
     /* The per-attribute views are not written: drop them, keep the image's. */
     for (int i = 0; i < d->accessor_count; i++)
@@ -543,6 +550,8 @@ int glb_doc_build(glb_doc *d, const sl_mesh *m, sl_error *err)
         rc = indices(d, m, err);
     if (rc == 0 && textured)
         rc = image(d, err);
+    if (rc == 0 && o->morph_positions && o->compression != SL_GLB_DRACO)
+        rc = glb_morph_target(d, m, err);
     if (rc == 0 && o->compression == SL_GLB_MESHOPT)
         rc = meshopt_pack(d, m, err);
     if (rc == 0 && o->compression == SL_GLB_DRACO) {
@@ -554,6 +563,8 @@ int glb_doc_build(glb_doc *d, const sl_mesh *m, sl_error *err)
         d->stats.position_step = extent / ((1u << o->position_bits) - 1);
         d->stats.position_bound = sqrt(3.0) / 2 * d->stats.position_step;
         rc = draco_pack(d, m, err);
+        if (rc == 0 && o->morph_positions)
+            rc = glb_morph_target(d, m, err);
     }
     return rc;
 }
@@ -565,4 +576,6 @@ void glb_doc_release(glb_doc *d)
         free(d->views[i].packed);
     }
     d->view_count = 0;
+    free(d->decoded_positions);
+    d->decoded_positions = NULL;
 }

@@ -35,7 +35,7 @@ static uint64_t pad4(uint64_t n)
 
 sl_glb_options sl_glb_default_options(void)
 {
-    sl_glb_options o = {SL_GLB_UNCOMPRESSED, 0, 14, 8, 12, 12, NULL, 0, NULL};
+    sl_glb_options o = {SL_GLB_UNCOMPRESSED, 0, 14, 8, 12, 12, NULL, 0, NULL, NULL};
     return o;
 }
 
@@ -143,9 +143,18 @@ static void json_mesh(sl_json *j, const glb_doc *d, const char *extras_json)
     sl_json_object_begin(j, NULL);
     sl_json_object_begin(j, "attributes");
     for (int i = 0; i < d->accessor_count; i++)
-        if (d->accessors[i].semantic)
+        if (d->accessors[i].semantic && !d->accessors[i].morph)
             sl_json_u64(j, d->accessors[i].semantic, (uint64_t)i);
     sl_json_object_end(j);
+    if (d->stats.morph) {
+        sl_json_array_begin(j, "targets");
+        sl_json_object_begin(j, NULL);
+        for (int i = 0; i < d->accessor_count; i++)
+            if (d->accessors[i].morph)
+                sl_json_u64(j, d->accessors[i].semantic, (uint64_t)i);
+        sl_json_object_end(j);
+        sl_json_array_end(j);
+    }
     sl_json_u64(j, "indices", (uint64_t)d->indices);
     sl_json_u64(j, "material", 0);
     sl_json_u64(j, "mode", GLTF_TRIANGLES);
@@ -155,7 +164,7 @@ static void json_mesh(sl_json *j, const glb_doc *d, const char *extras_json)
         sl_json_u64(j, "bufferView", (uint64_t)d->draco_view);
         sl_json_object_begin(j, "attributes");
         for (int i = 0; i < d->accessor_count; i++)
-            if (d->accessors[i].semantic)
+            if (d->accessors[i].semantic && !d->accessors[i].morph)
                 sl_json_u64(j, d->accessors[i].semantic, (uint64_t)d->accessors[i].draco_id);
         sl_json_object_end(j);
         sl_json_object_end(j);
@@ -163,6 +172,11 @@ static void json_mesh(sl_json *j, const glb_doc *d, const char *extras_json)
     }
     sl_json_object_end(j);
     sl_json_array_end(j);
+    if (d->stats.morph) { /* weight 0: the mesh as given until a viewer blends */
+        sl_json_array_begin(j, "weights");
+        sl_json_double(j, NULL, 0);
+        sl_json_array_end(j);
+    }
     if (extras_json)
         sl_json_raw(j, "extras", extras_json);
     sl_json_object_end(j);

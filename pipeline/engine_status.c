@@ -74,7 +74,7 @@ int sl_engine_finish(sl_engine *e)
     if (k->skipped)
         snprintf(skipped, sizeof skipped, ", %llu input entries skipped (see the log)",
                  (unsigned long long)k->skipped);
-    if (k->ran == 0 && k->published == 0 && pending == 0 && !e->stop)
+    if (k->ran == 0 && k->published == 0 && k->quarantined == 0 && pending == 0 && !e->stop)
         printf("nothing to do: %llu items up to date (%llu quarantined)%s\n",
                (unsigned long long)k->items, (unsigned long long)quarantined, skipped);
     else
@@ -131,8 +131,12 @@ int sl_engine_status(sl_engine *e, FILE *out, sl_error *err)
                             e->stages[s]->name, t.item, t.host, t.pid, t.job[0] ? " job " : "",
                             t.job, (unsigned long long)t.epoch);
                 else
-                    fprintf(out, "%s %s: %s (%s): %s\n", e->stages[s]->name, t.item,
-                            sl_queue_state_name(listed[l]), t.cls, t.reason);
+                    fprintf(out, "%s %s: %s (%s): %s%s\n", e->stages[s]->name, t.item,
+                            sl_queue_state_name(listed[l]), t.cls, t.reason,
+                            listed[l] == SL_STATE_QUARANTINE &&
+                                    sl_engine_item_published(e, t.item)
+                                ? " [stale: the previous version's levels stay published]"
+                                : "");
             }
             free(names);
         }
@@ -163,10 +167,13 @@ static double collection_fraction(sl_engine *e, int s, double stage_fraction)
 }
 
 /* Seconds left, from the pace of this run's own work (items settled before it began do
- * not count); < 0 until there is a pace to go by. */
+ * not count); < 0 until there is a pace to go by: a second of work or one item this run
+ * settled (a fast machine may finish a small collection in less than two seconds). */
 static double eta_seconds(const sl_engine *e, double fraction, double elapsed)
 {
-    if (fraction < 0 || !e->items_total || elapsed < 2)
+    if (fraction < 0 || !e->items_total || elapsed <= 0)
+        return -1;
+    if (elapsed < 1 && e->items_settled <= e->settled_at_start)
         return -1;
     double before = (double)e->settled_at_start / (double)e->items_total;
     double done = fraction - before, left = 1 - fraction;

@@ -1,9 +1,14 @@
-/* The collection summary: OUTPUT/summary.json (every published item's report, and the
- * quarantined items with their reasons), OUTPUT/summary.md (per item the export stage's
+/* The collection summary: OUTPUT/summary.json (every published item's report, the
+ * quarantined items with their reasons, and the stale ones), OUTPUT/summary.md (per item the export stage's
  * summary-item.md: a Table-1-style table and the thumbnails; then the quarantine list) and
  * OUTPUT/summary.html (the same from each item's summary-item.html, with a 3D view per
  * item: docs/formats.md, "The HTML report"). All are rewritten atomically at the end of
  * every `scanlod run`.
+ *
+ * An item both published and quarantined is stale: its input changed, the new version was
+ * quarantined, and the derivatives of the previous version stay published (a museum's
+ * web page keeps working). Every summary says so where the item's levels are shown and in
+ * the quarantine list, never listing the item as simply published (docs/engine.md).
  *
  * summary.html runs the viewer bundle from OUTPUT/scanlod-viewer.js, a copy of the first
  * published item's own (every item carries one, so that its folder works alone). */
@@ -44,6 +49,49 @@ static int quarantined(sl_engine *e, const char *item, sl_ticket *t)
             return 1;
     }
     return 0;
+}
+
+/* The "Stale:" note of an item whose new input was quarantined (engine.md, "Stale
+ * publications"), in Markdown or HTML. */
+static void stale_note(FILE *out, const char *item, const sl_ticket *t, int html)
+{
+    void (*text)(FILE *, const char *) = html ? sl_html_text : sl_md_text;
+    fputs(html ? "<p class=\"stale\"><strong>Stale:</strong> the input of <code>"
+               : "> **Stale:** the input of `",
+          out);
+    text(out, item);
+    fprintf(out, html ? "</code> changed and its new version was quarantined (%s): "
+                      : "` changed and its new version was quarantined (%s): ",
+            t->cls);
+    text(out, t->reason);
+    fputs(html ? ". The levels below are the previous version's.</p>\n"
+               : "\n>\n> The levels below are the previous version's.\n\n",
+          out);
+}
+
+/* An item's section of summary.md or .html (the export's summary-item.*), with the stale
+ * note after its heading (the text up to the first `heading_end`); a stand-in heading
+ * when the item has no section. */
+static void put_section(FILE *out, const char *section, const char *heading_end,
+                        const char *item, const sl_ticket *stale, int html)
+{
+    const char *rest = section;
+    if (section && (rest = strstr(section, heading_end)))
+        rest += strlen(heading_end);
+    if (section && rest)
+        fwrite(section, 1, (size_t)(rest - section), out);
+    else {
+        fputs(html ? "<section class=\"item\">\n<h2>" : "### ", out);
+        (html ? sl_html_text : sl_md_text)(out, item);
+        fputs(html ? "</h2>\n" : "\n\n", out);
+        rest = NULL;
+    }
+    if (stale)
+        stale_note(out, item, stale, html);
+    if (rest)
+        fputs(rest, out);
+    else
+        fputs(html ? "<p>(no levels)</p>\n</section>\n" : "(no levels)\n\n", out);
 }
 
 #define VIEWER_FILE "scanlod-viewer.js" /* stages/export/export_html.c */
@@ -114,25 +162,15 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
         published++;
         sl_json_raw(&js, NULL, report);
         free(report);
+        sl_ticket t;
+        int stale = quarantined(e, e->items[i], &t);
         sl_engine_path(path, sizeof path, "%s/%s/summary-item.md", e->output, e->items[i]);
         char *section = read_optional(path);
-        if (section)
-            fputs(section, out);
-        else {
-            fputs("### ", out);
-            sl_md_text(out, e->items[i]);
-            fputs("\n\n(no levels)\n\n", out);
-        }
+        put_section(out, section, "\n", e->items[i], stale ? &t : NULL, 0);
         free(section);
         sl_engine_path(path, sizeof path, "%s/%s/summary-item.html", e->output, e->items[i]);
         section = read_optional(path);
-        if (section)
-            fputs(section, page);
-        else {
-            fputs("<section class=\"item\">\n<h2>", page);
-            sl_html_text(page, e->items[i]);
-            fputs("</h2>\n<p>(no levels)</p>\n</section>\n", page);
-        }
+        put_section(page, section, "</h2>\n", e->items[i], stale ? &t : NULL, 1);
         free(section);
     }
     sl_json_array_end(&js);
@@ -143,26 +181,32 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
     fprintf(out, "## Quarantined\n\n");
     fputs("<h2>Quarantined</h2>\n<ul>\n", page);
     sl_json_array_begin(&js, "quarantined");
-    uint64_t bad = 0;
+    uint64_t bad = 0, stale = 0;
     for (uint64_t i = 0; i < e->item_count; i++) {
         sl_ticket t;
         if (!quarantined(e, e->items[i], &t))
             continue;
         bad++;
+        int previous = sl_engine_item_published(e, e->items[i]);
+        stale += (uint64_t)previous;
+        const char *kept = previous ? "; the previous version's levels stay published, "
+                                      "marked stale"
+                                    : "";
         fputs("- ", out);
         sl_md_text(out, e->items[i]);
         fprintf(out, " (%s): ", t.cls);
         sl_md_text(out, t.reason);
-        fputc('\n', out);
+        fprintf(out, "%s\n", kept);
         fputs("<li>", page);
         sl_html_text(page, e->items[i]);
         fprintf(page, " (%s): ", t.cls);
         sl_html_text(page, t.reason);
-        fputs("</li>\n", page);
+        fprintf(page, "%s</li>\n", kept);
         sl_json_object_begin(&js, NULL);
         sl_json_string(&js, "item", e->items[i]);
         sl_json_string(&js, "class", t.cls);
         sl_json_string(&js, "reason", t.reason);
+        sl_json_raw(&js, "stale_publication", previous ? "true" : "false");
         sl_json_object_end(&js);
     }
     if (!bad)
@@ -172,6 +216,7 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
     sl_json_u64(&js, "items_total", e->item_count);
     sl_json_u64(&js, "items_published", published);
     sl_json_u64(&js, "items_quarantined", bad);
+    sl_json_u64(&js, "items_stale", stale);
     sl_json_object_end(&js);
     fclose(out);
     int viewer = copy_viewer(e, err);

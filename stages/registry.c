@@ -2,6 +2,7 @@
  * Adding a stage: docs/adding-a-stage.md. */
 #include <string.h>
 
+#include "stages/cluster/cluster.h"
 #include "stages/crack/crack.h"
 #include "stages/export/export.h"
 #include "stages/merge/merge.h"
@@ -16,6 +17,7 @@ static const sl_stage *const registry[] = {
     &sl_merge_stage,
     &sl_priority_stage,
     &sl_crack_stage,
+    &sl_cluster_stage,
     &sl_export_stage,
     NULL,
 };

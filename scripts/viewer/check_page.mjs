@@ -12,7 +12,7 @@
 // view may take to draw (default 60 s); SCANLOD_CHROMIUM: the browser (default: chromium
 // on PATH).
 // Prints one JSON line per view ({in: page URL, src: its .glb.js, state, triangles, drawn:
-// share of the canvas}) and per page; exits 1 if anything failed, 2 on usage.
+// share of the canvas, morph: the morph weight drawn or null}) and per page; exits 1 if anything failed, 2 on usage.
 import { createServer } from 'node:http';
 import { existsSync, mkdirSync, mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -100,7 +100,8 @@ async function waitDrawn(page, figure, url, src) {
   const state = (await figure.getAttribute('data-state')) || 'none';
   const triangles = Number(await figure.getAttribute('data-triangles'));
   const share = await drawnShare(figure);
-  const row = { in: url, src, state, triangles, drawn: Number(share.toFixed(4)) };
+  const morph = await figure.getAttribute('data-morph'); // the morph weight drawn, if any
+  const row = { in: url, src, state, triangles, drawn: Number(share.toFixed(4)), morph };
   console.log(JSON.stringify(row));
   if (state !== 'drawn') fail(`${what}: state ${state}`);
   else if (share < MIN_DRAWN) fail(`${what}: the canvas shows no model (${(100 * share).toFixed(2)} % drawn)`);

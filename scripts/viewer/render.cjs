@@ -1,5 +1,5 @@
 #!/usr/bin/env node
-// node render.cjs MODEL.glb OUT.png [unlit] [side|front|top]
+// node render.cjs MODEL.glb OUT.png [unlit] [side|front|top] [morph=W] [box=x0,y0,z0,x1,y1,z1]
 // Serves render.html, three.js and MODEL.glb (as /model.glb) on 127.0.0.1, opens the page in
 // headless Chromium (/usr/bin/chromium, or $CHROMIUM) through playwright-core, waits for
 // the page's OK, and saves a 512 x 512 screenshot of the canvas. Prints one JSON line:
@@ -40,6 +40,10 @@ server.listen(0, '127.0.0.1', async () => {
     page.on('pageerror', (e) => console.error('pageerror: ' + e));
     const query = new URLSearchParams({ view: opts.find((o) => /^(side|front|top)$/.test(o)) || 'side' });
     if (opts.includes('unlit')) query.set('unlit', '1');
+    const morph = opts.find((o) => o.startsWith('morph='));
+    if (morph) query.set('morph', morph.slice(6));
+    const box = opts.find((o) => o.startsWith('box='));
+    if (box) query.set('box', box.slice(4));
     await page.goto(`http://127.0.0.1:${port}/render.html?${query}`);
     await page.waitForFunction(() => document.title !== 'loading', null, { timeout: 120000 });
     const title = await page.title();

@@ -42,6 +42,9 @@ typedef struct sl_export_glb {
     double to_metres; /* metres per input unit (mm: 0.001) */
     int z_up;         /* the input's up is +Z: (x, y, z) -> (x, z, -y), a rotation */
     const float *texcoords; /* per vertex (OpenGL convention) with options.image, or NULL */
+    /* The next coarser level, or NULL: the GLB then carries a morph target moving each
+     * vertex to its closest point on this level's surface (docs/morphing.md). */
+    const sl_lod_mesh *morph_to;
 } sl_export_glb;
 
 /* The resolved [export] section (options: stages/export/export_stage.c). */
@@ -62,6 +65,7 @@ typedef struct sl_export_config {
     int texture_size;                           /* atlas edge of levels not listed below */
     char texture_sizes[256];                    /* "name:edge,..." */
     int viewer; /* index.html gets a 3D view per level: viewer bundle + NAME.glb.js copies */
+    int morph;  /* each published level's GLB morphs to the next coarser published level */
 } sl_export_config;
 
 /* The section at its option table's defaults (sl_stage_default_config). */

@@ -187,7 +187,10 @@ static void level_table(FILE *out, const page *p, const char *prefix)
             grouped(out, lv->budget);
         else
             fputs("–", out);
-        fprintf(out, "</td><td class=\"n\">%u</td><td class=\"n\">", w->k);
+        if (p->model)
+            fprintf(out, "</td><td class=\"n\">%u</td><td class=\"n\">", w->k);
+        else /* a level list: no expansions */
+            fputs("</td><td class=\"n\">–</td><td class=\"n\">", out);
         grouped(out, w->triangles);
         fputs("</td><td class=\"n\">", out);
         grouped(out, w->vertices);
@@ -264,6 +267,11 @@ static void view_caption(FILE *out, const page *p, int i)
     grouped(out, p->results[i].triangles);
     fputs(" triangles, ", out);
     size_text(out, sl_export_file_bytes(p->io, p->c->levels[i].name, "glb"));
+    if (p->results[i].morph_to >= 0) { /* viewer.js blends by camera distance */
+        fputs(", blends into ", out);
+        sl_html_text(out, p->c->levels[p->results[i].morph_to].name);
+        fputs(" as you zoom out", out);
+    }
 }
 
 /* index.html: a view per published level. */
@@ -313,7 +321,8 @@ static void item_files(FILE *out, const page *p, const char *prefix)
     files[n++] = "timings.json";
     if (p->manifest)
         files[n++] = "scene.svx.json";
-    files[n++] = "model.slod";
+    if (p->model)
+        files[n++] = "model.slod";
     files[n++] = "summary-item.md";
     if (p->views)
         files[n++] = VIEWER_FILE;
@@ -340,9 +349,14 @@ static void section(FILE *out, const page *p, const char *prefix, int summary)
         sl_html_text(out, p->io->item);
     }
     fputs(summary ? "</h2>\n<p>" : "</h1>\n<p>", out);
-    fprintf(out, "LOD model: %u expansions, ", m->expansion_count);
-    grouped(out, m->accumulation[m->expansion_count]);
-    fputs(" triangles at the finest level", out);
+    if (m) {
+        fprintf(out, "LOD model: %u expansions, ", m->expansion_count);
+        grouped(out, m->accumulation[m->expansion_count]);
+        fputs(" triangles at the finest level", out);
+    } else {
+        fputs("Clustering levels with bounded error (paper 2; intermediate models in "
+              "report.json and summary.md)", out);
+    }
     if (p->input) {
         fputs("; input: ", out);
         grouped(out, p->input->triangle_count);

@@ -4,6 +4,8 @@
 
 #include <stdint.h>
 
+#include "core/hash.h"
+#include "core/json.h"
 #include "geometry/mesh.h"
 #include "geometry/triangle_bvh.h"
 #include "pipeline/stage.h"
@@ -94,7 +96,48 @@ typedef struct sl_export_result {
      * level with the identical mesh (lod100 for a budget clamped at the finest level, say),
      * so the mesh is published once; -1 when the level has no triangles, so no files. */
     int file;
+    /* The published level this level's GLB morphs to ([export] morph), or -1. */
+    int morph_to;
 } sl_export_result;
+
+/* With [export] morph and GLBs written: the published level (rows[j].file == j) next
+ * coarser than published level i, the one with the most triangles below i's; else -1. */
+int sl_export_morph_coarser(const sl_export_config *c, const sl_export_result *rows, int i);
+
+/* What identifies a generated mesh: counts and the XXH3-128 of every array. Two meshes
+ * with equal digests (compared whole, with memcmp) have the same vertices, normals,
+ * colours and triangles in the same order, so they would write byte-identical files. */
+typedef struct sl_export_digest {
+    uint64_t vertices, triangles;
+    sl_hash positions, normals, colors, indices;
+} sl_export_digest;
+
+sl_export_digest sl_export_digest_mesh(const sl_lod_mesh *m);
+
+/* One distinct mesh's work, what the LOD model's levels and a level list share: its atlas
+ * baked (with `texture`), its files written as [export] asks under lv->name, its topology
+ * and (with `input`) fidelity measured; all of it kept in *row (not k, not file). With
+ * `morph_to` (may be NULL) its GLB morphs to that coarser level ([export] morph). */
+int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
+                          const sl_lod_mesh *mesh, const sl_lod_mesh *morph_to,
+                          const char *extras, const sl_mesh *input,
+                          const sl_export_frame *frame, const sl_export_texture *texture,
+                          const sl_stage_io *io, sl_export_result *row, sl_error *err);
+
+/* A level's facts in its open JSON object in `r`, after its own fields: topology, fidelity,
+ * "file" (`file_name`, NULL without triangles), atlas and GLB (with `max_error`, the
+ * level's bound before quantisation). */
+void sl_export_report_result(const sl_export_config *c, const sl_export_frame *frame,
+                             const sl_export_result *row, const char *file_name,
+                             double max_error, sl_json *r);
+
+/* The levels of a level list (the cluster stage's, stages/cluster/cluster.h) instead of an
+ * LOD model: written, measured, deduplicated and reported like sl_export_levels, with the
+ * manifest and the pages (export_level_list.c). */
+int sl_export_level_list(const sl_export_config *c, const char *cluster_dir,
+                         const char *range_dir, const sl_mesh *input,
+                         const sl_export_frame *frame, const sl_export_texture *texture,
+                         const sl_stage_io *io, sl_error *err);
 
 /* The size of the level file NAME.EXT this stage wrote, 0 when there is none. */
 uint64_t sl_export_file_bytes(const sl_stage_io *io, const char *name, const char *ext);
@@ -114,7 +157,8 @@ int sl_export_manifest(const sl_export_config *c, const sl_export_result *result
                        sl_error *err);
 
 /* index.html and summary-item.html (the item's section of OUTPUT/summary.html), and with
- * [export] viewer the viewer bundle and NAME.glb.js per GLB (export_html.c). */
+ * [export] viewer the viewer bundle and NAME.glb.js per GLB (export_html.c). `model` is
+ * NULL for a level list (the cluster method): no expansions, no model.slod. */
 int sl_export_html(const sl_export_config *c, const sl_lod_model *model, const sl_mesh *input,
                    const sl_export_result *results,
                    const int level_of_quality[SL_EXPORT_QUALITIES], const sl_stage_io *io,

@@ -145,6 +145,8 @@ static void report_glb(sl_json *r, const sl_export_config *c, const sl_glb_stats
     sl_json_double(r, "normal_error_deg", g->normal_error_max_deg);
     sl_json_double(r, "color_error_srgb_steps", g->color_error_max);
     sl_json_double(r, "max_error", max_error + bound);
+    if (g->morph) /* how far weight 1 lands from the coarser level's surface point */
+        sl_json_double(r, "morph_error_world", g->morph_error_max / to_metres);
     if (measured)
         sl_json_double(r, "hausdorff", hausdorff + bound / diagonal);
     sl_json_object_end(r);
@@ -183,17 +185,9 @@ static int measure_level(const sl_export_config *c, const sl_mesh *input, const 
     return 0;
 }
 
-/* What identifies a generated mesh: counts and the XXH3-128 of every array. Two levels
- * with equal digests have the same vertices, normals, colours and triangles in the same
- * order, so they would write byte-identical files. */
-typedef struct mesh_digest {
-    uint64_t vertices, triangles;
-    sl_hash positions, normals, colors, indices;
-} mesh_digest;
-
-static mesh_digest digest_mesh(const sl_lod_mesh *m)
+sl_export_digest sl_export_digest_mesh(const sl_lod_mesh *m)
 {
-    mesh_digest d;
+    sl_export_digest d;
     memset(&d, 0, sizeof d); /* no padding bytes left undefined: digests are compared whole */
     d.vertices = m->vertex_count;
     d.triangles = m->triangle_count;
@@ -287,7 +281,7 @@ static int names_files_before(const sl_export_config *c, int a, int b)
 static int plan_levels(const sl_export_config *c, sl_lod_model *model, const sl_stage_io *io,
                        sl_export_result *rows, uint64_t *cracks, sl_error *err)
 {
-    mesh_digest *digests = calloc((size_t)c->level_count + 1, sizeof *digests);
+    sl_export_digest *digests = calloc((size_t)c->level_count + 1, sizeof *digests);
     if (!digests)
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     for (int i = 0; i < c->level_count; i++) {
@@ -306,7 +300,7 @@ static int plan_levels(const sl_export_config *c, sl_lod_model *model, const sl_
         }
         rows[i].triangles = mesh.triangle_count;
         rows[i].vertices = mesh.vertex_count;
-        digests[i] = digest_mesh(&mesh);
+        digests[i] = sl_export_digest_mesh(&mesh);
         sl_lod_mesh_release(&mesh);
     }
     for (int i = 0; i < c->level_count; i++) {
@@ -378,6 +372,17 @@ static void report_level(const sl_export_config *c, const sl_lod_model *model,
     sl_json_u64(r, "vertices", row->vertices);
     sl_json_double(r, "max_error", model->error_after[row->k]);
     sl_json_u64(r, "unpatched_cells", cracks);
+    sl_export_report_result(c, frame, row, row->file >= 0 ? c->levels[row->file].name : NULL,
+                            model->error_after[row->k], r);
+    if (row->morph_to >= 0)
+        sl_json_string(r, "morph_to", c->levels[row->morph_to].name);
+    sl_json_object_end(r);
+}
+
+void sl_export_report_result(const sl_export_config *c, const sl_export_frame *frame,
+                             const sl_export_result *row, const char *file_name,
+                             double max_error, sl_json *r)
+{
     sl_json_u64(r, "boundary_edges", row->boundary_edges);
     sl_json_u64(r, "nonmanifold_edges", row->nonmanifold_edges);
     sl_json_bool(r, "watertight", row->watertight);
@@ -387,20 +392,37 @@ static void report_level(const sl_export_config *c, const sl_lod_model *model,
         sl_json_double(r, "mean", row->mean);
     }
     /* The level whose files hold this mesh (docs/formats.md); null without triangles. */
-    sl_json_string(r, "file", row->file >= 0 ? c->levels[row->file].name : NULL);
+    sl_json_string(r, "file", file_name);
     if (row->texture)
         report_texture(row, r);
     if (row->triangles && c->write_glb)
-        report_glb(r, c, &row->glb, frame->to_metres, model->error_after[row->k], row->diagonal,
-                   row->hausdorff, row->measured);
-    sl_json_object_end(r);
+        report_glb(r, c, &row->glb, frame->to_metres, max_error, row->diagonal, row->hausdorff,
+                   row->measured);
+}
+
+int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
+                          const sl_lod_mesh *mesh, const sl_lod_mesh *morph_to,
+                          const char *extras, const sl_mesh *input,
+                          const sl_export_frame *frame, const sl_export_texture *texture,
+                          const sl_stage_io *io, sl_export_result *row, sl_error *err)
+{
+    sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z', NULL, morph_to};
+    row->triangles = mesh->triangle_count;
+    row->vertices = mesh->vertex_count;
+    sl_export_baked baked;
+    int rc = bake_level(c, texture, lv, mesh, row, &baked, err);
+    if (rc == 0 && mesh->triangle_count)
+        rc = write_files(c, lv, mesh, &baked, extras, &glb, &row->glb, io, err);
+    sl_export_baked_release(&baked);
+    if (rc == 0)
+        rc = measure_level(c, input, mesh, io, row, err);
+    return rc;
 }
 
 int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_mesh *input,
                      const sl_export_frame *frame, const sl_export_texture *texture,
                      const sl_stage_io *io, sl_error *err)
 {
-    sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z', NULL};
     sl_json *r = io->report;
     sl_json_u64(r, "expansions", model->expansion_count);
     sl_json_u64(r, "triangles_finest", model->accumulation[model->expansion_count]);
@@ -415,24 +437,30 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
         const sl_export_level *lv = &c->levels[i];
         if ((rc = sl_stage_step(io, "export", (double)i / c->level_count, err)))
             break;
+        rows[i].morph_to = -1;
         if (rows[i].file != i)
             continue;
-        sl_lod_mesh mesh;
+        sl_lod_mesh mesh, coarser;
+        memset(&coarser, 0, sizeof coarser);
+        int to = sl_export_morph_coarser(c, rows, i);
         if (sl_lod_generate(model, rows[i].k, &mesh, NULL)) {
             rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
             break;
         }
+        if (to >= 0 && sl_lod_generate(model, rows[to].k, &coarser, NULL)) {
+            sl_lod_mesh_release(&mesh);
+            rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+            break;
+        }
+        rows[i].morph_to = to;
         char extras[256];
         snprintf(extras, sizeof extras,
                  "{\"scanlod\":{\"level\":\"%s\",\"expansions\":%u,\"of\":%u}}", lv->name,
                  rows[i].k, model->expansion_count);
-        sl_export_baked baked;
-        rc = bake_level(c, texture, lv, &mesh, &rows[i], &baked, err);
-        if (rc == 0)
-            rc = write_files(c, lv, &mesh, &baked, extras, &glb, &rows[i].glb, io, err);
-        sl_export_baked_release(&baked);
-        if (rc == 0)
-            rc = measure_level(c, input, &mesh, io, &rows[i], err);
+        rc = sl_export_write_level(c, lv, &mesh, to >= 0 ? &coarser : NULL, extras, input,
+                                   frame, texture, io, &rows[i], err);
+        if (to >= 0)
+            sl_lod_mesh_release(&coarser);
         sl_lod_mesh_release(&mesh);
     }
     for (int i = 0; i < c->level_count && rc == 0; i++)

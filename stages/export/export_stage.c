@@ -14,7 +14,7 @@
 #include "stages/crack/crack.h"
 #include "stages/export/export_internal.h"
 
-#define EXPORT_STAGE_VERSION 4u
+#define EXPORT_STAGE_VERSION 5u
 
 static const sl_option export_options[] = {
     {"export", "lod_percents", SL_OPT_LIST, "20,40,60,80,100", 0, 100, NULL,
@@ -86,6 +86,13 @@ static const sl_option export_options[] = {
      "each level in an interactive 3D view that needs no network and works from a local "
      "file. This adds the viewer script (about 1 MB) and each GLB again as a script "
      "(NAME.glb.js, a third larger than the GLB) to every item."},
+    {"export", "morph", SL_OPT_BOOL, "false", 0, 0, NULL,
+     "Each published level's GLB carries one glTF morph target (docs/morphing.md) that "
+     "moves every vertex to its closest point on the next coarser published level, so a "
+     "viewer can blend between levels instead of popping (the 3D views do, by camera "
+     "distance). At weight 0 the GLB is the level, at weight 1 it lies on the coarser level. "
+     "The coarsest level has none. Works with every compression (Draco: the target is "
+     "stored uncompressed beside the Draco stream)."},
     SL_OPTION_END,
 };
 
@@ -136,6 +143,7 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
         p += n + (p[n] == ',');
     }
     c->viewer = sl_config_bool(cfg, "export", "viewer");
+    c->morph = sl_config_bool(cfg, "export", "morph");
     if (rc) {
         free(c);
         return rc;
@@ -166,12 +174,15 @@ void sl_export_resolve_frame(const sl_export_config *c, const sl_mesh *input,
 static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
 {
     const sl_export_config *c = config;
+    /* [lod] method = cluster: the cluster stage's level list instead of an LOD model. */
+    const char *cluster_dir = sl_stage_dir(io, "cluster");
     char model_path[PATH_MAX], published[PATH_MAX];
     sl_lod_model model;
-    int rc = sl_stage_path(model_path, io->in_dir, SL_MODEL_FILE, err);
-    if (rc == 0)
+    sl_lod_model_init(&model);
+    int rc = cluster_dir ? 0 : sl_stage_path(model_path, io->in_dir, SL_MODEL_FILE, err);
+    if (rc == 0 && !cluster_dir)
         rc = sl_stage_path(published, io->out_dir, SL_MODEL_FILE, err);
-    if (rc == 0)
+    if (rc == 0 && !cluster_dir)
         rc = sl_lod_model_read(model_path, &model, err);
     if (rc)
         return rc;
@@ -217,10 +228,16 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
         }
         sl_json_object_end(io->report);
     }
-    rc = sl_link_or_copy(model_path, published, err);
-    if (rc == 0)
-        rc = sl_export_levels(c, &model, measure ? &input : NULL, &frame,
-                              texture.input ? &texture : NULL, io, err);
+    if (cluster_dir) {
+        rc = sl_export_level_list(c, cluster_dir, sl_stage_dir(io, "range"),
+                                  measure ? &input : NULL, &frame,
+                                  texture.input ? &texture : NULL, io, err);
+    } else {
+        rc = sl_link_or_copy(model_path, published, err);
+        if (rc == 0)
+            rc = sl_export_levels(c, &model, measure ? &input : NULL, &frame,
+                                  texture.input ? &texture : NULL, io, err);
+    }
     sl_export_texture_close(&texture);
     sl_mesh_release(&input);
     sl_lod_model_release(&model);

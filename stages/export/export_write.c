@@ -10,6 +10,7 @@
 
 #include "geometry/glb.h"
 #include "geometry/mesh.h"
+#include "geometry/morph_target.h"
 #include "geometry/ply.h"
 #include "geometry/raster.h"
 #include "stages/export/export_internal.h"
@@ -56,8 +57,25 @@ static void to_gltf_frame(float *pos, float *nrm, uint64_t n, double to_metres, 
 static sl_export_glb default_glb(void)
 {
     sl_export_config c = sl_export_default_config();
-    sl_export_glb g = {c.glb, 1.0, 0, NULL};
+    sl_export_glb g = {c.glb, 1.0, 0, NULL, NULL};
     return g;
+}
+
+/* Where each vertex of `m` goes on glb->morph_to (input frame), or NULL with no morph. */
+static int morph_targets(const sl_lod_mesh *m, const sl_export_glb *glb, const char *path,
+                         float **out, sl_error *err)
+{
+    *out = NULL;
+    if (!glb->morph_to)
+        return 0;
+    size_t n = (size_t)m->vertex_count;
+    if (!(*out = malloc((n ? n : 1) * 3 * sizeof **out)))
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    sl_mesh coarser = sl_export_mesh_view(glb->morph_to);
+    int rc = sl_morph_closest_points(&coarser, m->positions, m->vertex_count, *out, NULL, err);
+    if (rc && !err->file[0])
+        snprintf(err->file, sizeof err->file, "%s", path);
+    return rc;
 }
 
 /* GLB in meshoptimizer's vertex-cache and vertex-fetch order (same surface, same welds). */
@@ -71,8 +89,11 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
     float *nrm = malloc((vertices ? vertices : 1) * 3 * sizeof *nrm);
     uint8_t *col = m->colors ? malloc((vertices ? vertices : 1) * 4) : NULL;
     float *uv = glb->texcoords ? malloc((vertices ? vertices : 1) * 2 * sizeof *uv) : NULL;
-    int rc;
-    if (!order || !remap || !pos || !nrm || (m->colors && !col) || (glb->texcoords && !uv)) {
+    float *morph = NULL, *target = glb->morph_to ? malloc((vertices ? vertices : 1) * 12) : NULL;
+    int rc = morph_targets(m, glb, path, &morph, err);
+    if (rc) {
+    } else if (!order || !remap || !pos || !nrm || (m->colors && !col) ||
+               (glb->texcoords && !uv) || (glb->morph_to && !target)) {
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
     } else {
         meshopt_optimizeVertexCache(order, m->indices, indices, vertices);
@@ -85,10 +106,18 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
         if (uv)
             meshopt_remapVertexBuffer(uv, glb->texcoords, vertices, 2 * sizeof *uv, remap);
         to_gltf_frame(pos, nrm, used, glb->to_metres, glb->z_up);
+        sl_glb_options options = glb->options;
+        if (target) {
+            meshopt_remapVertexBuffer(target, morph, vertices, 3 * sizeof(float), remap);
+            to_gltf_frame(target, NULL, used, glb->to_metres, glb->z_up);
+            options.morph_positions = target;
+        }
         sl_mesh g = sl_mesh_view(used, pos, nrm, col, m->triangle_count, order);
         g.texcoords = uv;
-        rc = sl_glb_write(path, &g, extras, &glb->options, stats, err);
+        rc = sl_glb_write(path, &g, extras, &options, stats, err);
     }
+    free(morph);
+    free(target);
     free(order);
     free(remap);
     free(pos);

@@ -7,7 +7,7 @@ source "$(dirname "$0")/../lib.sh"
 command -v script >/dev/null || { echo "SKIP: no script(1) to give the run a terminal"; exit 77; }
 
 mkdir -p "$TMP/in"
-cp "$SCANS/bun_zipper_res4.ply" "$SCANS/bun_zipper_res3.ply" "$SCANS/cow.ply" "$TMP/in/"
+cp "$SCANS/bun_zipper_res4.ply" "$SCANS/rocker_arm.ply" "$SCANS/cow.ply" "$TMP/in/"
 write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out"
 
 # On a terminal (script(1) gives the run a pseudo-terminal of 120 columns).

@@ -172,6 +172,8 @@ typedef struct glb_decoded {
     double *normals;     /* 3 per vertex or NULL */
     double *colors;      /* 4 per vertex, linear, or NULL */
     double *texcoords;   /* 2 per vertex (glTF convention) or NULL */
+    double *morph;       /* targets[0].POSITION: 3 per vertex, metres (node scale applied),
+                            or NULL */
     uint32_t *triangles;
     int compression;     /* 0 none, 1 meshopt, 2 draco */
     int quantized;       /* KHR_mesh_quantization in extensionsRequired */
@@ -385,7 +387,7 @@ static int glb_draco_(glb_decoded *g, const unsigned char *bin, uint64_t bin_siz
 
 static void glb_decoded_free(glb_decoded *g)
 {
-    free(g->positions), free(g->normals), free(g->colors), free(g->texcoords);
+    free(g->positions), free(g->normals), free(g->colors), free(g->texcoords), free(g->morph);
     free(g->triangles), free(g->file);
     jv_free(&g->json);
     memset(g, 0, sizeof *g);
@@ -477,6 +479,27 @@ static int glb_decode(const char *path, glb_decoded *g, char *why, size_t n)
     const jv *node = jv_at(jv_get(&g->json, "nodes"), 0);
     if (jv_get(node, "rotation")->type != JV_NULL || jv_get(node, "matrix")->type != JV_NULL)
         return glb_fail_(why, n, "the node has a rotation or matrix");
+    /* A morph target: plain (or meshopt) accessors in every encoding, Draco's included. */
+    const jv *target = jv_get(jv_at(jv_get(prim, "targets"), 0), "POSITION");
+    if (target->type == JV_NUM) {
+        uint64_t count;
+        if (!(g->morph = glb_accessor_(g, bin, bin_size, (int)target->num, 3, &count, why, n)))
+            return -1;
+        if (count != g->vertex_count)
+            return glb_fail_(why, n, "the morph target has %llu elements, POSITION %llu",
+                             (unsigned long long)count, (unsigned long long)g->vertex_count);
+        const jv *ta = jv_at(jv_get(&g->json, "accessors"), (int)target->num);
+        for (int k = 0; k < 3; k++) { /* min/max are required and must be the data's */
+            double lo = INFINITY, hi = -INFINITY;
+            for (uint64_t i = 0; i < count; i++)
+                lo = fmin(lo, g->morph[3 * i + k]), hi = fmax(hi, g->morph[3 * i + k]);
+            if ((float)jv_num(jv_at(jv_get(ta, "min"), k), NAN) != (float)lo ||
+                (float)jv_num(jv_at(jv_get(ta, "max"), k), NAN) != (float)hi)
+                return glb_fail_(why, n, "morph target min/max[%d] are not the data's", k);
+        }
+        for (uint64_t i = 0; i < 3 * count; i++)
+            g->morph[i] *= jv_num(jv_at(jv_get(node, "scale"), (int)(i % 3)), 1);
+    }
     for (uint64_t i = 0; i < g->vertex_count; i++)
         for (int k = 0; k < 3; k++) {
             double s = jv_num(jv_at(jv_get(node, "scale"), k), 1);

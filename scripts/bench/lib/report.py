@@ -299,6 +299,30 @@ def section_growth(out, h):
     out.append("")
 
 
+CLUSTER_HEADING = "## 5. Clustering with bounded error (paper 2, issue 13)"
+
+
+def section_cluster(out, results, dest):
+    """bench_cluster.sh's tables (its own run, BUILD/bench-results/cluster/cluster.md,
+    beside this run's folder), else the section the page already has: run.sh does not
+    run that benchmark, and regenerating the page must not drop its figures."""
+    md = os.path.join(os.path.dirname(os.path.abspath(results)), "cluster", "cluster.md")
+    body = None
+    if os.path.exists(md):
+        body = ("From `scripts/bench/bench_cluster.sh` (not part of `run.sh`; its own run, "
+                "docs/clustering.md explains the method and the bound):\n\n" +
+                open(md).read())
+    elif os.path.exists(dest):
+        old = open(dest).read()
+        at = old.find(CLUSTER_HEADING)
+        if at >= 0:
+            end = old.find("\n## ", at + len(CLUSTER_HEADING))
+            body = old[at + len(CLUSTER_HEADING):end if end >= 0 else len(old)].strip() + "\n"
+    if body:
+        out.append(CLUSTER_HEADING + "\n")
+        out.append(body.strip() + "\n")
+
+
 def section_plots(out):
     out.append("## Plots\n")
     for f, what in [("error_vs_triangles.png", "RMS error against triangle count per input: "
@@ -333,6 +357,7 @@ def main():
         else:
             fn()
     section_growth(out, h)
+    section_cluster(out, results, dest)
     section_plots(out)
     with open(dest + ".tmp", "w") as f:
         f.write("\n".join(out).rstrip() + "\n")

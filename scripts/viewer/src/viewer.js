@@ -14,7 +14,9 @@
 // time. Its figure's data-state is "loading", then "drawn" (data-triangles set) or
 // "error"; the tests wait for those. One WebGL context serves every view (a page may hold
 // hundreds; browsers allow about 16 contexts): each view is rendered there and copied
-// into its own 2D canvas, again whenever it is orbited.
+// into its own 2D canvas, again whenever it is orbited. A level whose GLB has a morph
+// target (docs/morphing.md) blends into the next coarser level as the camera moves away
+// (morph_blend.js); its figure's data-morph says the weight drawn.
 import {
   Box3, Color, DirectionalLight, HemisphereLight, PerspectiveCamera, SRGBColorSpace, Scene,
   Sphere, Vector3, WebGLRenderer,
@@ -25,6 +27,7 @@ import { MeshoptDecoder } from 'three/examples/jsm/libs/meshopt_decoder.module.j
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
 import dracoWrapper from 'three/examples/jsm/libs/draco/gltf/draco_wasm_wrapper.js'; // text (build.mjs)
 import dracoWasm from 'three/examples/jsm/libs/draco/gltf/draco_decoder.wasm'; // Uint8Array
+import { morphMeshes, morphWeight, setMorph } from './morph_blend.js';
 
 // As the PNG thumbnails (docs/glb.md, "Thumbnails"): the same direction about +Y, clay
 // where a level has no colours, the same light grey background.
@@ -119,6 +122,7 @@ class View {
     this.camera = new PerspectiveCamera(FOV, 1, 0.01, 100);
     this.scene = null;
     this.controls = null;
+    this.morphs = [];
     this.key = new DirectionalLight(0xffffff, 2.2);
     this.src = figure.dataset.src;
     for (const b of figure.querySelectorAll('button[data-src]')) {
@@ -178,6 +182,8 @@ class View {
       this.controls.addEventListener('change', () => this.draw());
     }
     this.center = sphere.center.clone();
+    this.framing = distance;
+    this.morphs = morphMeshes(root);
     this.controls.target.copy(sphere.center);
     this.controls.update(); // may draw ('change')
     this.draw();
@@ -199,6 +205,11 @@ class View {
     const offset = new Vector3(-0.6, 0.7, 0.45).applyQuaternion(this.camera.quaternion);
     this.key.target.position.copy(this.center);
     this.key.position.copy(this.center).add(offset);
+    if (this.morphs.length) {
+      const w = morphWeight(this.camera.position.distanceTo(this.center), this.framing);
+      setMorph(this.morphs, w);
+      this.figure.dataset.morph = w.toFixed(3);
+    }
     const gl = sharedRenderer();
     gl.setPixelRatio(1);
     gl.setSize(w, h, false);

@@ -1,0 +1,541 @@
+/* `scanlod simplify IN.ply --method M (--max-error E | --triangles N) [method options]
+ * -o OUT.ply`: one mesh simplified by one of the papers' methods, without a collection or
+ * a work folder (ARCHITECTURE section 1; docs/clustering.md for --method cluster).
+ *
+ * The input is cleaned exactly as the range stage cleans it (welded, degenerate and
+ * non-finite faces dropped, an inside-out mesh turned), so a level made here equals the
+ * one the pipeline makes. A method is an entry of `methods[]`: its option parser, its
+ * usage text and a function from the cleaned mesh and the target to triangles in the
+ * cleaned mesh's vertices (plus, optionally, meshes of its own, e.g. intermediate models).
+ *
+ * stdout: one summary line, or one JSON object with --json. Bad input: one line
+ * `scanlod: FILE: cause`, exit 65; a bad option: exit 64; out of memory, interrupt: 75.
+ */
+#include <errno.h>
+#include <inttypes.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "cli/commands.h"
+#include "core/json.h"
+#include "core/signals.h"
+#include "geometry/ply.h"
+#include "stages/cluster/cluster.h"
+#include "stages/range/range.h"
+
+static double seconds_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* What every method gets: the cleaned mesh and the size asked for. */
+typedef struct simplify_job {
+    const sl_pointset *mesh;
+    uint64_t triangles;  /* > 0: budget */
+    double max_error;    /* > 0: bound, fraction of the bounding-box diagonal */
+    int strict;          /* refuse open boundaries, non-manifold edges, degenerate faces */
+} simplify_job;
+
+/* A mesh with its own vertices, written beside the output (OUT_1.ply, ...). */
+typedef struct simplify_extra {
+    uint64_t vertex_count, triangle_count;
+    const float *positions;
+    const uint32_t *source;    /* the cleaned mesh's vertex each one is (its colour) */
+    const uint32_t *triangles;
+} simplify_extra;
+
+/* What a method gives back: triangles in the cleaned mesh's points, and its figures. */
+typedef struct simplify_output {
+    uint64_t triangle_count;
+    const uint32_t *triangles;
+    uint32_t extra_count;
+    simplify_extra *extras;
+    sl_json figures;           /* the method's own figures (an open object's members) */
+    void *state;               /* the method's, freed by its release */
+} simplify_output;
+
+typedef struct simplify_method {
+    const char *name;
+    const char *options_help;
+    /* Parses argv[*i] (and its value) if it is one of the method's options: 1 taken,
+     * 0 not the method's, -1 a bad value (message printed). */
+    int (*parse)(int argc, char **argv, int *i);
+    int (*run)(const simplify_job *job, simplify_output *out, sl_progress *progress,
+               sl_error *err);
+    void (*release)(simplify_output *out);
+} simplify_method;
+
+static int parse_double(const char *text, double *out)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(text, &end);
+    if (errno || end == text || *end || !isfinite(v))
+        return -1;
+    *out = v;
+    return 0;
+}
+
+/* A whole number in [lo, hi] from argv[++*i]; -1 (message printed) otherwise. */
+static int parse_count(int argc, char **argv, int *i, double lo, double hi, double *out)
+{
+    const char *arg = argv[*i];
+    double v;
+    if (*i + 1 >= argc || parse_double(argv[++*i], &v) || v < lo || v > hi || v != floor(v)) {
+        fprintf(stderr, "scanlod simplify: %s needs a whole number in [%g, %g]\n", arg, lo, hi);
+        return -1;
+    }
+    *out = v;
+    return 0;
+}
+
+/* --- the cluster method (paper 2) ------------------------------------------------------ */
+
+static sl_cluster_config cluster_opts;
+static uint32_t cluster_intermediates;
+
+static int cluster_parse(int argc, char **argv, int *i)
+{
+    const char *arg = argv[*i];
+    double v;
+    if (!strcmp(arg, "--passes")) {
+        if (parse_count(argc, argv, i, 1, SL_CLUSTER_MAX_PASSES, &v))
+            return -1;
+        cluster_opts.passes = (uint32_t)v;
+    } else if (!strcmp(arg, "--intermediates")) {
+        if (parse_count(argc, argv, i, 1, SL_CLUSTER_MAX_INTERMEDIATES, &v))
+            return -1;
+        cluster_intermediates = (uint32_t)v;
+    } else if (!strcmp(arg, "--max-angle") || !strcmp(arg, "--slab-share")) {
+        int angle = arg[2] == 'm';
+        if (*i + 1 >= argc || parse_double(argv[++*i], &v) ||
+            !(angle ? v > 0 && v <= SL_CLUSTER_MAX_ANGLE : v > 0 && v <= 1)) {
+            fprintf(stderr, "scanlod simplify: %s needs a number in %s\n", arg,
+                    angle ? "(0, 89] (degrees)" : "(0, 1]");
+            return -1;
+        }
+        *(angle ? &cluster_opts.max_angle : &cluster_opts.slab_share) = v;
+    } else {
+        return 0;
+    }
+    return 1;
+}
+
+static void cluster_figures(sl_json *j, const sl_cluster_level *l)
+{
+    sl_json_double(j, "bound", l->bound_fraction);
+    sl_json_double(j, "bound_world", l->bound);
+    sl_json_double(j, "diagonal", l->diagonal);
+    sl_json_bool(j, "reached", l->reached);
+    sl_json_u64(j, "search_steps", l->search_steps);
+    sl_json_u64(j, "boundary_edges", l->boundary_edges);
+    sl_json_u64(j, "nonmanifold_edges", l->nonmanifold_edges);
+    sl_json_u64(j, "nonmanifold_vertices", l->nonmanifold_vertices);
+    sl_json_array_begin(j, "passes");
+    for (uint32_t p = 0; p < l->pass_count; p++) {
+        const sl_cluster_pass_stats *s = &l->pass[p];
+        sl_json_object_begin(j, NULL);
+        sl_json_double(j, "tolerance", s->tolerance / l->diagonal);
+        sl_json_double(j, "bound", s->bound / l->diagonal);
+        sl_json_double(j, "max_slab", s->max_slab / l->diagonal);
+        sl_json_double(j, "max_deviation", s->max_deviation / l->diagonal);
+        sl_json_u64(j, "clusters", s->clusters);
+        sl_json_u64(j, "clusters_kept", s->clusters_kept);
+        sl_json_u64(j, "corners", s->corners);
+        sl_json_u64(j, "borders", s->borders);
+        sl_json_u64(j, "borders_reverted", s->borders_reverted);
+        sl_json_u64(j, "forced_splits", s->forced_splits);
+        sl_json_u64(j, "triangulation_failures", s->triangulation_failures);
+        sl_json_u64(j, "regrowths", s->regrowths);
+        sl_json_u64(j, "removed_interior", s->removed_interior);
+        sl_json_u64(j, "removed_border", s->removed_border);
+        sl_json_u64(j, "triangles_in", s->triangles_in);
+        sl_json_u64(j, "triangles_out", s->triangles_out);
+        sl_json_object_end(j);
+    }
+    sl_json_array_end(j);
+    sl_json_array_begin(j, "intermediates");
+    for (uint32_t k = 0; k < l->intermediate_count; k++) {
+        sl_json_object_begin(j, NULL);
+        sl_json_u64(j, "triangles", l->intermediates[k].triangle_count);
+        sl_json_double(j, "bound", l->intermediates[k].bound / l->diagonal);
+        sl_json_object_end(j);
+    }
+    sl_json_array_end(j);
+}
+
+static int cluster_run(const simplify_job *job, simplify_output *out, sl_progress *progress,
+                       sl_error *err)
+{
+    sl_cluster_level *l = calloc(1, sizeof *l);
+    if (!l)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory");
+    sl_cluster_input in = {job->mesh->count, job->mesh->positions, job->mesh->triangle_count,
+                           job->mesh->triangles, 0.0, 0.0, job->strict ? SL_CLUSTER_STRICT : 0};
+    sl_cluster_target target = {job->max_error, job->triangles, cluster_intermediates};
+    if (!target.max_error && !target.triangles)
+        target.max_error = 0.01;
+    int rc = sl_cluster_simplify(&cluster_opts, &in, &target, l, progress, err);
+    out->state = l;
+    if (rc)
+        return rc;
+    out->triangle_count = l->triangle_count;
+    out->triangles = l->triangles;
+    out->extras = calloc(l->intermediate_count ? l->intermediate_count : 1, sizeof *out->extras);
+    if (!out->extras)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory");
+    out->extra_count = l->intermediate_count;
+    for (uint32_t k = 0; k < l->intermediate_count; k++) {
+        const sl_cluster_intermediate *m = &l->intermediates[k];
+        out->extras[k] = (simplify_extra){m->vertex_count, m->triangle_count, m->positions,
+                                          m->source, m->triangles};
+    }
+    cluster_figures(&out->figures, l);
+    if (l->boundary_edges || l->nonmanifold_edges || l->nonmanifold_vertices)
+        fprintf(stderr, "scanlod simplify: note: kept %" PRIu64 " boundary edges (straightened "
+                "within the bound), %" PRIu64 " non-manifold edges and %" PRIu64 " non-manifold "
+                "vertices (unchanged); --strict refuses them\n", l->boundary_edges,
+                l->nonmanifold_edges, l->nonmanifold_vertices);
+    return 0;
+}
+
+static void cluster_release(simplify_output *out)
+{
+    if (out->state)
+        sl_cluster_level_release(out->state);
+    free(out->state);
+    free(out->extras);
+}
+
+static const simplify_method methods[] = {
+    {"cluster",
+     "  cluster (paper 2; docs/clustering.md): --max-error bounds the symmetric Hausdorff\n"
+     "  distance to the input (proven; measure it with `scanlod compare`)\n"
+     "    --passes P          clustering passes, each on the previous one's output (1)\n"
+     "    --intermediates M   also write M intermediate models OUT_1 .. OUT_M (morphing)\n"
+     "    --max-angle D       a face's normal within D degrees of its cluster's (60)\n"
+     "    --slab-share S      share of each pass tolerance for cluster thickness (0.7)\n",
+     cluster_parse, cluster_run, cluster_release},
+};
+
+/* --- the command -------------------------------------------------------------------- */
+
+static const char simplify_usage[] =
+    "usage: scanlod simplify IN.ply --method M (--max-error E | --triangles N)\n"
+    "                        [method options] [-o OUT.ply] [--strict] [--json]\n"
+    "  One mesh simplified by one method, cleaned first as the pipeline's range stage does.\n"
+    "  --method M       cluster\n"
+    "  --max-error E    the level's error bound, a fraction of the bounding-box diagonal\n"
+    "                   in (0, 1] (neither this nor --triangles: 0.01)\n"
+    "  --triangles N    at most N triangles, with the smallest bound the search finds\n"
+    "  -o OUT.ply       write the level (positions, and colours when the input has them)\n"
+    "  --strict         refuse open boundaries, non-manifold edges and degenerate faces\n"
+    "                   (by default they are kept: see the method's doc)\n"
+    "  --json           the figures as one JSON object on stdout\n";
+
+typedef struct simplify_args {
+    const char *input, *output;
+    const simplify_method *method;
+    simplify_job job;
+    int json;
+} simplify_args;
+
+/* A bad option: one line naming it (the usage is --help's). */
+static int usage_error(const char *fmt, const char *what)
+{
+    fputs("scanlod simplify: ", stderr);
+    fprintf(stderr, fmt, what);
+    fputs(" (scanlod simplify --help)\n", stderr);
+    return SL_EXIT_USAGE;
+}
+
+static int parse_common(int argc, char **argv, int *i, simplify_args *a)
+{
+    const char *arg = argv[*i];
+    if (!strcmp(arg, "--triangles")) {
+        double v;
+        if (*i + 1 >= argc || parse_double(argv[++*i], &v) || v < 1 || v != floor(v) || v > 1e15)
+            return usage_error("%s needs a whole number >= 1", arg);
+        a->job.triangles = (uint64_t)v;
+    } else if (!strcmp(arg, "--max-error")) {
+        if (*i + 1 >= argc || parse_double(argv[++*i], &a->job.max_error) ||
+            !(a->job.max_error > 0) || a->job.max_error > 1)
+            return usage_error("%s needs a fraction of the diagonal in (0, 1] (0.01 = 1 %%)", arg);
+    } else if (!strcmp(arg, "-o")) {
+        if (*i + 1 >= argc)
+            return usage_error("%s needs a file name", arg);
+        a->output = argv[++*i];
+    } else if (!strcmp(arg, "--json")) {
+        a->json = 1;
+    } else if (!strcmp(arg, "--strict")) {
+        a->job.strict = 1;
+    } else {
+        return -1;
+    }
+    return 0;
+}
+
+static int parse_args(int argc, char **argv, simplify_args *a)
+{
+    memset(a, 0, sizeof *a);
+    cluster_opts = sl_cluster_default_config();
+    cluster_intermediates = 0;
+    for (int i = 1; i < argc; i++) /* the method first: its options depend on it */
+        if (!strcmp(argv[i], "--method") && i + 1 < argc) {
+            a->method = NULL;
+            for (size_t m = 0; m < sizeof methods / sizeof methods[0]; m++)
+                if (!strcmp(argv[i + 1], methods[m].name))
+                    a->method = &methods[m];
+            if (!a->method)
+                return usage_error("unknown method '%s'", argv[i + 1]);
+        }
+    int counted = 0;
+    for (int i = 1; i < argc; i++) {
+        const char *arg = argv[i];
+        if (!strcmp(arg, "-h") || !strcmp(arg, "--help")) {
+            fputs(simplify_usage, stdout);
+            for (size_t m = 0; m < sizeof methods / sizeof methods[0]; m++)
+                fputs(methods[m].options_help, stdout);
+            return -2;
+        }
+        if (!strcmp(arg, "--method")) {
+            if (++i >= argc)
+                return usage_error("%s needs a name", arg);
+            continue;
+        }
+        int rc = parse_common(argc, argv, &i, a);
+        if (rc > 0)
+            return rc;
+        if (rc == 0) {
+            counted += !strcmp(arg, "--triangles") || !strcmp(arg, "--max-error");
+            continue;
+        }
+        rc = a->method ? a->method->parse(argc, argv, &i) : 0;
+        if (rc < 0) /* the method said what, in one line */
+            return SL_EXIT_USAGE;
+        if (rc > 0)
+            continue;
+        if (arg[0] == '-' && arg[1])
+            return usage_error("unknown option %s", arg);
+        if (a->input)
+            return usage_error("unexpected argument %s", arg);
+        a->input = arg;
+    }
+    if (!a->method)
+        return usage_error("%s", "needs --method (cluster)");
+    if (!a->input)
+        return usage_error("%s", "needs an input PLY file");
+    if (counted > 1)
+        return usage_error("%s", "give one of --triangles and --max-error");
+    if (cluster_intermediates && !a->output)
+        return usage_error("%s", "--intermediates needs -o OUT.ply (they are written beside it)");
+    return 0;
+}
+
+/* One line `scanlod: FILE: cause`; reading failures of the input are the user's data. */
+static int report_error(sl_error *err, const char *file, int reading)
+{
+    if (!err->file[0] && file)
+        snprintf(err->file, sizeof err->file, "%s", file);
+    char line[1600];
+    fprintf(stderr, "scanlod: %s\n", sl_error_format(err, line, sizeof line));
+    return reading ? sl_error_input_exit_code(err->code) : sl_error_exit_code(err->code);
+}
+
+/* A mesh whose vertex k is positions[k] (the cleaned mesh's vertex source[k], or k when
+ * source is NULL), coloured from the cleaned mesh when it has colours. */
+static int write_mesh(const char *path, const sl_pointset *ps, uint64_t vertex_count,
+                      const float *positions, const uint32_t *source, uint64_t triangle_count,
+                      const uint32_t *triangles, sl_error *err)
+{
+    sl_mesh m;
+    sl_mesh_init(&m);
+    m.vertex_count = vertex_count;
+    m.triangle_count = triangle_count;
+    m.positions = malloc((vertex_count ? vertex_count : 1) * 12);
+    m.colors = ps->colors ? malloc((vertex_count ? vertex_count : 1) * 4) : NULL;
+    m.triangles = malloc((triangle_count ? triangle_count : 1) * 12);
+    int rc;
+    if (!m.positions || (ps->colors && !m.colors) || !m.triangles) {
+        rc = sl_error_set(err, SL_E_NOMEM, 0, path, "writing the mesh");
+    } else {
+        memcpy(m.positions, positions, vertex_count * 12);
+        memcpy(m.triangles, triangles, triangle_count * 12);
+        for (uint64_t v = 0; m.colors && v < vertex_count; v++)
+            memcpy(m.colors + 4 * v, ps->colors + 4 * (uint64_t)(source ? source[v] : v), 4);
+        rc = sl_ply_write(path, &m, err);
+    }
+    sl_mesh_release(&m);
+    return rc;
+}
+
+/* The level: the cleaned mesh's vertices it uses, in their order. */
+static int write_level(const char *path, const sl_pointset *ps, const simplify_output *o,
+                       sl_error *err)
+{
+    uint64_t n = ps->count ? ps->count : 1;
+    uint32_t *map = malloc(n * sizeof *map), *source = malloc(n * sizeof *source);
+    float *pos = malloc(n * 12);
+    uint32_t *tri = malloc((o->triangle_count ? o->triangle_count : 1) * 12);
+    int rc;
+    if (!map || !source || !pos || !tri) {
+        rc = sl_error_set(err, SL_E_NOMEM, 0, path, "writing the level");
+    } else {
+        memset(map, 0xff, n * sizeof *map);
+        for (uint64_t i = 0; i < 3 * o->triangle_count; i++)
+            map[o->triangles[i]] = 0;
+        uint64_t used = 0;
+        for (uint64_t p = 0; p < ps->count; p++)
+            if (map[p] != UINT32_MAX) {
+                source[used] = (uint32_t)p;
+                memcpy(pos + 3 * used, ps->positions + 3 * p, 12);
+                map[p] = (uint32_t)used++;
+            }
+        for (uint64_t i = 0; i < 3 * o->triangle_count; i++)
+            tri[i] = map[o->triangles[i]];
+        rc = write_mesh(path, ps, used, pos, source, o->triangle_count, tri, err);
+    }
+    free(map);
+    free(source);
+    free(pos);
+    free(tri);
+    return rc;
+}
+
+/* OUT_K.ply beside OUT.ply (the suffix kept when OUT has one). */
+static int extra_path(char *buf, size_t size, const char *out, uint32_t k)
+{
+    const char *dot = strrchr(out, '.'), *slash = strrchr(out, '/');
+    if (!dot || (slash && dot < slash))
+        dot = out + strlen(out);
+    int n = snprintf(buf, size, "%.*s_%u%s", (int)(dot - out), out, k, dot);
+    return n > 0 && (size_t)n < size ? 0 : -1;
+}
+
+static int write_outputs(const simplify_args *a, const sl_pointset *ps, const simplify_output *o,
+                         sl_error *err)
+{
+    int rc = write_level(a->output, ps, o, err);
+    for (uint32_t k = 0; k < o->extra_count && rc == 0; k++) {
+        char path[PATH_MAX];
+        const simplify_extra *x = &o->extras[k];
+        if (extra_path(path, sizeof path, a->output, k + 1))
+            return sl_error_set(err, SL_E_USAGE, 0, a->output, "the file name is too long");
+        rc = write_mesh(path, ps, x->vertex_count, x->positions, x->source, x->triangle_count,
+                        x->triangles, err);
+    }
+    return rc;
+}
+
+static void print_result(const simplify_args *a, const sl_pointset *ps, const simplify_output *o,
+                         const sl_range_counts *counts, const double seconds[4])
+{
+    sl_json j;
+    sl_json_init(&j, 0);
+    sl_json_object_begin(&j, NULL);
+    sl_json_string(&j, "input", a->input);
+    sl_json_string(&j, "method", a->method->name);
+    sl_json_string(&j, "output", a->output);
+    sl_json_u64(&j, "input_triangles", ps->triangle_count);
+    sl_json_u64(&j, "input_vertices", ps->count);
+    sl_json_u64(&j, "triangles", o->triangle_count);
+    sl_json_u64(&j, "dropped_degenerate_faces", counts->degenerate_faces);
+    sl_json_u64(&j, "welded_vertices", counts->welded);
+    sl_json_double(&j, "read_seconds", seconds[0]);
+    sl_json_double(&j, "clean_seconds", seconds[1]);
+    sl_json_double(&j, "simplify_seconds", seconds[2]);
+    sl_json_double(&j, "write_seconds", seconds[3]);
+    if (o->figures.len > 2) /* "{" ... : the method's members */
+        sl_json_raw(&j, a->method->name, o->figures.buf);
+    sl_json_object_end(&j);
+    if (a->json)
+        printf("%.*s\n", (int)j.len, j.buf);
+    else
+        printf("%s: %" PRIu64 " -> %" PRIu64 " triangles (%s), %.3f s\n  %s\n", a->input,
+               ps->triangle_count, o->triangle_count, a->method->name, seconds[2],
+               o->figures.len > 2 ? o->figures.buf : "");
+    sl_json_release(&j);
+}
+
+/* What the cleaning dropped and the method kept, said once on stderr. */
+static void notes(const simplify_args *a, const sl_range_counts *counts)
+{
+    if (counts->degenerate_faces)
+        fprintf(stderr, "scanlod simplify: %s: note: %" PRIu64 " degenerate faces dropped\n",
+                a->input, counts->degenerate_faces);
+}
+
+int sl_cmd_simplify(int argc, char **argv)
+{
+    simplify_args a;
+    int rc = parse_args(argc, argv, &a);
+    if (rc)
+        return rc == -2 ? SL_EXIT_OK : rc;
+    sl_error err;
+    sl_error_init(&err);
+    sl_signals_install();
+    sl_progress progress = {NULL, NULL, sl_interrupt_flag()};
+    double seconds[4] = {0, 0, 0, 0}, t = seconds_now();
+    sl_mesh mesh;
+    sl_mesh_init(&mesh);
+    rc = sl_ply_read(a.input, NULL, &mesh, NULL, &progress, &err);
+    if (rc) {
+        sl_mesh_release(&mesh);
+        return report_error(&err, a.input, 1);
+    }
+    seconds[0] = seconds_now() - t;
+    t = seconds_now();
+    sl_range_config rcfg = sl_range_default_config();
+    sl_pointset ps;
+    sl_range_counts counts;
+    uint64_t faces = mesh.triangle_count;
+    rc = sl_range_points_from_mesh(&rcfg, &mesh, NULL, &ps, &counts, &progress, &err);
+    sl_mesh_release(&mesh);
+    if (rc)
+        return report_error(&err, a.input, 1);
+    seconds[1] = seconds_now() - t;
+    if (a.job.strict && counts.degenerate_faces) {
+        sl_error_set(&err, SL_E_BADINPUT, 0, a.input,
+                     "%" PRIu64 " of %" PRIu64 " faces are degenerate (a repeated corner after "
+                     "welding, or zero area)", counts.degenerate_faces, faces);
+        sl_pointset_release(&ps);
+        return report_error(&err, a.input, 1);
+    }
+    simplify_output out;
+    memset(&out, 0, sizeof out);
+    sl_json_init(&out.figures, 0);
+    sl_json_object_begin(&out.figures, NULL);
+    a.job.mesh = &ps;
+    t = seconds_now();
+    if (ps.triangle_count == 0)
+        rc = sl_error_set(&err, SL_E_BADINPUT, 0, a.input,
+                          "a point cloud (no faces): simplify needs a triangle mesh");
+    else
+        rc = a.method->run(&a.job, &out, &progress, &err);
+    seconds[2] = seconds_now() - t;
+    sl_json_object_end(&out.figures);
+    int exit_code = SL_EXIT_OK;
+    if (rc) {
+        exit_code = report_error(&err, a.input, sl_error_class_of(rc) == SL_CLASS_BADINPUT);
+    } else {
+        notes(&a, &counts);
+        t = seconds_now();
+        if (a.output)
+            rc = write_outputs(&a, &ps, &out, &err);
+        seconds[3] = seconds_now() - t;
+        if (rc)
+            exit_code = report_error(&err, NULL, 0);
+        else
+            print_result(&a, &ps, &out, &counts, seconds);
+    }
+    a.method->release(&out);
+    sl_json_release(&out.figures);
+    sl_pointset_release(&ps);
+    return exit_code;
+}
