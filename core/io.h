@@ -2,9 +2,20 @@
  * one open of files read whole (sl_io_open_regular).
  *
  * Tests set SCANLOD_FAULT="OP:N[:ERRNO]" (OP one of write, fsync, rename, unlink, mkdir,
- * open, any; ERRNO a name like ENOSPC or EIO, or "crash") to make the N-th call of that
- * kind fail with ERRNO, or `_exit(99)` for "crash" -- SQLite's test6.c idea: sweep N
- * over every durability point and check that resume recovers. Counting is per process.
+ * open, any; ERRNO a name like ENOSPC or EIO, or "crash" or "halt") to make the N-th call
+ * of that kind fail with ERRNO, or `_exit(99)` for "crash" -- SQLite's test6.c idea:
+ * sweep N over every durability point and check that resume recovers. Counting is per
+ * process. "halt" is "crash" for the whole run, as on a power cut: in a per-item child
+ * it SIGKILLs the engine before exiting (a child's "crash" alone is a stage crash, which
+ * the engine retries and then quarantines as a bug).
+ *
+ * SCANLOD_FAULT_COUNT=FILE (with or without a fault) appends one line per durable call
+ * to FILE: "PID parent|child:K OP N ANY[ FAULT]" (the engine, or the K-th per-item child
+ * it forked), N counting that OP and ANY every durable call of the process (the index
+ * `any:N` addresses); FAULT (the errno's name, "crash" or "halt") marks the one call that
+ * was failed. A sweep first counts the points of a clean run,
+ * then checks that each injected run failed the call it aimed at
+ * (tests/crash/test_fault_points.sh, tests/faults/test_lost_races.sh).
  */
 #ifndef SCANLOD_CORE_IO_H
 #define SCANLOD_CORE_IO_H
@@ -34,12 +45,14 @@ int sl_io_mkdir(const char *path, mode_t mode);
  * durable operations, and read-only opens are none. */
 int sl_io_open_regular(const char *path, struct stat *st, sl_error *err);
 
-/* Reads SCANLOD_FAULT once; called by the engine at start (also lazily).
- * SCANLOD_FAULT_SCOPE = all (default) | parent | child picks the processes that inject:
- * the engine's own process, or each per-item stage process. */
+/* Reads SCANLOD_FAULT once; called by the engine at start, before its first fork (also
+ * lazily). SCANLOD_FAULT_SCOPE = all (default) | parent | child | child:K picks the
+ * processes that inject: the engine's own process, each per-item stage process, or only
+ * the K-th of them in the order the engine forked them (from 1). */
 void sl_io_fault_init(void);
-/* Nonzero when this process injects a fault: copies then take the write path (no reflink
- * or copy_file_range), so every byte written is a call the fault can hit. */
+/* Nonzero when this process injects a fault or counts the calls: copies then take the
+ * write path (no reflink or copy_file_range), so every byte written is a call the fault
+ * can hit, and a counting run has the points of the injected runs. */
 int sl_io_faults_armed(void);
 /* Called first thing in a per-item child: restarts the counts for this process. */
 void sl_io_fault_enter_child(void);

@@ -132,11 +132,13 @@ int sl_engine_check_input(sl_engine *e, sl_error *err)
 }
 
 /* Creates and removes one empty file in `dir`: a read-only or foreign folder is found
- * before the first item runs, not after all its stages. */
+ * before the first item runs, not after all its stages. Its name has the atomic writer's
+ * form (.NAME.HOST.PID.N.tmp), so a crash between the two leaves a temp that the next
+ * run's gc removes (engine_gc.c). */
 static int probe_writable(const sl_engine *e, const char *key, const char *dir, sl_error *err)
 {
     char path[PATH_MAX];
-    if (sl_engine_path(path, sizeof path, "%s/.scanlod-probe.%s.%ld.tmp", dir, e->self.host,
+    if (sl_engine_path(path, sizeof path, "%s/.scanlod-probe.%s.%ld.0.tmp", dir, e->self.host,
                        e->self.pid))
         return sl_error_set(err, SL_E_STORAGE, ENAMETOOLONG, dir, "path too long");
     int fd = sl_io_open(path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);

@@ -17,6 +17,9 @@ trap cleanup EXIT
 trap '[[ $- != *e* ]] || echo "ERROR: ${BASH_SOURCE[0]}:$LINENO: \"$BASH_COMMAND\" exited $?" >&2' ERR
 passed=0
 failed=0
+# SCANLOD_LIGHT=1: the sanitizer pass (tests/CMakeLists.txt). The same code on less data:
+# a heavy test says on a LIGHT: line what it leaves to the Release pass.
+light() { [ "${SCANLOD_LIGHT:-}" = 1 ]; }
 
 check() { # check "description" command...
   local what=$1; shift
