@@ -87,6 +87,9 @@ int sl_engine_scans_elsewhere(const sl_engine *e);
 int sl_engine_path(char *buf, size_t size, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 int sl_artifact_dir(const sl_engine *e, int stage, const char *ticket, char *buf, size_t size);
+/* Whether some version of `item` is published (its publish record exists), current or not:
+ * a quarantined item with one is stale (engine_summary.c). */
+int sl_engine_item_published(const sl_engine *e, const char *item);
 /* Empties an artifact folder, its record first (without it nothing left is trusted). */
 int sl_remove_dir_contents(const char *dir, sl_error *err);
 int sl_engine_make_work_layout(sl_engine *e, sl_error *err);
@@ -124,9 +127,6 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
 int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const char *source_rel,
                       int force, sl_error *err);
 int sl_engine_publish_valid(sl_engine *e, const char *item, const char *ticket);
-/* Whether some version of `item` is published (its publish record exists), current or not:
- * a quarantined item with one is stale (engine_summary.c). */
-int sl_engine_item_published(sl_engine *e, const char *item);
 
 /* engine_summary.c: OUTPUT/summary.json and summary.md over the scanned items. */
 int sl_engine_write_summary(sl_engine *e, sl_error *err);

@@ -38,6 +38,17 @@ int sl_artifact_dir(const sl_engine *e, int stage, const char *ticket, char *buf
                           ticket);
 }
 
+int sl_engine_item_published(const sl_engine *e, const char *item)
+{
+    char ticket[SL_TICKET_NAME_MAX + 1], record[PATH_MAX];
+    sl_error err;
+    sl_error_init(&err);
+    return sl_ticket_name(item, ticket, sizeof ticket, &err) == 0 &&
+           sl_engine_path(record, sizeof record, "%s/artifacts/_publish/%s/%s", e->work, ticket,
+                          SL_RECORD_FILE) == 0 &&
+           access(record, F_OK) == 0;
+}
+
 int sl_remove_dir_contents(const char *dir, sl_error *err)
 {
     /* The record goes first: without it nothing left here is trusted. */

@@ -71,19 +71,6 @@ int sl_engine_publish_valid(sl_engine *e, const char *item, const char *ticket)
            sl_record_check(record, final_dir, &key, NULL, &err) == 0;
 }
 
-int sl_engine_item_published(sl_engine *e, const char *item)
-{
-    char ticket[SL_TICKET_NAME_MAX + 1], final_dir[PATH_MAX], record_dir[PATH_MAX];
-    char record[PATH_MAX];
-    sl_error err;
-    sl_error_init(&err);
-    if (sl_ticket_name(item, ticket, sizeof ticket, &err))
-        return 0;
-    publish_paths(e, item, ticket, final_dir, record_dir);
-    sl_engine_path(record, sizeof record, "%s/%s", record_dir, SL_RECORD_FILE);
-    return access(record, F_OK) == 0;
-}
-
 /* report.json: every stage's report fragment under "stages"; timings.json likewise. */
 static int write_reports(sl_engine *e, const char *item, const char *ticket,
                          const char *source_rel, const char *dir, sl_error *err)
