@@ -403,6 +403,18 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         sl_queue_put(e->work, stage->name, SL_STATE_CLAIMED, name, t, err);
         return release_done(e, s, name, t, NULL, err);
     }
+    /* The claim is fenced by its lease right before the artifact folder is emptied: an
+     * owner frozen since it claimed (SIGSTOP, a Slurm suspend, an NFS stall) whose claim
+     * was taken over must not empty the folder the new owner has committed into (seen in
+     * test_liveness: the woken run wiped a committed artifact, which verify, finding no
+     * record, could not flag). */
+    sl_error lerr;
+    sl_error_init(&lerr);
+    if (sl_engine_lease_renew(e, stage->name, name, t, &lerr) != 0) {
+        e->counts.transient++;
+        SL_LOG(SL_LOG_WARN, stage->name, t->item, "lease lost: another worker owns the item now");
+        return 0;
+    }
     rc = sl_mkdirs(out_dir, err);
     if (rc == 0)
         rc = sl_remove_dir_contents(out_dir, err);

@@ -51,7 +51,7 @@ done_events=$(cat "$TMP/logs"/*.jsonl | grep -c '"stage_done"' || true)
 check "each of the 3 x 6 stages is done once, by one owner ($done_events stage_done events)" [ "$done_events" -eq 18 ]
 run_scanlod verify "$TMP/c.ini"
 check "verify after both: exit 0 (got $rc: $out)" [ "$rc" -eq 0 ]
-check "result byte-identical to the clean run" [ "$ref" = "$(tree_digest "$TMP/work" "$TMP/out")" ]
+check "result byte-identical to the clean run" same_digest "$ref" "$TMP/work" "$TMP/out"
 
 # A worker before any scan waits for it, then works with it.
 write_config "$TMP/w.ini" "$TMP/in" "$TMP/w-work" "$TMP/w-out"
