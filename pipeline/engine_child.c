@@ -31,6 +31,7 @@
 #include <unistd.h>
 
 #include "core/atomicfile.h"
+#include "core/dirs.h"
 #include "core/io.h"
 #include "core/json.h"
 #include "core/log.h"
@@ -216,8 +217,13 @@ static int move_with_reason(sl_engine *e, int s, const char *name, sl_ticket *t,
 
 static int advance(sl_engine *e, int from, const sl_ticket *t, sl_error *err);
 
+/* The stage process wrote into `staged`, a private sibling of `out_dir`; the record is
+ * committed there, and the folder swapped in whole after the last fencing check: an owner
+ * that lost its claim while it was frozen can then never empty or half-write the folder a
+ * newer owner committed (at worst it swaps in a complete, identical one). */
 static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, sl_hash key,
-                          const char *out_dir, const child_outcome *o, sl_error *err)
+                          const char *staged, const char *out_dir, const child_outcome *o,
+                          sl_error *err)
 {
     const sl_stage *stage = e->stages[s];
     int rc = sl_engine_lease_check(e, stage->name, name, t, err);
@@ -229,13 +235,23 @@ static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, s
                          "\"threads\":%d}\n",
                          o->seconds, o->result.cpu_seconds, o->result.max_rss_kb,
                          e->threads > 0 ? e->threads : omp_get_num_procs());
-        sl_engine_path(path, sizeof path, "%s/_stats.json", out_dir);
+        sl_engine_path(path, sizeof path, "%s/_stats.json", staged);
         rc = sl_write_file_atomic(path, stats, (size_t)n, err);
     }
     if (rc == 0) {
-        sl_engine_path(path, sizeof path, "%s/%s", out_dir, SL_RECORD_FILE);
-        rc = sl_record_commit(path, out_dir, NULL, stage->name, stage->version, t->item, key,
+        sl_engine_path(path, sizeof path, "%s/%s", staged, SL_RECORD_FILE);
+        rc = sl_record_commit(path, staged, NULL, stage->name, stage->version, t->item, key,
                               NULL, err);
+    }
+    if (rc == 0)
+        rc = sl_engine_lease_check(e, stage->name, name, t, err);
+    if (rc == 0) {
+        char parent[PATH_MAX];
+        snprintf(parent, sizeof parent, "%s", out_dir);
+        char *slash = strrchr(parent, '/');
+        if (slash)
+            *slash = '\0';
+        rc = sl_engine_swap_in(staged, out_dir, parent, err);
     }
     if (rc == 0) {
         sl_hash_hex(key, t->key);
@@ -369,6 +385,20 @@ static int item_paths(sl_engine *e, int s, const char *name, const sl_ticket *t,
     return 0;
 }
 
+/* The private folder a claim's stage process writes into: a hidden sibling of the
+ * artifact folder named after its writer (`.TICKET.stage.HOST.PID`, which gc removes once
+ * that pid is gone), swapped in by commit_success. */
+static int staged_path(const sl_engine *e, const char *out_dir, char *buf, sl_error *err)
+{
+    const char *slash = strrchr(out_dir, '/');
+    int dir_len = slash ? (int)(slash - out_dir) : 0;
+    const char *base = slash ? slash + 1 : out_dir;
+    if (sl_engine_path(buf, PATH_MAX, "%.*s/.%.100s.stage.%s.%ld", dir_len, out_dir, base,
+                       e->self.host, e->self.pid))
+        return sl_error_set(err, SL_E_LIMIT, 0, out_dir, "path too long");
+    return 0;
+}
+
 int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_error *err)
 {
     const sl_stage *stage = e->stages[s];
@@ -415,9 +445,12 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         SL_LOG(SL_LOG_WARN, stage->name, t->item, "lease lost: another worker owns the item now");
         return 0;
     }
-    rc = sl_mkdirs(out_dir, err);
+    char staged[PATH_MAX];
+    rc = staged_path(e, out_dir, staged, err);
     if (rc == 0)
-        rc = sl_remove_dir_contents(out_dir, err);
+        rc = sl_mkdirs(staged, err);
+    if (rc == 0)
+        rc = sl_remove_dir_contents(staged, err);
     if (rc) { /* cannot even prepare the artifact directory (full disk, permissions) */
         sl_error prep_err = *err;
         child_outcome none;
@@ -441,7 +474,7 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
     pid_t pid = fork();
     if (pid == 0) {
         close(fds[0]);
-        child_main(e, s, t->item, source, s > 0 ? in_dir : NULL, out_dir, sp, fds[1], parent);
+        child_main(e, s, t->item, source, s > 0 ? in_dir : NULL, staged, sp, fds[1], parent);
     }
     close(fds[1]);
     if (pid < 0) {
@@ -461,7 +494,7 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
     int ok = outcome.have_result && item_err.code == SL_OK && WIFEXITED(outcome.status) &&
              WEXITSTATUS(outcome.status) == 0 && !outcome.lease_lost;
     if (ok) {
-        rc = commit_success(e, s, name, t, key, out_dir, &outcome, &item_err);
+        rc = commit_success(e, s, name, t, key, staged, out_dir, &outcome, &item_err);
         if (rc == 0) {
             e->counts.ran++;
             int released = 0;
@@ -485,6 +518,9 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         if (rc == SL_E_LEASE_LOST)
             outcome.lease_lost = 1;
     }
+    sl_error ignored;
+    sl_error_init(&ignored);
+    sl_remove_tree(staged, 0, &ignored); /* never committed: nothing in it is trusted */
     sl_error_context(&item_err, stage->name, t->item);
     return handle_failure(e, s, name, t, &outcome, &item_err, err);
 }

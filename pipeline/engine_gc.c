@@ -2,7 +2,7 @@
  * `scanlod verify` (every commit record still vouches for its files).
  *
  * Temp names carry their writer: `.NAME.HOST.PID.N.tmp` (atomicfile.c) and
- * `.NAME.publish.HOST.PID` (engine_publish.c). On this host a temp whose writer pid is gone
+ * `.NAME.publish.HOST.PID` (engine_publish.c), `.NAME.stage.HOST.PID` (engine_child.c). On this host a temp whose writer pid is gone
  * is removed at once; another host's temps are left to that host (we cannot judge its
  * pids), unless older than a day.
  */
@@ -76,7 +76,8 @@ static void gc_dir(const sl_engine *e, const char *dir, int depth, uint64_t *rem
         long pid = own_temp_pid(de->d_name, e->self.host);
         int dead = pid > 0 && pid != e->self.pid && kill((pid_t)pid, 0) != 0 && errno == ESRCH;
         int ancient = pid == 0 && now - st.st_mtime > FOREIGN_TEMP_MAX_AGE_S &&
-                      (strstr(de->d_name, ".tmp") || strstr(de->d_name, ".publish."));
+                      (strstr(de->d_name, ".tmp") || strstr(de->d_name, ".publish.") ||
+                       strstr(de->d_name, ".stage."));
         sl_error ignored;
         sl_error_init(&ignored);
         if ((dead || ancient) && sl_remove_tree(path, 0, &ignored) == 0)

@@ -90,6 +90,10 @@ int sl_artifact_dir(const sl_engine *e, int stage, const char *ticket, char *buf
 /* Whether some version of `item` is published (its publish record exists), current or not:
  * a quarantined item with one is stale (engine_summary.c). */
 int sl_engine_item_published(const sl_engine *e, const char *item);
+/* Puts folder `staged` in place of `final_dir` (in folder `parent`) in one rename, or one
+ * exchange when `final_dir` exists (whose old contents are then removed); durable. */
+int sl_engine_swap_in(const char *staged, const char *final_dir, const char *parent,
+                      sl_error *err);
 /* Empties an artifact folder, its record first (without it nothing left is trusted). */
 int sl_remove_dir_contents(const char *dir, sl_error *err);
 int sl_engine_make_work_layout(sl_engine *e, sl_error *err);

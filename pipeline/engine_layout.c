@@ -49,6 +49,21 @@ int sl_engine_item_published(const sl_engine *e, const char *item)
            access(record, F_OK) == 0;
 }
 
+int sl_engine_swap_in(const char *staged, const char *final_dir, const char *parent, sl_error *err)
+{
+    if (sl_io_rename(staged, final_dir) == 0)
+        return sl_fsync_dir(parent, err);
+    if (errno != EEXIST && errno != ENOTEMPTY)
+        return sl_error_errno(err, errno, final_dir, "rename");
+    if (renameat2(AT_FDCWD, staged, AT_FDCWD, final_dir, RENAME_EXCHANGE) != 0)
+        return sl_error_errno(err, errno, final_dir, "rename (exchange)");
+    int rc = sl_fsync_dir(parent, err);
+    sl_error ignored;
+    sl_error_init(&ignored);
+    sl_remove_tree(staged, 0, &ignored); /* now the previous publication */
+    return rc;
+}
+
 int sl_remove_dir_contents(const char *dir, sl_error *err)
 {
     /* The record goes first: without it nothing left here is trusted. */

@@ -156,20 +156,6 @@ static int publish_stage_files(sl_engine *e, const char *ticket, const char *sta
 }
 
 /* Swaps `staged` in as `final_dir`. */
-static int swap_in(const char *staged, const char *final_dir, const char *parent, sl_error *err)
-{
-    if (sl_io_rename(staged, final_dir) == 0)
-        return sl_fsync_dir(parent, err);
-    if (errno != EEXIST && errno != ENOTEMPTY)
-        return sl_error_errno(err, errno, final_dir, "rename");
-    if (renameat2(AT_FDCWD, staged, AT_FDCWD, final_dir, RENAME_EXCHANGE) != 0)
-        return sl_error_errno(err, errno, final_dir, "rename (exchange)");
-    int rc = sl_fsync_dir(parent, err);
-    sl_error ignored;
-    sl_error_init(&ignored);
-    sl_remove_tree(staged, 0, &ignored); /* now the previous publication */
-    return rc;
-}
 
 int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const char *source_rel,
                       int force, sl_error *err)
@@ -213,7 +199,7 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
     if (rc == 0 && unlink(record) == 0)
         rc = sl_fsync_dir(record_dir, err);
     if (rc == 0)
-        rc = swap_in(staged, final_dir, parent, err);
+        rc = sl_engine_swap_in(staged, final_dir, parent, err);
     if (rc) {
         sl_error ignored;
         sl_error_init(&ignored);
