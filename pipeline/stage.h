@@ -31,7 +31,7 @@
 #include "pipeline/config.h"
 
 typedef struct sl_stage_io {
-    const char *item;        /* item id: input path relative to [run] input, no ".ply" */
+    const char *item;        /* item id: input path relative to [run] input, suffix kept */
     const char *source_path; /* the item's input file */
     const char *in_dir;      /* upstream stage's artifact directory; NULL for the first */
     const char *out_dir;     /* this stage's artifact directory (exists and is empty) */

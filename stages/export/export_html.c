@@ -354,8 +354,12 @@ static void section(FILE *out, const page *p, const char *prefix, int summary)
         grouped(out, m->accumulation[m->expansion_count]);
         fputs(" triangles at the finest level", out);
     } else {
-        fputs("Clustering levels with bounded error (paper 2; intermediate models in "
-              "report.json and summary.md)", out);
+        /* A level list: the cluster or the segment stage made it. */
+        fputs(sl_stage_dir(p->io, "segment")
+                  ? "Segmentation levels, planes kept exact (paper 3)"
+                  : "Clustering levels with bounded error (paper 2; intermediate models in "
+                    "report.json and summary.md)",
+              out);
     }
     if (p->input) {
         fputs("; input: ", out);

@@ -15,8 +15,9 @@
 #include "stages/export/export_internal.h"
 
 /* 5: [export] morph (morph targets in the GLBs). 6: report.json gives each level's
- * connected parts and the largest one's share of the area. */
-#define EXPORT_STAGE_VERSION 6u
+ * connected parts and the largest one's share of the area. 7: the pages name the segment
+ * method's levels as such (they said "Clustering levels"). */
+#define EXPORT_STAGE_VERSION 7u
 
 static const sl_option export_options[] = {
     {"export", "lod_percents", SL_OPT_LIST, "20,40,60,80,100", 0, 100, NULL,

@@ -148,6 +148,7 @@ for item in cow.ply fandisk.ply bun_zipper_res4.ply; do
   check "$item: published levels as the report says (${problems:-ok})" [ -z "$problems" ]
 done
 check "the collection summary names the method" grep -q "Segmentation levels" "$TMP/ref-out/summary.md"
+check "summary.html names the method" bash -c 'grep -q "Segmentation levels" "$1" && ! grep -q "Clustering levels" "$1"' _ "$TMP/ref-out/summary.html"
 if gltf_validator_ready; then
   mapfile -t glbs < <(find "$TMP/ref-out" -name '*.glb' | sort)
   set +e
