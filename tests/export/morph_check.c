@@ -55,6 +55,7 @@ int main(int argc, char **argv)
         points = malloc(24 * (n ? n : 1));
         for (uint64_t i = 0; i < 3 * n; i++)
             points[i] = mesh.positions[i];
+        sl_mesh_release(&mesh);
     } else {
         glb_decoded g;
         char why[512];
@@ -85,5 +86,8 @@ int main(int argc, char **argv)
     double g = diagonal(&coarse);
     printf("vertices %llu max_distance %.9g diagonal %.9g ratio %.3g\n", (unsigned long long)n,
            worst, g, worst / g);
+    sl_triangle_bvh_release(&bvh);
+    sl_mesh_release(&coarse);
+    free(points);
     return 0;
 }
