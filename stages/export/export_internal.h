@@ -167,4 +167,11 @@ int sl_export_html(const sl_export_config *c, const sl_lod_model *model, const s
                    const int level_of_quality[SL_EXPORT_QUALITIES], const sl_stage_io *io,
                    sl_error *err);
 
+/* export_levels.c, shared with export_level_list.c: one level's thumbnail as a Markdown
+ * image linked relative to OUTPUT/ (a space before all but the first), and
+ * summary-item.md written from `text` (an open_memstream buffer, freed; NULL: out of
+ * memory). */
+void sl_export_md_thumbnail(FILE *md, const char *item, const char *name, int first);
+int sl_export_write_summary_item(const sl_stage_io *io, char *text, size_t size, sl_error *err);
+
 #endif

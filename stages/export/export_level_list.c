@@ -109,26 +109,12 @@ static int write_summary(const sl_cluster_list *list, const char *method,
     fputc('\n', md);
     for (uint32_t i = 0, n = 0; thumbnails && i < list->count; i++)
         if (rows[i].file == (int)i && !list->meshes[i].intermediate) {
-            fputs(n++ ? " ![" : "![", md);
-            sl_md_text(md, io->item);
-            fputc(' ', md);
-            sl_md_text(md, list->meshes[i].name);
-            fputs("](<", md);
-            sl_md_link(md, io->item);
-            fputc('/', md);
-            sl_md_link(md, list->meshes[i].name);
-            fputs(".png>)", md);
+            sl_export_md_thumbnail(md, io->item, list->meshes[i].name, n++ == 0);
         }
     if (thumbnails)
         fputs("\n\n", md);
     fclose(md);
-    char path[PATH_MAX];
-    int rc = text ? sl_stage_path(path, io->out_dir, "summary-item.md", err)
-                  : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    if (rc == 0)
-        rc = sl_write_file_atomic(path, text, size, err);
-    free(text);
-    return rc;
+    return sl_export_write_summary_item(io, text, size, err);
 }
 
 /* Of two list meshes with one mesh, the one whose name the files take: a level before an

@@ -242,19 +242,29 @@ static int write_summary_section(const sl_export_config *c, const sl_lod_model *
     int thumbnails = 0;
     for (int i = 0; i < c->level_count; i++)
         if (rows[i].file == i && c->thumbnail_size > 0) {
-            fputs(thumbnails++ ? " ![" : "![", md);
-            sl_md_text(md, io->item);
-            fputc(' ', md);
-            sl_md_text(md, c->levels[i].name);
-            fputs("](<", md);
-            sl_md_link(md, io->item);
-            fputc('/', md);
-            sl_md_link(md, c->levels[i].name);
-            fputs(".png>)", md);
+            sl_export_md_thumbnail(md, io->item, c->levels[i].name, thumbnails++ == 0);
         }
     if (thumbnails)
         fputs("\n\n", md);
     fclose(md);
+    return sl_export_write_summary_item(io, text, size, err);
+}
+
+void sl_export_md_thumbnail(FILE *md, const char *item, const char *name, int first)
+{
+    fputs(first ? "![" : " ![", md);
+    sl_md_text(md, item);
+    fputc(' ', md);
+    sl_md_text(md, name);
+    fputs("](<", md);
+    sl_md_link(md, item);
+    fputc('/', md);
+    sl_md_link(md, name);
+    fputs(".png>)", md);
+}
+
+int sl_export_write_summary_item(const sl_stage_io *io, char *text, size_t size, sl_error *err)
+{
     char path[PATH_MAX];
     int rc = text ? sl_stage_path(path, io->out_dir, "summary-item.md", err)
                   : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
