@@ -69,6 +69,16 @@ int sl_artifact_read(const char *path, const char magic[8], uint32_t format_vers
                      uint64_t max_body_size, void **body, uint64_t *body_size,
                      uint32_t *stage_version, sl_error *err)
 {
+    uint32_t version;
+    return sl_artifact_read_versions(path, magic, format_version, format_version, max_body_size,
+                                     body, body_size, stage_version, &version, err);
+}
+
+int sl_artifact_read_versions(const char *path, const char magic[8], uint32_t oldest,
+                              uint32_t newest, uint64_t max_body_size, void **body,
+                              uint64_t *body_size, uint32_t *stage_version,
+                              uint32_t *version_out, sl_error *err)
+{
     *body = NULL;
     *body_size = 0;
     struct stat st;
@@ -87,12 +97,18 @@ int sl_artifact_read(const char *path, const char magic[8], uint32_t format_vers
         goto done;
     }
     uint32_t version = sl_get_u32(header + 8);
-    if (version != format_version) {
-        rc = sl_error_set(err, SL_E_CORRUPT, 0, path,
-                          "format version %u, this scanlod reads version %u", version,
-                          format_version);
+    if (version < oldest || version > newest) {
+        if (oldest == newest)
+            rc = sl_error_set(err, SL_E_CORRUPT, 0, path,
+                              "format version %u, this scanlod reads version %u", version,
+                              newest);
+        else
+            rc = sl_error_set(err, SL_E_CORRUPT, 0, path,
+                              "format version %u, this scanlod reads versions %u to %u",
+                              version, oldest, newest);
         goto done;
     }
+    *version_out = version;
     uint64_t size = sl_get_u64(header + 16);
     if (size != (uint64_t)st.st_size - SL_ARTIFACT_HEADER_SIZE) {
         rc = sl_error_set(err, SL_E_CORRUPT, 0, path,

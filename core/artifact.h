@@ -37,6 +37,12 @@ int sl_artifact_write(const char *path, const char magic[8], uint32_t format_ver
 int sl_artifact_read(const char *path, const char magic[8], uint32_t format_version,
                      uint64_t max_body_size, void **body, uint64_t *body_size,
                      uint32_t *stage_version, sl_error *err);
+/* The same for a reader of several format versions: any of oldest..newest, the file's in
+ * *version. */
+int sl_artifact_read_versions(const char *path, const char magic[8], uint32_t oldest,
+                              uint32_t newest, uint64_t max_body_size, void **body,
+                              uint64_t *body_size, uint32_t *stage_version, uint32_t *version,
+                              sl_error *err);
 
 /* Little-endian helpers for bodies (the format is LE on every host). */
 static inline void sl_put_u32(unsigned char *p, uint32_t v)

@@ -7,32 +7,57 @@
 #include <string.h>
 
 #include "core/artifact.h"
+#include "runtime/lod_pack.h"
 #include "runtime/octree_io.h"
 
 #define LOD_HEADER_SIZE 24
+/* The largest plain body a packed one may declare (the envelope's own limit). */
+#define PLAIN_LIMIT ((uint64_t)1 << 40)
+
+/* The record size of an octree part (the packing filters' unit). */
+static uint16_t octree_record(const sl_octree *t, const sl_artifact_part *part, int index)
+{
+    if (index == 0)
+        return 0; /* the header */
+    if (part->data == (const void *)t->nodes)
+        return sizeof *t->nodes;
+    if (part->data == (const void *)t->crossing_position ||
+        part->data == (const void *)t->vertex_position)
+        return 12;
+    return 4;
+}
 
 int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_version,
                        sl_error *err)
 {
     unsigned char octree_header[512], header[LOD_HEADER_SIZE];
-    sl_artifact_part parts[SL_OCTREE_PARTS + 9];
-    int count = sl_octree_parts(&m->tree, octree_header, parts);
+    sl_artifact_part octree[SL_OCTREE_PARTS];
+    sl_pack_part parts[SL_OCTREE_PARTS + 6];
+    int count = sl_octree_parts(&m->tree, octree_header, octree);
+    for (int i = 0; i < count; i++)
+        parts[i] = (sl_pack_part){octree[i].data, octree[i].size,
+                                  octree_record(&m->tree, &octree[i], i)};
     uint32_t n = m->tree.node_count, e = m->expansion_count;
     sl_put_u32(header, e);
     sl_put_u32(header + 4, n);
     sl_put_u64(header + 8, m->neighbours.count);
     sl_put_u64(header + 16, m->transitions.count);
-    parts[count++] = (sl_artifact_part){header, sizeof header};
-    parts[count++] = (sl_artifact_part){m->lod_array, (size_t)e * 4};
-    parts[count++] = (sl_artifact_part){m->accumulation, ((size_t)e + 1) * 8};
-    parts[count++] = (sl_artifact_part){m->error_after, ((size_t)e + 1) * 4};
-    parts[count++] = (sl_artifact_part){m->neighbours.mask, (size_t)n * 4};
-    parts[count++] = (sl_artifact_part){m->neighbours.base, (size_t)n * 4};
-    parts[count++] = (sl_artifact_part){m->neighbours.index, (size_t)m->neighbours.count * 4};
-    parts[count++] = (sl_artifact_part){m->transitions.base, (size_t)n * 4};
-    parts[count++] = (sl_artifact_part){m->transitions.words, (size_t)m->transitions.count * 4};
-    return sl_artifact_write(path, SL_LOD_MAGIC, SL_LOD_FORMAT_VERSION, stage_version, parts,
-                             count, err);
+    /* No neighbour table: reading rebuilds it from the octree (format 3). */
+    parts[count++] = (sl_pack_part){header, sizeof header, 0};
+    parts[count++] = (sl_pack_part){m->lod_array, (size_t)e * 4, 4};
+    parts[count++] = (sl_pack_part){m->accumulation, ((size_t)e + 1) * 8, 8};
+    parts[count++] = (sl_pack_part){m->error_after, ((size_t)e + 1) * 4, 4};
+    parts[count++] = (sl_pack_part){m->transitions.base, (size_t)n * 4, 4};
+    parts[count++] = (sl_pack_part){m->transitions.words, (size_t)m->transitions.count * 4, 4};
+    void *packed = NULL;
+    size_t packed_size = 0;
+    if (sl_pack(parts, count, &packed, &packed_size))
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory packing the model");
+    sl_artifact_part body = {packed, packed_size};
+    int rc = sl_artifact_write(path, SL_LOD_MAGIC, SL_LOD_FORMAT_VERSION, stage_version, &body,
+                               1, err);
+    free(packed);
+    return rc;
 }
 
 static int corrupt(sl_error *err, const char *path, const char *what)
@@ -113,27 +138,36 @@ static int validate(const sl_lod_model *m, const char *path, sl_error *err)
     return rc;
 }
 
-static int parse_lod(sl_lod_model *m, const unsigned char *p, uint64_t size, const char *path,
-                     sl_error *err)
+/* `stored`: the section holds the neighbour table (format 2); else it is rebuilt from the
+ * octree and must have the count the header declares. */
+static int parse_lod(sl_lod_model *m, const unsigned char *p, uint64_t size, int stored,
+                     const char *path, sl_error *err)
 {
     if (size < LOD_HEADER_SIZE)
         return corrupt(err, path, "truncated LOD header");
     uint64_t e = sl_get_u32(p), n = sl_get_u32(p + 4);
-    m->neighbours.count = sl_get_u64(p + 8);
+    uint64_t neighbours = sl_get_u64(p + 8);
     m->transitions.count = sl_get_u64(p + 16);
-    if (n != m->tree.node_count || e > n || m->neighbours.count > 26 * n ||
+    if (n != m->tree.node_count || e > n || neighbours > 26 * n ||
         m->transitions.count > 51 * n ||
-        size != LOD_HEADER_SIZE + 4 * e + 8 * (e + 1) + 4 * (e + 1) + 12 * n +
-                    4 * m->neighbours.count + 4 * m->transitions.count)
+        size != LOD_HEADER_SIZE + 4 * e + 8 * (e + 1) + 4 * (e + 1) + 4 * n +
+                    (stored ? 8 * n + 4 * neighbours : 0) + 4 * m->transitions.count)
         return corrupt(err, path, "LOD section sizes do not match the file");
     m->expansion_count = (uint32_t)e;
     const unsigned char *at = p + LOD_HEADER_SIZE;
     m->lod_array = take(&at, 4 * e);
     m->accumulation = take(&at, 8 * (e + 1));
     m->error_after = take(&at, 4 * (e + 1));
-    m->neighbours.mask = take(&at, 4 * n);
-    m->neighbours.base = take(&at, 4 * n);
-    m->neighbours.index = take(&at, 4 * m->neighbours.count);
+    if (stored) {
+        m->neighbours.count = neighbours;
+        m->neighbours.mask = take(&at, 4 * n);
+        m->neighbours.base = take(&at, 4 * n);
+        m->neighbours.index = take(&at, 4 * neighbours);
+    } else if (sl_neighbours_build(&m->tree, &m->neighbours)) {
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    } else if (m->neighbours.count != neighbours) {
+        return corrupt(err, path, "neighbour count differs from the octree's");
+    }
     m->transitions.base = take(&at, 4 * n);
     m->transitions.words = take(&at, 4 * m->transitions.count);
     if (!m->lod_array || !m->accumulation || !m->error_after || !m->neighbours.mask ||
@@ -143,16 +177,34 @@ static int parse_lod(sl_lod_model *m, const unsigned char *p, uint64_t size, con
     return validate(m, path, err);
 }
 
+/* A plain body: with the neighbour table (format 2) or without (format 3, unpacked). */
+static int parse_plain(const void *body, uint64_t size, int stored, const char *name,
+                       sl_lod_model *out, sl_error *err)
+{
+    uint64_t used = 0;
+    int rc = sl_octree_parse(body, size, name, &out->tree, &used, err);
+    if (rc == 0)
+        rc = parse_lod(out, (const unsigned char *)body + used, size - used, stored, name, err);
+    if (rc == 0 && (sl_lod_model_localize(out) || sl_lod_model_prepare(out)))
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
+    return rc;
+}
+
 int sl_lod_model_parse(const void *body, uint64_t size, const char *name, sl_lod_model *out,
                        sl_error *err)
 {
     sl_lod_model_init(out);
-    uint64_t used = 0;
-    int rc = sl_octree_parse(body, size, name, &out->tree, &used, err);
-    if (rc == 0)
-        rc = parse_lod(out, (const unsigned char *)body + used, size - used, name, err);
-    if (rc == 0 && (sl_lod_model_localize(out) || sl_lod_model_prepare(out)))
-        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
+    int rc;
+    if (sl_pack_is_packed(body, size)) {
+        void *plain = NULL;
+        uint64_t plain_size = 0;
+        rc = sl_unpack(body, size, PLAIN_LIMIT, name, &plain, &plain_size, err);
+        if (rc == 0)
+            rc = parse_plain(plain, plain_size, 0, name, out, err);
+        free(plain);
+    } else {
+        rc = parse_plain(body, size, 1, name, out, err);
+    }
     if (rc)
         sl_lod_model_release(out);
     return rc;
@@ -163,8 +215,13 @@ int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err)
     sl_lod_model_init(out);
     void *body = NULL;
     uint64_t size = 0;
-    int rc = sl_artifact_read(path, SL_LOD_MAGIC, SL_LOD_FORMAT_VERSION, (uint64_t)1 << 40, &body,
-                              &size, NULL, err);
+    uint32_t version = 0;
+    int rc = sl_artifact_read_versions(path, SL_LOD_MAGIC, SL_LOD_OLDEST_VERSION,
+                                       SL_LOD_FORMAT_VERSION, PLAIN_LIMIT, &body, &size, NULL,
+                                       &version, err);
+    if (rc == 0 && sl_pack_is_packed(body, size) != (version >= 3))
+        rc = corrupt(err, path, version >= 3 ? "format 3 without packed parts"
+                                             : "packed parts in a format 2 file");
     if (rc == 0)
         rc = sl_lod_model_parse(body, size, path, out, err);
     free(body);

@@ -1,12 +1,17 @@
-/* The LOD model file, `.slod` (docs/formats.md): artifact envelope "SLODMODL" whose body is
- * the octree section (octree_io.h) followed by the LOD section:
+/* The LOD model file, `.slod` (docs/formats.md): artifact envelope "SLODMODL" whose plain
+ * body is the octree section (octree_io.h) followed by the LOD section:
  *
  *   u32 expansion_count, u32 node_count, u64 neighbour_count, u64 transition_words
  *   lod_array      expansion_count x u32
  *   accumulation   (expansion_count + 1) x u64
  *   error_after    (expansion_count + 1) x f32
  *   neighbours     node_count x u32 mask, node_count x u32 base, neighbour_count x u32
+ *                  (format 2 only: format 3 rebuilds the table from the octree on reading
+ *                  and checks its count against the header's)
  *   transitions    node_count x u32 base, transition_words x u32
+ *
+ * Format 3 stores the plain body in packed parts (lod_pack.h: zstd frames of filtered
+ * pieces); format 2 stored it as it is, and is still read.
  *
  * Reading validates every index (the LOD array is a valid expansion order: each entry an
  * internal node whose parent was expanded before it, each node at most once).
@@ -18,16 +23,18 @@
 #include "runtime/lod_model.h"
 
 #define SL_LOD_MAGIC "SLODMODL"
-/* 2: the octree section of format 2 (optional dual vertices). */
-#define SL_LOD_FORMAT_VERSION 2u
+/* 2: the octree section of format 2 (optional dual vertices). 3: the body in packed parts
+ * (lod_pack.h), without the neighbour table. */
+#define SL_LOD_FORMAT_VERSION 3u
+#define SL_LOD_OLDEST_VERSION 2u
 
 int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_version,
                        sl_error *err);
 /* Loads and validates; derives what generation needs (sl_lod_model_prepare). */
 int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err);
 /* The same from a body already out of its envelope (what sl_artifact_read returns; the
- * fuzz target feeds bodies here, past the checksum). `name` is used in messages. On
- * failure `out` holds nothing. */
+ * fuzz target feeds bodies here, past the checksum): packed (format 3) or plain (format 2).
+ * `name` is used in messages. On failure `out` holds nothing. */
 int sl_lod_model_parse(const void *body, uint64_t size, const char *name, sl_lod_model *out,
                        sl_error *err);
 

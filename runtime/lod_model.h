@@ -168,8 +168,11 @@ static inline uint32_t sl_neighbour(const sl_neighbours *nb, uint32_t n, int d)
 #define SL_LOD_UNIFORM_ROW 16
 extern const uint8_t sl_lod_uniform_cells[256][SL_LOD_UNIFORM_ROW];
 
-/* The tables are built by the stages (sl_neighbours_build: stages/priority/priority.h;
- * sl_transitions_build: stages/crack/crack.h) and read here. */
+/* The same-level neighbour table of every node (lod_neighbours.c; O(n log n) lookups,
+ * OpenMP over nodes): built by the priority stage and when a model is read. Returns -1
+ * on OOM. The transition records are built by the crack stage (sl_transitions_build:
+ * stages/crack/crack.h) and read here. */
+int sl_neighbours_build(const sl_octree *t, sl_neighbours *out);
 void sl_neighbours_release(sl_neighbours *nb);
 void sl_transitions_release(sl_transitions *tr);
 

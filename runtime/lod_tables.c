@@ -1,7 +1,7 @@
 /* The LOD model's tables as the runtime holds them (lod_model.h, docs/lod.md): the uniform
  * cell table as constant data, and releasing the neighbour and transition tables. The
- * tables are built by the stages that own their algorithms: the neighbours by the
- * priority stage (stages/priority/priority_neighbours.c), the transition records, the
+ * neighbours are built by lod_neighbours.c (for the priority stage and when a model is
+ * read), the transition records, the
  * crack compensation, by the crack stage (stages/crack/crack_transitions.c).
  */
 #include <stdlib.h>

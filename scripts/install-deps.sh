@@ -7,7 +7,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 packages=(
   build-essential cmake ninja-build pkg-config clang libclang-rt-14-dev
   libopenvdb-dev libboost-iostreams-dev libtbb-dev
-  libopenimageio-dev libinih-dev libxxhash-dev libmeshoptimizer-dev libdraco-dev
+  libopenimageio-dev libinih-dev libxxhash-dev libzstd-dev libmeshoptimizer-dev libdraco-dev
   zlib1g-dev time gnuplot-nox
   # scripts/bench/peers/vsa_lod.cpp: CGAL's Variational Shape Approximation (issue 12)
   libcgal-dev

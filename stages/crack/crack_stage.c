@@ -11,8 +11,8 @@
 #include "stages/priority/priority.h"
 
 /* 2: dual models (runtime/lod_dual.h): their accumulation table counts dual triangles;
- * model format 2. */
-#define CRACK_STAGE_VERSION 2u
+ * model format 2. 3: model format 3 (packed parts, no neighbour table). */
+#define CRACK_STAGE_VERSION 3u
 
 static int crack_configure(const sl_config *cfg, void **out, sl_error *err)
 {

@@ -42,9 +42,6 @@ typedef struct sl_priority {
 
 void sl_priority_release(sl_priority *p);
 
-/* The same-level neighbour table of every node (priority_neighbours.c; O(n log n)
- * lookups, OpenMP over nodes). Returns -1 on OOM. */
-int sl_neighbours_build(const sl_octree *t, sl_neighbours *out);
 
 /* What orders the expansions ([priority] metric; docs/lod.md "The priority metric"). */
 typedef enum sl_priority_metric {

@@ -1,9 +1,10 @@
 /* Same-level neighbours of every octree node, for the priority stage's level-difference
- * rule and for generation (priority.h; the table's format: runtime/lod_model.h). */
+ * rule and for generation (lod_model.h): the priority stage builds the table, and reading
+ * a model of format 3 rebuilds it (the file does not store it: lod_io.h). */
 #include <stdlib.h>
 #include <string.h>
 
-#include "stages/priority/priority.h"
+#include "runtime/lod_model.h"
 
 int sl_neighbours_build(const sl_octree *t, sl_neighbours *out)
 {
