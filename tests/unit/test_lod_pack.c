@@ -1,0 +1,270 @@
+/* Model format 3's packed parts (runtime/lod_pack.h, docs/formats.md "model.slod"): the
+ * packing round-trips exactly and is the same on any thread count; a real model of format
+ * 2 (the pipeline's model of bun_zipper_res4, tests/data/models/) still reads, rewritten
+ * as format 3 it is several times smaller, cuts the same meshes and rebuilds the very
+ * neighbour table format 2 stored; and packed bodies that lie (a truncated frame, plain
+ * sizes that disagree with their frames, garbage, counts beyond the bytes, a neighbour
+ * count the octree does not have, an envelope of the other version) are each refused with
+ * their own cause, before anything the lie would size is allocated.
+ */
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "core/artifact.h"
+#include "runtime/lod_io.h"
+#include "runtime/lod_pack.h"
+#include "runtime/octree_io.h"
+#include "tests/check.h"
+
+#define ENTRY(body, i) ((unsigned char *)(body) + 8 + SL_PACK_TABLE_ENTRY * (i))
+
+static void test_round_trip(void)
+{
+    /* Parts of every record size the model uses, one over two pieces long, tails that
+     * are not whole records. */
+    size_t big = 2 * SL_PACK_PIECE + 1000;
+    float *wave = malloc(big);
+    uint32_t *ids = malloc(4 * 300001);
+    unsigned char *nodes = malloc(32 * 5000 + 7), head[37];
+    CHECK(wave && ids && nodes);
+    if (!wave || !ids || !nodes)
+        return;
+    for (size_t i = 0; i < big / 4; i++)
+        wave[i] = (float)(i % 3) + 0.001f * (float)((i * 2654435761u) % 977);
+    for (uint32_t i = 0; i < 300001; i++)
+        ids[i] = i * 7 + (i * 2654435761u >> 28);
+    for (size_t i = 0; i < sizeof head; i++)
+        head[i] = (unsigned char)(i * 31);
+    for (size_t i = 0; i < 32 * 5000 + 7; i++)
+        nodes[i] = (unsigned char)(i % 32 < 12 ? i / 32 >> (i % 4 * 2) : i % 5);
+    sl_pack_part parts[] = {{head, sizeof head, 0}, {wave, big - 2, 12}, {ids, 4 * 300001, 4},
+                            {nodes, 32 * 5000 + 7, 32}, {ids, 4 * 1001, 8}, {head, 0, 4}};
+    int count = (int)(sizeof parts / sizeof parts[0]);
+    size_t plain = 0;
+    for (int i = 0; i < count; i++)
+        plain += parts[i].size;
+    void *one = NULL, *two = NULL, *back = NULL;
+    size_t one_size = 0, two_size = 0;
+    omp_set_num_threads(1);
+    CHECK(sl_pack(parts, count, &one, &one_size) == 0);
+    omp_set_num_threads(2);
+    CHECK(sl_pack(parts, count, &two, &two_size) == 0);
+    CHECK_MSG(one && two && one_size == two_size && memcmp(one, two, one_size) == 0,
+              "1 and 2 threads pack differently (%zu, %zu bytes)", one_size, two_size);
+    CHECK_MSG(one_size < plain / 2, "packed %zu of %zu bytes", one_size, plain);
+    CHECK_EQ_U64(sl_get_u32((unsigned char *)one + 4), 1 + 3 + 1 + 1 + 1); /* pieces */
+    sl_error err;
+    sl_error_init(&err);
+    uint64_t back_size = 0;
+    CHECK(sl_unpack(one, one_size, (uint64_t)1 << 40, "round trip", &back, &back_size, &err) == 0);
+    CHECK_EQ_U64(back_size, plain);
+    size_t at = 0;
+    for (int i = 0; back && i < count; at += parts[i].size, i++)
+        CHECK_MSG(memcmp((unsigned char *)back + at, parts[i].data, parts[i].size) == 0,
+                  "part %d differs after the round trip", i);
+    free(one);
+    free(two);
+    free(back);
+    free(wave);
+    free(ids);
+    free(nodes);
+}
+
+static void *slurp(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *data = NULL;
+    if (f && fseek(f, 0, SEEK_END) == 0) {
+        long n = ftell(f);
+        data = n > 0 ? malloc((size_t)n) : NULL;
+        if (data && (fseek(f, 0, SEEK_SET) || fread(data, 1, (size_t)n, f) != (size_t)n)) {
+            free(data);
+            data = NULL;
+        }
+        *size = data ? (size_t)n : 0;
+    }
+    if (f)
+        fclose(f);
+    return data;
+}
+
+/* The body refused as corrupt, naming the file, for `cause`. */
+static void expect_refused(const void *body, size_t size, const char *what, const char *cause)
+{
+    sl_lod_model m;
+    sl_error err;
+    sl_error_init(&err);
+    int rc = sl_lod_model_parse(body, size, "hostile.slod", &m, &err);
+    CHECK_MSG(rc == SL_E_CORRUPT && strstr(err.message, cause) &&
+                  strcmp(err.file, "hostile.slod") == 0,
+              "%s: parse gave %d (%s), expected corrupt: %s", what, rc, err.message, cause);
+    if (rc == 0)
+        sl_lod_model_release(&m);
+}
+
+/* The largest zstd piece of a packed body, and where its stored bytes start. */
+static uint32_t largest_frame(const unsigned char *body, size_t *at)
+{
+    uint32_t count = sl_get_u32(body + 4), best = 0;
+    size_t offset = 8 + (size_t)SL_PACK_TABLE_ENTRY * count, best_size = 0;
+    for (uint32_t i = 0; i < count; i++) {
+        size_t s = sl_get_u64(ENTRY(body, i) + 8);
+        if (ENTRY(body, i)[16] == 1 && s > best_size) {
+            best = i;
+            best_size = s;
+            *at = offset;
+        }
+        offset += s;
+    }
+    return best;
+}
+
+static void test_hostile_bodies(const unsigned char *good, size_t size)
+{
+    unsigned char *b = malloc(size + 1);
+    if (!b)
+        return;
+    size_t at = 0;
+    uint32_t i = largest_frame(good, &at);
+    uint64_t plain = sl_get_u64(ENTRY(good, i)), stored = sl_get_u64(ENTRY(good, i) + 8);
+    /* A frame cut short: the table still adds up (its stored size says so too). */
+    memcpy(b, good, size);
+    sl_put_u64(ENTRY(b, i) + 8, stored - 9);
+    memmove(b + at + stored - 9, good + at + stored, size - at - stored);
+    expect_refused(b, size - 9, "truncated frame", "frame sizes disagree with the table");
+    /* Plain sizes that are not the frame's: one byte more, one less, far more. */
+    memcpy(b, good, size);
+    sl_put_u64(ENTRY(b, i), plain + 1);
+    expect_refused(b, size, "plain size one more", "frame sizes disagree with the table");
+    sl_put_u64(ENTRY(b, i), plain - 1);
+    expect_refused(b, size, "plain size one less", "frame sizes disagree with the table");
+    sl_put_u64(ENTRY(b, i), (uint64_t)1 << 38);
+    expect_refused(b, size, "plain size of 256 GiB", "plain size out of range");
+    /* Garbage: the whole frame, then its blocks behind an intact frame header. */
+    memcpy(b, good, size);
+    for (uint64_t j = 0; j < stored; j++)
+        b[at + j] = (unsigned char)(j * 2654435761u >> 13);
+    expect_refused(b, size, "garbage frame", "frame sizes disagree with the table");
+    memcpy(b, good, size);
+    for (uint64_t j = 12; j + 4 < stored; j++)
+        b[at + j] = (unsigned char)(j * 2654435761u >> 11);
+    expect_refused(b, size, "garbage blocks", "");
+    /* Counts beyond the bytes, bytes beyond the pieces, an unknown codec. */
+    memcpy(b, good, size);
+    sl_put_u32(b + 4, 0x7fffffff);
+    expect_refused(b, size, "piece count", "do not fit");
+    memcpy(b, good, size);
+    b[size] = 0;
+    expect_refused(b, size + 1, "trailing byte", "after the last piece");
+    ENTRY(b, i)[16] = 7;
+    expect_refused(b, size, "unknown codec", "unknown codec");
+    free(b);
+}
+
+/* Unpacked, the neighbour count in the LOD header raised by one, packed again. */
+static void test_neighbour_count_lie(const unsigned char *good, size_t size)
+{
+    sl_error err;
+    sl_error_init(&err);
+    void *plain = NULL, *packed = NULL;
+    uint64_t plain_size = 0, used = 0;
+    size_t packed_size = 0;
+    CHECK(sl_unpack(good, size, (uint64_t)1 << 40, "good", &plain, &plain_size, &err) == 0);
+    sl_octree t;
+    CHECK(plain && sl_octree_parse(plain, plain_size, "good", &t, &used, &err) == 0);
+    if (!plain || !used)
+        return;
+    sl_octree_release(&t);
+    unsigned char *lod = (unsigned char *)plain + used;
+    sl_put_u64(lod + 8, sl_get_u64(lod + 8) + 1);
+    sl_pack_part part = {plain, plain_size, 4};
+    CHECK(sl_pack(&part, 1, &packed, &packed_size) == 0);
+    expect_refused(packed, packed_size, "neighbour count", "neighbour count differs");
+    free(plain);
+    free(packed);
+}
+
+/* The same meshes from both models at k. */
+static void check_same_cut(sl_lod_model *a, sl_lod_model *b, uint32_t k)
+{
+    sl_lod_mesh x, y;
+    CHECK(sl_lod_generate(a, k, &x, NULL) == 0 && sl_lod_generate(b, k, &y, NULL) == 0);
+    CHECK_MSG(x.triangle_count == y.triangle_count && x.vertex_count == y.vertex_count &&
+                  memcmp(x.positions, y.positions, 12 * (size_t)x.vertex_count) == 0 &&
+                  memcmp(x.indices, y.indices, 12 * (size_t)x.triangle_count) == 0,
+              "k %u: %llu / %llu triangles", k, (unsigned long long)x.triangle_count,
+              (unsigned long long)y.triangle_count);
+    sl_lod_mesh_release(&x);
+    sl_lod_mesh_release(&y);
+}
+
+static void test_real_model(void)
+{
+    const char *src = getenv("SCANLOD_SOURCE_DIR");
+    char v2[4096], v3[] = "/tmp/scanlod-test-pack-XXXXXX";
+    snprintf(v2, sizeof v2, "%s/tests/data/models/bun_zipper_res4-v2.slod", src ? src : ".");
+    sl_error err;
+    sl_error_init(&err);
+    sl_lod_model old, now;
+    int rc = sl_lod_model_read(v2, &old, &err);
+    CHECK_MSG(rc == 0, "format 2 model: %s", err.message);
+    if (rc)
+        return;
+    int fd = mkstemp(v3);
+    close(fd);
+    CHECK(sl_lod_model_write(v3, &old, 1, &err) == 0);
+    size_t v2_size = 0, v3_size = 0;
+    unsigned char *file2 = slurp(v2, &v2_size), *file3 = slurp(v3, &v3_size);
+    CHECK(file2 && file3 && sl_get_u32(file3 + 8) == 3);
+    CHECK_MSG(v3_size * 8 < v2_size, "format 3: %zu bytes, format 2: %zu", v3_size, v2_size);
+    printf("bun_zipper_res4: format 2 %zu bytes, format 3 %zu bytes\n", v2_size, v3_size);
+    rc = sl_lod_model_read(v3, &now, &err);
+    CHECK_MSG(rc == 0, "format 3 model: %s", err.message);
+    if (rc == 0) {
+        const sl_neighbours *a = &old.neighbours, *b = &now.neighbours;
+        uint32_t n = old.tree.node_count;
+        CHECK_MSG(a->count == b->count && memcmp(a->mask, b->mask, 4 * (size_t)n) == 0 &&
+                      memcmp(a->base, b->base, 4 * (size_t)n) == 0 &&
+                      memcmp(a->index, b->index, 4 * a->count) == 0,
+                  "rebuilt neighbour table differs from the stored one");
+        uint32_t e = old.expansion_count;
+        uint32_t ks[] = {0, 1, e / 3, e / 2, e - 1, e};
+        for (int i = 0; i < 6; i++)
+            check_same_cut(&old, &now, ks[i]);
+        sl_lod_model_release(&now);
+    }
+    if (file3) {
+        test_hostile_bodies(file3 + SL_ARTIFACT_HEADER_SIZE, v3_size - SL_ARTIFACT_HEADER_SIZE);
+        test_neighbour_count_lie(file3 + SL_ARTIFACT_HEADER_SIZE,
+                                 v3_size - SL_ARTIFACT_HEADER_SIZE);
+        /* Envelopes of the other version: a packed body called format 2, a plain one
+         * called format 3, and a format from the future. */
+        struct { uint32_t version; const unsigned char *body; size_t size; const char *cause; }
+        cases[] = {{2, file3 + 32, v3_size - 32, "packed parts in a format 2 file"},
+                   {3, file2 + 32, v2_size - 32, "format 3 without packed parts"},
+                   {4, file3 + 32, v3_size - 32, "reads versions 2 to 3"}};
+        for (int i = 0; i < 3 && file2; i++) {
+            sl_artifact_part part = {cases[i].body, cases[i].size};
+            CHECK(sl_artifact_write(v3, SL_LOD_MAGIC, cases[i].version, 1, &part, 1, &err) == 0);
+            sl_error_init(&err);
+            rc = sl_lod_model_read(v3, &now, &err);
+            CHECK_MSG(rc == SL_E_CORRUPT && strstr(err.message, cases[i].cause),
+                      "envelope %u: %d (%s)", cases[i].version, rc, err.message);
+            if (rc == 0)
+                sl_lod_model_release(&now);
+        }
+    }
+    free(file2);
+    free(file3);
+    unlink(v3);
+    sl_lod_model_release(&old);
+}
+
+int main(void)
+{
+    test_round_trip();
+    test_real_model();
+    return check_report();
+}
