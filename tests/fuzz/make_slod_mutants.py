@@ -10,8 +10,13 @@ collapsed-grid        a leaf of 1e-30 at (1, 1, 1), every crossing on the origin
 vertex-range-overrun  from tiny-qef: the root's vertex range ending far past the table,
                       the next node's back in it (the reader once read the root's
                       vertices before it saw the ranges out of order)
+packed-truncated-frame  from tiny-packed (format 3, runtime/lod_pack.h): its largest frame
+                      cut by 9 bytes, the table's stored size with it
+packed-size-lie       the same frame declaring one plain byte more than it holds
+packed-huge-piece     the same frame declaring 2^38 plain bytes (refused unallocated)
+packed-garbage        the same frame's blocks overwritten, its header kept
 Rerun after the seeds are regenerated for a new octree format (octree section layout:
-runtime/octree_io.h)."""
+runtime/octree_io.h; tiny-packed: SCANLOD_SLOD_SEED_DIR=dir build/tests/test_lod_pack)."""
 import math
 import os
 import struct
@@ -53,3 +58,29 @@ vertex_first = HEADER + 32 * n + 4 * ncc + (12 + colour) * cc
 b = bytearray(dual)
 struct.pack_into("<I", b, vertex_first + 4, 0x00ffffff)
 write("vertex-range-overrun", b)
+
+# Format 3's packed parts: 8-byte head (magic, piece count), 24-byte entries (u64 plain,
+# u64 stored, u8 codec, u8 filter, u16 record, u32 0), then the stored pieces.
+packed = open(os.path.join(d, "tiny-packed"), "rb").read()
+count = struct.unpack_from("<I", packed, 4)[0]
+at, best, best_at = 8 + 24 * count, None, 0
+for i in range(count):
+    plain, stored, codec = struct.unpack_from("<QQB", packed, 8 + 24 * i)
+    if codec == 1 and (best is None or stored > best[2]):
+        best, best_at = (i, plain, stored), at
+    at += stored
+i, plain, stored = best
+entry = 8 + 24 * i
+b = bytearray(packed)
+struct.pack_into("<Q", b, entry + 8, stored - 9)
+del b[best_at + stored - 9:best_at + stored]
+write("packed-truncated-frame", b)
+b = bytearray(packed)
+struct.pack_into("<Q", b, entry, plain + 1)
+write("packed-size-lie", b)
+struct.pack_into("<Q", b, entry, 1 << 38)
+write("packed-huge-piece", b)
+b = bytearray(packed)
+for j in range(12, stored - 4):
+    b[best_at + j] = (j * 2654435761 >> 11) & 0xff
+write("packed-garbage", b)

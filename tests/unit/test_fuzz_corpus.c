@@ -78,6 +78,10 @@ static void replay_slod(const unsigned char *data, size_t size, const char *name
         CHECK_MSG(loaded, "seed %s refused: %s", name, err.message);
         counts[2]++;
     }
+    /* The packed mutants (make_slod_mutants.py) each lie about their frames. */
+    if (!strncmp(name, "packed-", 7))
+        CHECK_MSG(!loaded && err.code == SL_E_CORRUPT, "%s loaded or not refused as corrupt: %s",
+                  name, err.message);
 }
 
 /* Replays every file of tests/fuzz/corpus/SUB, each in a buffer of exactly its size. */
@@ -110,6 +114,6 @@ int main(void)
     replay_corpus("ply", replay_ply, ply);
     CHECK(ply[0] > 20 && ply[1] > 20);
     replay_corpus("slod", replay_slod, slod);
-    CHECK_MSG(slod[2] == 4 && slod[1] >= 1, "slod corpus: %d seeds, %d refused", slod[2], slod[1]);
+    CHECK_MSG(slod[2] == 5 && slod[1] >= 5, "slod corpus: %d seeds, %d refused", slod[2], slod[1]);
     return check_report();
 }

@@ -262,8 +262,40 @@ static void test_real_model(void)
     sl_lod_model_release(&old);
 }
 
+/* With SCANLOD_SLOD_SEED_DIR=dir: dir/tiny-packed, the fuzz seed tiny-error (a plain
+ * body of format 2) as format 3 writes it (tests/fuzz/README.md). */
+static void write_packed_seed(const char *dir)
+{
+    char in[1200], out[1200], tmp[] = "/tmp/scanlod-test-pack-seed-XXXXXX";
+    snprintf(in, sizeof in, "%s/tiny-error", dir);
+    snprintf(out, sizeof out, "%s/tiny-packed", dir);
+    size_t size = 0, file_size = 0;
+    unsigned char *body = slurp(in, &size);
+    sl_lod_model m;
+    sl_error err;
+    sl_error_init(&err);
+    CHECK(body && sl_lod_model_parse(body, size, in, &m, &err) == 0);
+    int fd = mkstemp(tmp);
+    close(fd);
+    CHECK(sl_lod_model_write(tmp, &m, 1, &err) == 0);
+    unsigned char *file = slurp(tmp, &file_size);
+    FILE *f = fopen(out, "wb");
+    CHECK(file && f && fwrite(file + 32, 1, file_size - 32, f) == file_size - 32);
+    if (f)
+        fclose(f);
+    unlink(tmp);
+    free(file);
+    free(body);
+    sl_lod_model_release(&m);
+}
+
 int main(void)
 {
+    const char *seed_dir = getenv("SCANLOD_SLOD_SEED_DIR");
+    if (seed_dir && seed_dir[0]) {
+        write_packed_seed(seed_dir);
+        return check_report();
+    }
     test_round_trip();
     test_real_model();
     return check_report();
