@@ -3,11 +3,13 @@
 
     scripts/bench/slod_sections.py MODEL.slod [--ply INPUT.ply] [--markdown]
 
-Reads format 2 (plain body) and format 3 (the body in packed parts: the stored size of
-each part beside its plain size). --ply adds the model/PLY ratio."""
+Reads format 2 (plain body) and format 3 (the body in packed pieces: each section's plain
+and stored bytes; needs the zstd command for the two header pieces). --ply adds the
+model/PLY ratio."""
 import argparse
 import os
 import struct
+import subprocess
 import sys
 
 OCTREE_HEADER = 288
@@ -54,6 +56,65 @@ def sections(body):
     return out, dict(nodes=n, crossings=cc, vertices=vc, expansions=e)
 
 
+def piece_bytes(body, entry, at):
+    """The plain bytes of a piece that is stored as is or in a zstd frame with no filter."""
+    plain, stored, codec, filt = struct.unpack_from("<QQBB", body, entry)
+    data = body[at:at + stored]
+    if codec == 1:
+        data = subprocess.run(["zstd", "-d", "-c", "-q"], input=data, capture_output=True,
+                              check=True).stdout
+    if filt != 0:
+        sys.exit("a header piece with a filter: not what format 3 writes")
+    return data
+
+
+def packed_sections(body):
+    """(name, plain bytes, stored bytes) per section of a packed (format 3) body: the
+    pieces are cut per section, in the plain body's order (the neighbour table left out)."""
+    count = struct.unpack_from("<I", body, 4)[0]
+    entries = [8 + 24 * i for i in range(count)]
+    offsets, at = [], 8 + 24 * count
+    for e in entries:
+        offsets.append(at)
+        at += struct.unpack_from("<Q", body, e + 8)[0]
+    head = piece_bytes(body, entries[0], offsets[0])
+    depth, n, cc, colour, ncc = struct.unpack_from("<IIIIQ", head, 0)
+    vc, flags = struct.unpack_from("<II", head, 272)
+    col = 4 if colour else 0
+    names = [("octree header", OCTREE_HEADER), ("nodes", 32 * n), ("node crossings", 4 * ncc),
+             ("crossing positions", 12 * cc)]
+    if col:
+        names.append(("crossing colours", 4 * cc))
+    if flags & 1:
+        names += [("vertex ranges", 4 * (n + 1)), ("qef vertex positions", 12 * vc)]
+        if col:
+            names.append(("qef vertex colours", 4 * vc))
+        names += [("node errors", 4 * n), ("node areas", 4 * n)]
+    rows, k = [], 0
+
+    def take(name, size):
+        nonlocal k
+        stored = 0
+        left = size
+        while left > 0:
+            plain, st = struct.unpack_from("<QQ", body, entries[k])
+            left -= plain
+            stored += st
+            k += 1
+        rows.append((name, size, stored))
+
+    for name, size in names:
+        take(name, size)
+    lod = piece_bytes(body, entries[k], offsets[k])
+    e, _, nbc, tc = struct.unpack_from("<IIQQ", lod, 0)
+    for name, size in [("LOD header", LOD_HEADER), ("LOD array", 4 * e),
+                       ("accumulation", 8 * (e + 1)), ("error after", 4 * (e + 1)),
+                       ("transition bases", 4 * n), ("transition words", 4 * tc)]:
+        take(name, size)
+    rows.append(("neighbour table (rebuilt on reading)", 0, 0))
+    return rows
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("model")
@@ -65,44 +126,25 @@ def main():
         sys.exit(f"{a.model}: not a model.slod")
     version = struct.unpack_from("<I", data, 8)[0]
     body = data[32:]
-    stored = None
     if version == 3:
-        count = struct.unpack_from("<I", body, 4)[0]
-        table = [struct.unpack_from("<QQBBHI", body, 8 + 24 * i) for i in range(count)]
-        stored = [t[1] for t in table]
-        plain_size = sum(t[0] for t in table)
-        # The plain body is only needed for the counts: its first parts suffice, but the
-        # sizes come from the table, so rebuild them from the plain sizes instead.
-        raw_sizes = [t[0] for t in table]
-    elif version != 2:
-        sys.exit(f"{a.model}: format version {version} (this script reads 2 and 3)")
-    if stored is None:
-        rows, counts = sections(body)
+        rows = packed_sections(body)
+    elif version == 2:
+        rows = [(name, size, size) for name, _, size in sections(body)[0]]
     else:
-        rows = [(f"part {i}", 0, s) for i, s in enumerate(raw_sizes)]
-        counts = {}
-        names = os.environ.get("SLOD_PART_NAMES")
-        if names:
-            rows = [(nm, 0, s) for nm, s in zip(names.split(","), raw_sizes)]
-    total_plain = sum(r[2] for r in rows) + 32
+        sys.exit(f"{a.model}: format version {version} (this script reads 2 and 3)")
+    plain = sum(r[1] for r in rows)
     ply = os.path.getsize(a.ply) if a.ply else None
     if a.markdown:
-        print("| section | bytes | share |" + (" stored | ratio |" if stored else ""))
-        print("|---|---:|---:|" + ("---:|---:|" if stored else ""))
-    for i, (name, _, size) in enumerate(rows):
-        share = 100.0 * size / total_plain
-        extra = ""
-        if stored:
-            extra = f" {stored[i]:>12} {size / max(stored[i], 1):6.1f}x"
+        print("| section | plain bytes | stored bytes | share of the file |")
+        print("|---|---:|---:|---:|")
+    for name, size, stored in rows:
+        share = 100.0 * stored / len(data)
         if a.markdown:
-            extra = extra.split()
-            print(f"| {name} | {size} | {share:.1f} % |" +
-                  (f" {extra[0]} | {extra[1]} |" if stored else ""))
+            print(f"| {name} | {size} | {stored} | {share:.1f} % |")
         else:
-            print(f"{name:24} {size:>12} {share:5.1f} %{extra}")
-    print(f"file {len(data)} bytes (plain {total_plain})" +
-          (f", PLY {ply} bytes: model/PLY {len(data) / ply:.2f}, plain/PLY {total_plain / ply:.2f}"
-           if ply else "") + (f"; {counts}" if counts else ""))
+            print(f"{name:38} {size:>12} {stored:>12} {share:5.1f} %")
+    print(f"file {len(data)} bytes (plain body {plain})" +
+          (f", PLY {ply} bytes: model/PLY {len(data) / ply:.2f}" if ply else ""))
 
 
 if __name__ == "__main__":
