@@ -64,32 +64,59 @@ static int levels_descending(const sl_octree *t)
     return at == t->node_count;
 }
 
-/* Node i's neighbour in direction d through its parent's: the cell's parent is the parent
- * itself or one of its neighbours, and the cell is that node's child in its octant (the
- * octree's children sit in their octants, in octant order). The same node the search
- * finds, in O(1). */
-static uint32_t via_parent(const sl_octree *t, const sl_neighbours *nb, uint32_t i, int d)
+static unsigned pop8(unsigned v) /* no popcount instruction is assumed */
 {
+    v = v - ((v >> 1) & 0x55u);
+    v = (v & 0x33u) + ((v >> 2) & 0x33u);
+    return (v + (v >> 4)) & 0x0fu;
+}
+
+/* For a child in octant o, direction d: the direction of its neighbour's parent from its
+ * own parent (13: the same), and the neighbour's octant there. */
+typedef struct octant_map {
+    uint8_t up[8][27], octant[8][27];
+} octant_map;
+
+static void octant_map_init(octant_map *m)
+{
+    for (int o = 0; o < 8; o++)
+        for (int d = 0; d < 27; d++) {
+            int c[3] = {(o & 1) + d % 3 - 1, (o >> 1 & 1) + d / 3 % 3 - 1, (o >> 2) + d / 9 - 1};
+            int up = 0, oc = 0, scale[3] = {1, 3, 9};
+            for (int a = 0; a < 3; a++) { /* c in -1..2: parent offset floor(c / 2) */
+                up += ((c[a] + 2) / 2 - 1 + 1) * scale[a];
+                oc |= (c[a] & 1) << a;
+            }
+            m->up[o][d] = (uint8_t)up;
+            m->octant[o][d] = (uint8_t)oc;
+        }
+}
+
+/* Node i's same-level neighbours in the 27 directions (13: none), through its parent's:
+ * a cell's parent is the parent itself or one of its neighbours, and the cell is that
+ * node's child in its octant (the octree's children sit in their octants, in octant
+ * order). The same nodes the search finds, in O(1) each. */
+static void around(const sl_octree *t, const sl_neighbours *nb, const octant_map *map,
+                   uint32_t i, uint32_t out[27])
+{
+    for (int d = 0; d < 27; d++)
+        out[d] = SL_OCTREE_NONE;
     const sl_octree_node *n = &t->nodes[i];
     if (n->parent == SL_OCTREE_NONE || n->parent >= i)
-        return SL_OCTREE_NONE;
-    int64_t x = (int64_t)n->x + d % 3 - 1, y = (int64_t)n->y + d / 3 % 3 - 1,
-            z = (int64_t)n->z + d / 9 - 1;
-    if (x < 0 || y < 0 || z < 0)
-        return SL_OCTREE_NONE;
-    const sl_octree_node *p = &t->nodes[n->parent];
-    int64_t ex = (x >> 1) - p->x, ey = (y >> 1) - p->y, ez = (z >> 1) - p->z;
-    if (ex < -1 || ex > 1 || ey < -1 || ey > 1 || ez < -1 || ez > 1)
-        return SL_OCTREE_NONE;
-    int dp = (int)(ex + 1 + 3 * (ey + 1) + 9 * (ez + 1));
-    uint32_t q = dp == 13 ? n->parent : sl_neighbour(nb, n->parent, dp);
-    if (q == SL_OCTREE_NONE)
-        return SL_OCTREE_NONE;
-    unsigned o = (unsigned)((x & 1) | (y & 1) << 1 | (z & 1) << 2);
-    unsigned mask = t->nodes[q].child_mask;
-    if (!(mask >> o & 1))
-        return SL_OCTREE_NONE;
-    return t->nodes[q].first_child + (uint32_t)__builtin_popcount(mask & ((1u << o) - 1u));
+        return;
+    uint32_t up[27], mask = nb->mask[n->parent], k = nb->base[n->parent];
+    for (int d = 0; d < 27; d++)
+        up[d] = mask >> d & 1 ? nb->index[k++] : SL_OCTREE_NONE;
+    up[13] = n->parent;
+    unsigned o = (unsigned)((n->x & 1) | (n->y & 1) << 1 | (n->z & 1) << 2);
+    for (int d = 0; d < 27; d++) {
+        uint32_t q = up[map->up[o][d]];
+        if (d == 13 || q == SL_OCTREE_NONE)
+            continue;
+        unsigned oc = map->octant[o][d], children = t->nodes[q].child_mask;
+        if (children >> oc & 1)
+            out[d] = t->nodes[q].first_child + pop8(children & ((1u << oc) - 1u));
+    }
 }
 
 /* Level by level from the root: each level's masks, bases and indices from its parents'. */
@@ -103,14 +130,16 @@ static int build_by_parents(const sl_octree *t, sl_neighbours *out)
     out->index = malloc(capacity * sizeof *out->index);
     if (!out->mask || !out->base || !out->index)
         goto nomem;
+    octant_map map;
+    octant_map_init(&map);
     for (int l = (int)t->depth; l >= 0; l--) {
         uint32_t first = t->level_first[l], end = first + t->level_count[l];
 #pragma omp parallel for schedule(static)
         for (uint32_t i = first; i < end; i++) {
-            uint32_t mask = 0;
+            uint32_t cells[27], mask = 0;
+            around(t, out, &map, i, cells);
             for (int d = 0; d < 27; d++)
-                if (d != 13 && via_parent(t, out, i, d) != SL_OCTREE_NONE)
-                    mask |= 1u << d;
+                mask |= (uint32_t)(cells[d] != SL_OCTREE_NONE) << d;
             out->mask[i] = mask;
         }
         uint64_t count = out->count;
@@ -128,10 +157,11 @@ static int build_by_parents(const sl_octree *t, sl_neighbours *out)
         }
 #pragma omp parallel for schedule(static)
         for (uint32_t i = first; i < end; i++) {
-            uint32_t k = out->base[i];
+            uint32_t cells[27], k = out->base[i];
+            around(t, out, &map, i, cells);
             for (int d = 0; d < 27; d++)
-                if (out->mask[i] >> d & 1)
-                    out->index[k++] = via_parent(t, out, i, d);
+                if (cells[d] != SL_OCTREE_NONE)
+                    out->index[k++] = cells[d];
         }
         out->count = count;
     }
