@@ -182,8 +182,9 @@ static int64_t retriangulate(pass *p)
 #pragma omp atomic write
             nomem = 1;
         }
-#pragma omp for schedule(dynamic, 4)
-        for (int64_t k = 0; k < ns; k++) {
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t i = 0; i < ns; i++) {
+            uint32_t k = m->by_size[i]; /* the largest first: no long one left at the end */
             if (!s || p->state[k] == STATE_KEEP)
                 continue;
             uint64_t sig = loop_signature(m, p->kept, (uint32_t)k);
@@ -505,6 +506,7 @@ int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_pat
         p.patch.tau = tau_min;
     }
     uint32_t *ts = NULL;
+    int probed = 0;
     while (!rc) {
         for (uint32_t k = 0; k < ns; k++)
             p.trimmable[k] = p.state[k] == STATE_TRIM;
@@ -538,6 +540,10 @@ int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_pat
                 continue;
             }
             p.over_budget = tau == -2;
+            if (p.over_budget && patch->probe) { /* kept segments only add: over it stays */
+                probed = 1;
+                break;
+            }
             /* a vertex within a billionth of the diagonal never comes back: it would only
              * be rounding noise on a flat patch */
             double floor2 = 1e-18 * m->diagonal * m->diagonal;
@@ -575,7 +581,11 @@ int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_pat
         }
     }
     free(ts);
-    if (!rc) {
+    if (!rc && probed) {
+        sl_segment_level_release(lv);
+        lv->stats.over_budget = 1;
+        lv->stats.tau = INFINITY;
+    } else if (!rc) {
         fill_stats(&p, lv);
         double residual = seg_chain_residual(m, p.kept);
         for (uint32_t k = 0; k < ns; k++)
