@@ -300,7 +300,7 @@ def section_growth(out, h):
     planned = [r for r in g["rows"] if r.get("plan") and "peak_rss_mb" in r["plan"]]
     if planned:
         out.append("`scanlod plan` before each size (the pre-flight estimate, "
-                   "pipeline/engine_plan.c) against the measured medians; ratio = plan / "
+                   "cli/plan.c) against the measured medians; ratio = plan / "
                    "measured (issue 14 asks for memory within 30 %, time within 50 %).\n")
         rows = []
         for r in planned:
