@@ -57,6 +57,9 @@ struct sl_engine {
     uint64_t items_total, items_settled, settled_at_start;
     double work_start, bar_fraction;
     char **items;            /* item ids found by the scan (for the collection summary) */
+    sl_engine_item_fn item_fn; /* set by sl_engine_each_item: items are reported to it,
+                                  not reconciled */
+    void *item_ctx;
     uint64_t item_count, item_capacity;
 };
 
