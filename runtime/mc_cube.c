@@ -232,11 +232,31 @@ void sl_mc_triangulate(const sl_mc_cell *cell, sl_mc_triangles *out)
     out->loops = (uint8_t)loops;
 }
 
-/* The face region a segment between points p and q lies in: its face, or for a split face
- * its sub-face (6 + 4 f + k, the sub-face at corner k); -1 when they share no face. */
+/* The face region the segment from point p to point q (in loop order) lies in: its face,
+ * or for a split face its sub-face (6 + 4 f + k, the sub-face at corner k); -1 when they
+ * share no face. The two halves of one split edge lie on both of its faces: the segment
+ * between them is on the face that walks the edge from p to q when the edge's midpoint is
+ * outside (pair_runs links the exit before the midpoint to the entry after it), from q to
+ * p when it is inside. Where levels meet (the edge's midpoint inside, its corners outside,
+ * its other face split), leaving it at -1 missed a loop that runs along the edge and
+ * crosses the same face once more: the same-level neighbour across that face draws the
+ * same two segments, and the two cells' dual vertices were joined by an edge of four
+ * triangles (docs/lod.md, Vertices from quadrics). */
 static int segment_region(const sl_mc_cell *cell, int p, int q)
 {
     unsigned common = ft.point_faces[p] & ft.point_faces[q];
+    if (__builtin_popcount(common) == 2) {
+        for (unsigned r = common; r; r &= r - 1u) {
+            int f = __builtin_ctz(r);
+            for (int k = 0; k < 4; k++) {
+                int out = !(cell->mid_inside >> ft.edges[f][k] & 1), s = ft.half_start[f][k],
+                    e = ft.half_end[f][k];
+                if ((out && s == p && e == q) || (!out && e == p && s == q))
+                    return cell->split_faces >> f & 1 ? -1 : f;
+            }
+        }
+        return -1;
+    }
     if (__builtin_popcount(common) != 1)
         return -1;
     int f = __builtin_ctz(common);

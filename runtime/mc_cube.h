@@ -62,7 +62,8 @@ const sl_mc_triangles *sl_mc_uniform_table(void);
 
 /* For the dual of the surface (runtime/lod_dual.h): splits every loop that has two
  * segments on one face (or one sub-face of a split face) into two, along a chord between
- * the ends of those segments, until none has. Two cells sharing a face both drawing one
+ * the ends of those segments, until none has (a segment joining the two halves of a split
+ * edge is on the face whose walk drew it, though both its points lie on two faces). Two cells sharing a face both drawing one
  * loop through it twice would otherwise share two edges, and their two dual vertices two
  * edges: an edge of four triangles once vertices name edges. Only loop_sizes, loop_points
  * and loops change (up to SL_MC_MAX_LOOPS; the triangles are left as they were). */

@@ -11,8 +11,12 @@
 #include "stages/priority/priority.h"
 
 /* 2: dual models (runtime/lod_dual.h): their accumulation table counts dual triangles;
- * model format 2. 3: model format 3 (packed parts, no neighbour table). */
-#define CRACK_STAGE_VERSION 3u
+ * model format 2.
+ * 3: model format 3 (packed parts, no neighbour table).
+ * 4: a dual model's transition cells split a loop that runs along a split edge and
+ * crosses the same face again (sl_mc_split_double_passes): more triangles in those cuts,
+ * so an older table no longer equals what is generated. */
+#define CRACK_STAGE_VERSION 4u
 
 static int crack_configure(const sl_config *cfg, void **out, sl_error *err)
 {

@@ -17,20 +17,21 @@
  * 3: refuses samples whose finest level has no triangle (issue 16: such items were
  * published as a success with empty levels); a work folder from version 2 rebuilds.
  * 4: octree format 2; optional dual vertices from quadrics of the input surface
- * ([octree] vertices = qef; the default stays mc, paper 1's triangles, until every cut
- * of a qef model is watertight: docs/lod.md, Vertices from quadrics). */
+ * ([octree] vertices = qef, the default since every cut of a qef model of a closed scan
+ * is watertight; mc, paper 1's triangles, by config: docs/lod.md, Vertices from
+ * quadrics). The default's change needs no new version: the config is part of the key. */
 #define MERGE_STAGE_VERSION 4u
 
 static const sl_option merge_options[] = {
     {"merge", "max_samples", SL_OPT_INT, "2147483647", 1, 4294967295.0, NULL,
      "Refuse sample grids with more samples than this (memory guard: about 60 bytes per "
      "sample while the octree is built)."},
-    {"octree", "vertices", SL_OPT_ENUM, "mc", 0, 0, "mc|qef",
-     "Where a level's vertices go. 'qef': one vertex per marching-cube loop of a cell, "
-     "where the quadric of the input surface the loop stands for is least (dual "
+    {"octree", "vertices", SL_OPT_ENUM, "qef", 0, 0, "mc|qef",
+     "Where a level's vertices go. 'qef' (the default): one vertex per marching-cube loop "
+     "of a cell, where the quadric of the input surface the loop stands for is least (dual "
      "contouring of the cell's surface: sharp edges and corners kept, vertices on the "
      "scan, an open scan trimmed at its border; docs/lod.md, Vertices from quadrics). "
-     "'mc' (the default): paper 1's marching-cube triangles, vertices on the cell edges."},
+     "'mc': paper 1's marching-cube triangles, vertices on the cell edges."},
     {"octree", "qef_tau", SL_OPT_DOUBLE, "0.02", 0.0001, 0.9, NULL,
      "qef: directions in which the quadric is flatter than this fraction of its steepest "
      "are left at the surface's mean point (keeps vertices of flat and smooth parts on "

@@ -241,13 +241,20 @@ static void item_pieces(cutter *c, const sl_surface *s, uint64_t i)
         point_piece(c, s, i);
 }
 
-/* The leaves' quadrics: pieces counted, made in parallel into per-item slots, summed in
- * item order. */
+/* Pieces made at once (96 bytes each): the pieces of the whole input (a few per triangle,
+ * many for triangles far larger than the leaf) were the larger part of a qef run's extra
+ * peak memory (docs/lod.md, Vertices from quadrics). */
+#define PIECE_CHUNK 65536
+
+/* The leaves' quadrics: pieces counted per item, then made in parallel, about PIECE_CHUNK
+ * at a time (whole items), into per-item slots and summed in item order (the same sums in
+ * the same order as all at once). */
 int sl_vertices_leaf_quadrics(const sl_octree *t, const sl_surface *s, level_slots *leaves,
                               sl_error *err)
 {
-    uint64_t items = s->triangle_count ? s->triangle_count : s->point_count;
+    uint64_t items = s->triangle_count ? s->triangle_count : s->point_count, capacity = 0;
     uint64_t *start = malloc((items + 1) * sizeof *start);
+    piece *pieces = NULL;
     if (!start)
         return nomem(err);
     int coloured = s->colors && t->crossing_color;
@@ -260,24 +267,33 @@ int sl_vertices_leaf_quadrics(const sl_octree *t, const sl_surface *s, level_slo
     start[0] = 0;
     for (uint64_t i = 0; i < items; i++)
         start[i + 1] += start[i];
-    piece *pieces = malloc((start[items] ? start[items] : 1) * sizeof *pieces);
-    if (!pieces) {
-        free(start);
-        return nomem(err);
-    }
-#pragma omp parallel for schedule(dynamic, 1024)
-    for (uint64_t i = 0; i < items; i++) {
-        cutter c = {t, leaves, {0, 0, 0}, {{0}}, coloured, {{0}}, pieces + start[i], 0};
-        item_pieces(&c, s, i);
-    }
-    for (uint64_t k = 0; k < start[items]; k++) {
-        const piece *p = &pieces[k];
-        if (p->slot != UINT32_MAX)
-            sl_qef_add_plane(&leaves->qef[p->slot], p->n, p->point, p->w,
-                             coloured ? p->rgba : NULL);
+    for (uint64_t from = 0, to; from < items; from = to) {
+        for (to = from + 1; to < items && start[to + 1] - start[from] <= PIECE_CHUNK; to++)
+            ;
+        uint64_t n = start[to] - start[from];
+        if (n > capacity) {
+            free(pieces);
+            capacity = n;
+            pieces = malloc(capacity * sizeof *pieces);
+            if (!pieces) {
+                free(start);
+                return nomem(err);
+            }
+        }
+#pragma omp parallel for schedule(dynamic, 256)
+        for (uint64_t i = from; i < to; i++) {
+            cutter c = {t, leaves, {0, 0, 0}, {{0}}, coloured, {{0}},
+                        pieces + (start[i] - start[from]), 0};
+            item_pieces(&c, s, i);
+        }
+        for (uint64_t k = 0; k < n; k++) {
+            const piece *p = &pieces[k];
+            if (p->slot != UINT32_MAX)
+                sl_qef_add_plane(&leaves->qef[p->slot], p->n, p->point, p->w,
+                                 coloured ? p->rgba : NULL);
+        }
     }
     free(pieces);
     free(start);
     return 0;
 }
-

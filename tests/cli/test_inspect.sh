@@ -46,7 +46,7 @@ check "missing file: says so in one line ($err)" [ "$err" = "scanlod: $TMP/missi
 mkdir -p "$TMP/in"
 cp "$SCANS/bun_zipper_res4.ply" "$TMP/in/"
 write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out"
-"$SCANLOD" run "$TMP/c.ini" -q
+"$SCANLOD" run "$TMP/c.ini" -q -s octree.vertices=mc
 model="$TMP/out/bun_zipper_res4.ply/model.slod"
 inspect "$model"
 check "model: exit 0 ($err)" [ "$rc" -eq 0 ]
@@ -55,12 +55,12 @@ check "model: the finest cut's triangles ($finest) as the report says" grep -qx 
 for key in grid nodes crossings "lod array" error "transition records"; do
   check "model: says its $key" grep -q "^$key: " <<<"$out"
 done
-check "model: says its vertices are paper 1's (the default)" grep -q "^vertices: mc (" <<<"$out"
-# With quadric vertices: how many, and the finest cut as the report says.
-"$SCANLOD" run "$TMP/c.ini" -q -s octree.vertices=qef -s run.output="$TMP/out-qef"
+check "model: says its vertices are paper 1's ([octree] vertices = mc)" grep -q "^vertices: mc (" <<<"$out"
+# The default: quadric vertices, how many, and the finest cut as the report says.
+"$SCANLOD" run "$TMP/c.ini" -q -s run.output="$TMP/out-qef"
 inspect "$TMP/out-qef/bun_zipper_res4.ply/model.slod"
 check "qef model: exit 0 ($err)" [ "$rc" -eq 0 ]
-check "qef model: says how many quadric vertices it has ($out)" grep -Eq "^vertices: qef, [1-9][0-9]* quadric vertices" <<<"$out"
+check "default (qef) model: says how many quadric vertices it has ($out)" grep -Eq "^vertices: qef, [1-9][0-9]* quadric vertices" <<<"$out"
 finest=$(python3 -c "import json; print(json.load(open('$TMP/out-qef/bun_zipper_res4.ply/report.json'))['stages']['export']['triangles_finest'])")
 check "qef model: the finest cut's triangles ($finest) as the report says" grep -qx "triangles: [0-9]* at the root, $finest at the finest cut" <<<"$out"
 head -c 4000 "$model" >"$TMP/cut.slod"

@@ -14,10 +14,11 @@ static inline int cmp_u64(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
-/* How many edges of an indexed mesh are not in exactly two triangles (0 = watertight). */
-static inline uint64_t bad_edges(const sl_lod_mesh *m)
+/* How many edges of an indexed mesh are not in exactly two triangles (the return value)
+ * and how many are in three or more (*crowded, when not NULL). */
+static inline uint64_t edge_census(const sl_lod_mesh *m, uint64_t *crowded)
 {
-    uint64_t n = 3 * m->triangle_count, bad = 0;
+    uint64_t n = 3 * m->triangle_count, bad = 0, over = 0;
     uint64_t *e = malloc((n ? n : 1) * sizeof *e);
     for (uint64_t t = 0; t < m->triangle_count; t++)
         for (int k = 0; k < 3; k++) {
@@ -30,11 +31,17 @@ static inline uint64_t bad_edges(const sl_lod_mesh *m)
         while (j < n && e[j] == e[i])
             j++;
         bad += (j - i) != 2;
+        over += (j - i) > 2;
         i = j;
     }
     free(e);
+    if (crowded)
+        *crowded = over;
     return bad;
 }
+
+/* How many edges of an indexed mesh are not in exactly two triangles (0 = watertight). */
+static inline uint64_t bad_edges(const sl_lod_mesh *m) { return edge_census(m, NULL); }
 
 /* Volume enclosed by a closed mesh, positive when its triangles face outwards. */
 static inline double signed_volume(const sl_lod_mesh *m)

@@ -1,5 +1,6 @@
 /* Marching-cube polygonizer: orientation of all 256 configurations, watertightness of
- * same-level grids, and of coarse transition cells meeting a finer region (no cracks). */
+ * same-level grids, and of coarse transition cells meeting a finer region (no cracks); the
+ * dual drawing's split of a loop that passes one face twice along split edges. */
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -329,10 +330,60 @@ static void test_transition_watertight(void)
     CHECK(triangles > 5000);
 }
 
+/* Whether loop l of tri has the segment from point p to point q. */
+static int loop_has_segment(const sl_mc_triangles *tri, int l, int p, int q)
+{
+    int n = tri->loop_sizes[l];
+    for (int a = 0; a < n; a++)
+        if (tri->loop_points[l][a] == p && tri->loop_points[l][(a + 1) % n] == q)
+            return 1;
+    return 0;
+}
+
+/* The dual drawing's loop split (sl_mc_split_double_passes, docs/lod.md "Vertices from
+ * quadrics"), on a transition cell of cow's qef model: edge 0 (corners 0 and 1 outside)
+ * split with its midpoint inside, face 2 (the finer side) split, face 4 whole. Face 4's
+ * walk joins the two halves of edge 0 (points 12 -> 13) and cuts corner 2 off (1 -> 4);
+ * one loop passes both. The same-level neighbour across face 4 draws the same two
+ * segments: left whole, its loop and this one share both, and their dual vertices an
+ * edge of four triangles. Split, each segment is in a loop of its own. */
+static void test_split_edge_double_pass(void)
+{
+    sl_mc_cell cell;
+    memset(&cell, 0, sizeof cell);
+    cell.inside = 0xf4;
+    cell.split_edges = 0x305;
+    cell.mid_inside = 0x105;
+    cell.split_faces = 0x04;
+    cell.centre_inside = 0x04;
+    sl_mc_triangles tri;
+    sl_mc_triangulate(&cell, &tri);
+    int whole = -1, loops = tri.loops, sizes = 0;
+    for (int l = 0; l < tri.loops; l++) {
+        sizes += tri.loop_sizes[l];
+        if (loop_has_segment(&tri, l, 12, 13) && loop_has_segment(&tri, l, 1, 4))
+            whole = l;
+    }
+    CHECK_MSG(whole >= 0, "no loop with both of face 4's segments (%d loops)", tri.loops);
+    sl_mc_split_double_passes(&cell, &tri);
+    int both = 0, small = 0, split_sizes = 0;
+    for (int l = 0; l < tri.loops; l++) {
+        split_sizes += tri.loop_sizes[l];
+        small += tri.loop_sizes[l] < 3;
+        both += loop_has_segment(&tri, l, 12, 13) && loop_has_segment(&tri, l, 1, 4);
+    }
+    CHECK_MSG(both == 0 && tri.loops == loops + 1,
+              "after the split %d loops (want %d), %d with both segments", tri.loops, loops + 1,
+              both);
+    CHECK_MSG(split_sizes == sizes + 2 && small == 0,
+              "points %d (want %d + the chord's 2), %d loops under 3", split_sizes, sizes, small);
+}
+
 int main(void)
 {
     test_orientation();
     test_uniform_watertight();
     test_transition_watertight();
+    test_split_edge_double_pass();
     return check_report();
 }
