@@ -1,0 +1,83 @@
+/* A finer level cut along the coarser level's edges, for its morph target
+ * (docs/morphing.md, "The surface at weight 1").
+ *
+ * With closest-point targets alone every vertex lands on the coarser level at weight 1,
+ * but a triangle whose corners land on different coarser faces becomes a chord across the
+ * coarser edges between them. The refinement splits such triangles until the three
+ * targets of every triangle lie in one coarser triangle (its inside, an edge or a corner),
+ * so at weight 1 every triangle is inside one coarser triangle: the surface, not only the
+ * vertices, lies on the coarser level.
+ *
+ * Method (a common refinement built by local splits, rounds until nothing changes):
+ *  1. an edge whose two targets share no coarser triangle is split where the weight-1
+ *     chord, walked inside the coarser triangle its first end lies in, leaves that
+ *     triangle: the new vertex's target is that point of the coarser edge (it lies in
+ *     both triangles of the edge); its weight-0 position is the same fraction along the
+ *     finer edge. Each split advances one coarser triangle, so an edge crossing k
+ *     coarser edges takes k rounds. Triangles with split edges are re-triangulated by the
+ *     usual 2-, 3- and 4-triangle templates, the mesh stays conforming (no T-junction);
+ *  2. a triangle whose edges all pass but whose three targets share no coarser triangle
+ *     spans a coarser vertex: a vertex targeting that coarser vertex is added inside it
+ *     (weight-0 position: the barycentric place of the coarser vertex in the triangle's
+ *     targets) and the triangle becomes a fan of three.
+ * Every added vertex lies on the finer level's triangle it was made in: its weight-0
+ * position is a convex combination of that triangle's corners (kept as up to three
+ * source vertices and weights, so normals, colours and texture coordinates interpolate
+ * too), so the weight-0 surface is the level's (to float rounding of the new vertices).
+ * The level's own vertices come first, in order, with their exact bytes and their
+ * closest-point targets (sl_morph_closest_points).
+ *
+ * "Lies in a coarser triangle" is a distance below SL_MORPH_REFINE_EPS of the coarser
+ * bounding-box diagonal. Rounds stop at SL_MORPH_REFINE_ROUNDS or when the triangle count
+ * reaches SL_MORPH_REFINE_GROWTH times the level's; triangles still spanning coarser
+ * triangles then (folds, targets on far-apart sheets) are counted in `unresolved`.
+ *
+ * Thread safety: reentrant (serial; the closest-point queries run in parallel). The
+ * result depends only on the inputs.
+ */
+#ifndef SCANLOD_GEOMETRY_MORPH_REFINE_H
+#define SCANLOD_GEOMETRY_MORPH_REFINE_H
+
+#include <stdint.h>
+
+#include "core/error.h"
+#include "geometry/mesh.h"
+
+#define SL_MORPH_REFINE_EPS 1e-6
+#define SL_MORPH_REFINE_ROUNDS 48
+#define SL_MORPH_REFINE_GROWTH 16
+
+typedef struct sl_morph_refined {
+    uint64_t vertex_count;   /* the level's vertices, then the added ones */
+    uint64_t triangle_count;
+    float *positions;        /* 3 * vertex_count, world: weight 0 */
+    float *targets;          /* 3 * vertex_count, world: weight 1, on the coarser level */
+    uint32_t *triangles;     /* 3 * triangle_count */
+    uint32_t *source;        /* 3 * vertex_count: level vertices a vertex is made of */
+    float *weight;           /* 3 * vertex_count: their weights (sum 1; a level vertex: 1, 0, 0) */
+    uint64_t level_vertices, level_triangles; /* the level's counts */
+    uint64_t torn_triangles; /* triangles with a torn corner (see sl_morph_refine) */
+    uint64_t torn_vertices;  /* copies made for them */
+    double tear_max;         /* the largest distance between a copy's target and its
+                                vertex's: the widest crack at weight 1, world */
+    uint64_t unresolved;     /* triangles whose targets still share no coarser triangle */
+    double max_move;         /* the largest distance a level vertex moves, world */
+} sl_morph_refined;
+
+/* Refines `level` against `coarser` (both need finite positions; `coarser` at least one
+ * triangle). OUT: *out (release with sl_morph_refined_release; zeroed on failure).
+ * Returns 0, SL_E_NOMEM, SL_E_LIMIT (more than 2^32 - 1 vertices) or SL_E_BADINPUT
+ * (a coarser mesh without triangles). */
+int sl_morph_refine(const sl_mesh *coarser, const sl_mesh *level, sl_morph_refined *out,
+                    sl_error *err);
+void sl_morph_refined_release(sl_morph_refined *r);
+
+/* A per-vertex attribute of the level (`comps` floats a vertex) for every refined vertex
+ * (OUT: comps * r->vertex_count floats): the weighted sum of its sources'. */
+void sl_morph_refined_interpolate(const sl_morph_refined *r, const float *level_attr, int comps,
+                                  float *out);
+/* The same for 8-bit RGBA colours (4 a vertex), rounded. */
+void sl_morph_refined_interpolate_rgba(const sl_morph_refined *r, const uint8_t *level_rgba,
+                                       uint8_t *out);
+
+#endif
