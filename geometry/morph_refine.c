@@ -438,6 +438,17 @@ void sl_morph_refined_interpolate(const sl_morph_refined *r, const float *level_
         }
 }
 
+void sl_morph_refined_normals(const sl_morph_refined *r, const float *level_normals, float *out)
+{
+    sl_morph_refined_interpolate(r, level_normals, 3, out);
+    for (uint64_t i = r->level_vertices; i < r->vertex_count; i++) {
+        float *q = out + 3 * i;
+        double l = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2]);
+        for (int k = 0; l > 0 && k < 3; k++)
+            q[k] = (float)(q[k] / l);
+    }
+}
+
 void sl_morph_refined_interpolate_rgba(const sl_morph_refined *r, const uint8_t *level_rgba,
                                        uint8_t *out)
 {

@@ -76,6 +76,8 @@ void sl_morph_refined_release(sl_morph_refined *r);
  * (OUT: comps * r->vertex_count floats): the weighted sum of its sources'. */
 void sl_morph_refined_interpolate(const sl_morph_refined *r, const float *level_attr, int comps,
                                   float *out);
+/* Unit normals: the level's interpolated and normalised (zero stays zero). */
+void sl_morph_refined_normals(const sl_morph_refined *r, const float *level_normals, float *out);
 /* The same for 8-bit RGBA colours (4 a vertex), rounded. */
 void sl_morph_refined_interpolate_rgba(const sl_morph_refined *r, const uint8_t *level_rgba,
                                        uint8_t *out);

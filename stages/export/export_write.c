@@ -3,7 +3,6 @@
  * codecs need them to compress well; GLB and thumbnail geometry is in glTF's frame
  * (metres, +Y up). */
 #include <errno.h>
-#include <math.h>
 #include <meshoptimizer.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -113,17 +112,6 @@ static int write_glb_mesh(const char *path, const sl_lod_mesh *m, const float *u
     return rc;
 }
 
-/* Normals of the refined vertices: the level's, interpolated and made unit again. */
-static void unit_normals(float *n, uint64_t count)
-{
-    for (uint64_t i = 0; i < count; i++) {
-        float *q = n + 3 * i;
-        double l = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2]);
-        for (int k = 0; l > 0 && k < 3; k++)
-            q[k] = (float)(q[k] / l);
-    }
-}
-
 /* With glb->morph_to: the level cut along the coarser level's edges (morph_refine.h), so
  * that at weight 1 its surface, not only its vertices, lies on the coarser level; the
  * level's own vertices keep their bytes, the added ones lie on its triangles. */
@@ -146,8 +134,7 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
     if (!nrm || (glb->texcoords && !uv) || (m->colors && !col)) {
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
     } else {
-        sl_morph_refined_interpolate(&r, m->normals, 3, nrm);
-        unit_normals(nrm + 3 * r.level_vertices, r.vertex_count - r.level_vertices);
+        sl_morph_refined_normals(&r, m->normals, nrm);
         if (uv)
             sl_morph_refined_interpolate(&r, glb->texcoords, 2, uv);
         if (col)
