@@ -191,8 +191,12 @@ static uint64_t edge_key(uint32_t a, uint32_t b)
 /* One round: `split_edges` 0 adds a vertex in each triangle that spans a coarser vertex,
  * 1 splits each failing edge at its first coarser edge. The two alternate: a triangle
  * around a coarser vertex gets that vertex before its edges are split, or the splits
- * would close in on the vertex without reaching it. *changed: whether anything was. */
-static int round_once(refine *R, int split_edges, int *changed, sl_error *err)
+ * would close in on the vertex without reaching it. *changed: whether anything was.
+ * *failing_edges: in: the failing edges of the last edge round (UINT64_MAX: none yet);
+ * out: this one's. An edge round with no fewer failing edges than the last makes no
+ * progress (splits chasing a fold of the closest-point map): it splits nothing. */
+static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *changed,
+                      sl_error *err)
 {
     sl_morph_refined *r = R->r;
     uint64_t tn = r->triangle_count, nb = 0;
@@ -214,6 +218,13 @@ static int round_once(refine *R, int split_edges, int *changed, sl_error *err)
     for (uint64_t i = 0; i < nb; i++)
         if (nu == 0 || bad[i] != bad[nu - 1])
             bad[nu++] = bad[i];
+    *changed = 0;
+    if (split_edges && nu >= *failing_edges) {
+        free(bad), free(old);
+        return 0;
+    }
+    if (split_edges)
+        *failing_edges = nu;
     uint32_t *split = malloc((nu + 1) * sizeof *split);
     /* at most one vertex per failing edge and per triangle; at most 4 triangles each */
     int rc = split ? reserve(R, r->vertex_count + nu + tn, 4 * tn, err) : nomem(err);
@@ -399,11 +410,12 @@ int sl_morph_refine(const sl_mesh *coarser, const sl_mesh *level, sl_morph_refin
     if (rc == 0)
         rc = start(&R, err);
     int idle = 0; /* rounds in a row that changed nothing */
+    uint64_t failing = UINT64_MAX;
     for (int round = 0; rc == 0 && idle < 2 && round < SL_MORPH_REFINE_ROUNDS &&
                         out->triangle_count <= SL_MORPH_REFINE_GROWTH * level->triangle_count;
          round++) {
         int changed = 0;
-        rc = round_once(&R, round % 2, &changed, err);
+        rc = round_once(&R, round % 2, &failing, &changed, err);
         idle = changed ? 0 : idle + 1;
     }
     if (rc == 0)

@@ -143,7 +143,8 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
         rc = write_glb_mesh(path, &rm, uv, r.targets, extras, glb, stats, err);
         if (rc == 0 && stats)
             stats->morph_added_triangles = r.triangle_count - r.level_triangles,
-            stats->morph_unresolved = r.unresolved;
+            stats->morph_unresolved = r.unresolved, stats->morph_torn_triangles = r.torn_triangles,
+            stats->morph_tear_max = r.tear_max * glb->to_metres; /* metres, as the rest */
     }
     free(nrm), free(uv), free(col);
     sl_morph_refined_release(&r);
