@@ -1,4 +1,4 @@
-/* scanlod run | worker | status CONFIG [-s section.key=value]... */
+/* scanlod run | worker | status | verify | plan CONFIG [-s section.key=value]... */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,7 +17,7 @@ typedef struct cli_args {
     const char *overrides[MAX_OVERRIDES];
     int override_count;
     char threads_override[64];
-    int quiet, verbose, help;
+    int quiet, verbose, help, json;
     const char *after_scan; /* worker: the Slurm job whose scan to wait for */
     long wait_seconds;      /* worker: how long to wait for a scan */
 } cli_args;
@@ -38,6 +38,11 @@ static const char *const usage_text[] = {
     "verify", "usage: scanlod verify CONFIG [-s section.key=value]...\n"
               "Checks that every commit record in the work dir still matches its files\n"
               "(sizes and content hashes). Exit 0 when all do, 65 otherwise.\n",
+    "plan", "usage: scanlod plan CONFIG [-s section.key=value]... [--threads N] [--json]\n"
+            "Before a run: per item of the collection, the expected peak memory, time and\n"
+            "disk, from each scan's PLY header and the config (a cost model fitted on this\n"
+            "project's runs; nothing is run or written). Exit 0, or 65 when a scan's\n"
+            "header cannot be read (said per item).\n",
     "status", "usage: scanlod status CONFIG [-s section.key=value]...\n"
               "Per stage: ready / claimed / done / failed / quarantined, and the reasons.\n",
 };
@@ -71,6 +76,8 @@ static int parse_args(int argc, char **argv, cli_args *a)
             if (a->override_count == MAX_OVERRIDES)
                 return -1;
             a->overrides[a->override_count++] = a->threads_override;
+        } else if (!strcmp(argv[0], "plan") && !strcmp(arg, "--json")) {
+            a->json = 1;
         } else if (!strcmp(argv[0], "worker") && !strcmp(arg, "--after-scan") && i + 1 < argc) {
             a->after_scan = argv[++i];
         } else if (!strcmp(argv[0], "worker") && !strcmp(arg, "--wait") && i + 1 < argc) {
@@ -199,4 +206,23 @@ int sl_cmd_verify(int argc, char **argv)
            (unsigned long long)bad);
     sl_engine_close(e);
     return rc ? SL_EXIT_DATAERR : SL_EXIT_OK;
+}
+
+int sl_cmd_plan(int argc, char **argv)
+{
+    sl_engine *e;
+    int exit_code;
+    cli_args a;
+    if (open_engine(argv[0], argc, argv, 0, &e, &exit_code) != 0)
+        return exit_code;
+    parse_args(argc, argv, &a);
+    sl_error err;
+    sl_error_init(&err);
+    uint64_t unplanned = 0;
+    if (sl_engine_plan(e, stdout, a.json, &unplanned, &err) != 0)
+        exit_code = report_error(argv[0], &err);
+    else
+        exit_code = unplanned ? SL_EXIT_DATAERR : SL_EXIT_OK;
+    sl_engine_close(e);
+    return exit_code;
 }

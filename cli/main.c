@@ -15,6 +15,7 @@ static const command commands[] = {
     {"run", sl_cmd_run, "convert a whole collection, resumably"},
     {"worker", sl_cmd_worker, "one worker pulling from the shared queues (cluster)"},
     {"status", sl_cmd_status, "per stage: ready / claimed / done / failed / quarantined"},
+    {"plan", sl_cmd_plan, "before a run: expected peak memory, time and disk per item"},
     {"verify", sl_cmd_verify, "check every commit record against its files"},
     {"inspect", sl_cmd_inspect, "what a file holds, validated"},
     {"extract", sl_cmd_extract, "any level of detail from a built model (.slod), O(m)"},

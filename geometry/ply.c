@@ -152,31 +152,68 @@ int sl_ply_read_memory(const void *data, size_t size, const char *name,
     return read_buffer(data ? data : empty, data ? size : 0, name, limits, out, info, NULL, err);
 }
 
-int sl_ply_read(const char *path, const sl_ply_limits *limits, sl_mesh *out, sl_ply_info *info,
-                sl_progress *progress, sl_error *err)
+/* Maps `path` read-only (*map NULL for an empty file), prefaulted when it is at most
+ * `populate_max` bytes. */
+static int map_file(const char *path, size_t populate_max, void **map, size_t *size,
+                    sl_error *err)
 {
     struct stat st;
-    sl_mesh_init(out);
-    if (info)
-        memset(info, 0, sizeof *info);
+    *map = NULL;
     int fd = sl_io_open_regular(path, &st, err);
     if (fd < 0)
         return fd;
-    size_t size = (size_t)st.st_size;
-    void *map = NULL;
-    /* Prefault typical scans in one call (cheaper than a fault per 64 KiB); larger files
-     * stream through readahead instead of being pinned whole. */
-    int populate = size <= POPULATE_MAX ? MAP_POPULATE : 0;
-    if (size > 0 &&
-        (map = mmap(NULL, size, PROT_READ, MAP_PRIVATE | populate, fd, 0)) == MAP_FAILED) {
+    *size = (size_t)st.st_size;
+    void *m = NULL;
+    int populate = *size <= populate_max ? MAP_POPULATE : 0;
+    if (*size > 0 &&
+        (m = mmap(NULL, *size, PROT_READ, MAP_PRIVATE | populate, fd, 0)) == MAP_FAILED) {
         int e = errno;
         close(fd);
         return sl_error_errno(err, e, path, "mmap");
     }
     close(fd); /* the mapping keeps the file */
+    *map = m;
+    return 0;
+}
+
+int sl_ply_read(const char *path, const sl_ply_limits *limits, sl_mesh *out, sl_ply_info *info,
+                sl_progress *progress, sl_error *err)
+{
+    sl_mesh_init(out);
+    if (info)
+        memset(info, 0, sizeof *info);
+    size_t size = 0;
+    void *map;
+    /* Prefault typical scans in one call (cheaper than a fault per 64 KiB); larger files
+     * stream through readahead instead of being pinned whole. */
+    int rc = map_file(path, POPULATE_MAX, &map, &size, err);
+    if (rc)
+        return rc;
     if (map)
         madvise(map, size, MADV_SEQUENTIAL);
-    int rc = read_buffer(map, size, path, limits, out, info, progress, err);
+    rc = read_buffer(map, size, path, limits, out, info, progress, err);
+    if (map)
+        munmap(map, size);
+    return rc;
+}
+
+int sl_ply_read_info(const char *path, const sl_ply_limits *limits, sl_ply_info *info,
+                     sl_error *err)
+{
+    memset(info, 0, sizeof *info);
+    size_t size = 0;
+    void *map;
+    int rc = map_file(path, 0, &map, &size, err); /* lazily: only the header's pages are read */
+    if (rc)
+        return rc;
+    static const unsigned char empty[1];
+    sl_ply_limits lim = limits ? *limits : sl_ply_default_limits();
+    ply_header *h = malloc(sizeof *h);
+    rc = h ? sl_ply_parse_header(map ? map : empty, size, path, &lim, h, err)
+           : sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory for the header");
+    if (rc == 0)
+        sl_ply_header_info(h, info);
+    free(h);
     if (map)
         munmap(map, size);
     return rc;

@@ -61,6 +61,12 @@ typedef struct sl_ply_info {
 int sl_ply_read(const char *path, const sl_ply_limits *limits, sl_mesh *out, sl_ply_info *info,
                 sl_progress *progress, sl_error *err);
 
+/* Only the header of `path` (nothing of the body is read: a pre-flight look at a scan of
+ * any size, `scanlod plan`); the counts are validated against the file's size as by
+ * sl_ply_read. */
+int sl_ply_read_info(const char *path, const sl_ply_limits *limits, sl_ply_info *info,
+                     sl_error *err);
+
 /* The same from memory (fuzzing, tests); `name` is used in messages. */
 int sl_ply_read_memory(const void *data, size_t size, const char *name,
                        const sl_ply_limits *limits, sl_mesh *out, sl_ply_info *info,

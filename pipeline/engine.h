@@ -57,4 +57,10 @@ int sl_engine_verify(sl_engine *e, FILE *out, uint64_t *checked, uint64_t *bad);
 /* Per stage: ready / claimed / done / failed / quarantined counts, and the reasons. */
 int sl_engine_status(sl_engine *e, FILE *out, sl_error *err);
 
+/* `scanlod plan`: per item of [run] input, the expected peak memory, time and disk from
+ * its PLY header and the config (a cost model: engine_plan.c), as a table or JSON, nothing
+ * run or written. `unplanned`: the items whose header could not be read (each said in the
+ * output with its cause). */
+int sl_engine_plan(sl_engine *e, FILE *out, int json, uint64_t *unplanned, sl_error *err);
+
 #endif

@@ -73,6 +73,8 @@ static int quarantine_unreadable(sl_engine *e, const char *item, const char *why
 
 static int scan_item(sl_engine *e, const char *rel, const char *unreadable, sl_error *err)
 {
+    if (e->plan)
+        return sl_engine_plan_item(e, rel, unreadable);
     e->counts.items++;
     sl_engine_scan_mark(e, 1); /* renews the announcement on a long scan */
     if (e->item_count == e->item_capacity) {
@@ -216,13 +218,18 @@ static int walk(sl_engine *e, const char *rel_dir, int depth, sl_error *err)
     return rc;
 }
 
+int sl_engine_walk_input(sl_engine *e, sl_error *err)
+{
+    return walk(e, "", 0, err);
+}
+
 int sl_engine_scan(sl_engine *e, sl_error *err)
 {
     double start = sl_now_seconds();
     sl_engine_scan_mark(e, 1);
     sl_engine_gc(e);
     e->items_settled = 0;
-    int rc = walk(e, "", 0, err);
+    int rc = sl_engine_walk_input(e, err);
     e->items_total = e->counts.items;
     e->work_start = sl_now_seconds();
     e->settled_at_start = e->items_settled;

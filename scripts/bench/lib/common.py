@@ -64,6 +64,17 @@ def run(cmd, check=True):
     return p.stdout
 
 
+def tree_bytes(root):
+    """Bytes of the regular files under root (links not followed)."""
+    total = 0
+    for d, _, files in os.walk(root):
+        for f in files:
+            p = os.path.join(d, f)
+            if not os.path.islink(p):
+                total += os.path.getsize(p)
+    return total
+
+
 def run_json(cmd):
     return json.loads(run(cmd))
 

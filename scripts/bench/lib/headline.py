@@ -146,7 +146,10 @@ def growth(gr):
         rows.append({"triangles": s["triangles"], "n": len(s["reps"]), "stages": s["stages"],
                      "total": stats.summary(totals),
                      "peak_rss_kb": max(v["peak_rss_kb"]["median"]
-                                        for v in s["stages"].values())})
+                                        for v in s["stages"].values()),
+                     "plan": s.get("plan"),
+                     "disk_bytes": stats.summary([d["work_bytes"] + d["published_bytes"]
+                                                  for d in s.get("disk", [])])})
     xs = [r["triangles"] for r in rows]
     slopes = {"total time": stats.loglog_slope(xs, [r["total"]["median"] for r in rows])}
     for stage in stats.STAGES:

@@ -297,6 +297,28 @@ def section_growth(out, h):
     for s in g["skipped"]:
         out.append("- Skipped %d triangles: %s." % (s["target"], s["reason"]))
     out.append("")
+    planned = [r for r in g["rows"] if r.get("plan") and "peak_rss_mb" in r["plan"]]
+    if planned:
+        out.append("`scanlod plan` before each size (the pre-flight estimate, "
+                   "pipeline/engine_plan.c) against the measured medians; ratio = plan / "
+                   "measured (issue 14 asks for memory within 30 %, time within 50 %).\n")
+        rows = []
+        for r in planned:
+            p = r["plan"]
+            mem = r["peak_rss_kb"] / 1024.0
+            secs = r["total"]["median"]
+            disk = (r.get("disk_bytes") or {}).get("median")
+            disk_plan = p["work_mb"] + p["published_mb"]
+            rows.append([r["triangles"], num(p["peak_rss_mb"], "%.0f"), num(mem, "%.0f"),
+                         num(p["peak_rss_mb"] / mem if mem else None, "%.2f"),
+                         num(p["seconds"], "%.1f"), num(secs, "%.1f"),
+                         num(p["seconds"] / secs if secs else None, "%.2f"),
+                         num(disk_plan, "%.0f"),
+                         num(disk / 1e6 if disk else None, "%.0f"),
+                         num(disk_plan / (disk / 1e6) if disk else None, "%.2f")])
+        table(out, ["triangles", "plan MB", "peak MB", "ratio", "plan s", "took s", "ratio",
+                    "plan disk MB", "disk MB", "ratio"], rows)
+        out.append("")
 
 
 CLUSTER_HEADING = "## 5. Clustering with bounded error (paper 2, issue 13)"

@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# `scanlod plan CONFIG [--json]`: a pre-flight estimate per item from the PLY headers and
+# the config, nothing run or written. Asserted: the counts are the headers' counts, a bad
+# scan is named with its cause (exit 65) while the others are still planned, the memory
+# limit is checked, the work folder is not created, and the predicted peak memory of a
+# real item is within 30 % of what its run then takes (issue 14's aim).
+source "$(dirname "$0")/../lib.sh"
+scans="$SCANLOD_SOURCE_DIR/tests/data/scans"
+
+mkdir -p "$TMP/in"
+cp "$scans/rocker_arm.ply" "$scans/cow.ply" "$TMP/in/"
+cp "$SCANLOD_SOURCE_DIR/tests/data/malformed/garbage_header.ply" "$TMP/in/broken.ply"
+write_config "$TMP/run.ini" "$TMP/in" "$TMP/work" "$TMP/out"
+
+run_scanlod plan "$TMP/run.ini" --json
+check "a bad scan: exit 65" [ "$rc" -eq 65 ]
+check "nothing written: no work folder" [ ! -e "$TMP/work" ]
+check "nothing written: no output folder" [ ! -e "$TMP/out" ]
+echo "$out" >"$TMP/plan.json"
+field() { # field ITEM KEY: a value of the item's plan
+  python3 -c 'import json,sys
+p = json.load(open(sys.argv[1]))
+print([i for i in p["items"] if i["item"] == sys.argv[2]][0].get(sys.argv[3]))' \
+    "$TMP/plan.json" "$1" "$2"
+}
+check "rocker_arm: the header's triangles" [ "$(field rocker_arm.ply triangles)" = 20088 ]
+check "cow: the header's vertices" [ "$(field cow.ply vertices)" = 2904 ]
+check "broken: named with its cause" contains "broken.ply.*header" "$(field broken.ply error)"
+check "every stage of the method estimated" [ "$(python3 -c 'import json,sys
+p = json.load(open(sys.argv[1]))
+print(",".join(p["items"][1]["stages"]))' "$TMP/plan.json")" = \
+  "range,samples,merge,priority,crack,export" ]
+check "totals: three items, one error" [ "$(python3 -c 'import json,sys
+t = json.load(open(sys.argv[1]))["totals"]
+print(t["items"], t["errors"])' "$TMP/plan.json")" = "3 1" ]
+
+run_scanlod plan "$TMP/run.ini" -s run.memory_limit_mb=20
+check "table: the over-limit item is said" contains "rocker_arm.ply .*over \[run\] memory_limit_mb" "$out"
+check "table: the bad one is said" contains "broken.ply  *cannot be planned" "$out"
+run_scanlod plan "$TMP/run.ini" -s lod.method=segment --json
+check "segment method: its stages" contains '"segment"' "$out"
+run_scanlod plan "$TMP/run.ini" -s no.such=1
+check "bad config key: exit 78" [ "$rc" -eq 78 ]
+
+# The prediction against the run: the item's largest stage peak (timings.json).
+rm "$TMP/in/broken.ply" "$TMP/in/cow.ply"
+run_scanlod plan "$TMP/run.ini" --threads 2 --json
+check "plan of good scans: exit 0" [ "$rc" -eq 0 ]
+echo "$out" >"$TMP/plan.json"
+predicted=$(field rocker_arm.ply peak_rss_mb)
+"$SCANLOD" run "$TMP/run.ini" --threads 2 -q >/dev/null
+measured=$(python3 -c 'import json,sys
+s = json.load(open(sys.argv[1]))["stages"]
+print(max(v["peak_rss_kb"] for v in s.values()) / 1024.0)' "$TMP/out/rocker_arm.ply/timings.json")
+echo "rocker_arm: predicted peak $predicted MB, measured $measured MB"
+if light; then
+  echo "(sanitizer build: its memory is not the model's; ratio not checked)"
+else
+  check "peak memory within 30 %" python3 -c 'import sys
+p, m = float(sys.argv[1]), float(sys.argv[2])
+sys.exit(0 if 0.7 <= p / m <= 1.3 else 1)' "$predicted" "$measured"
+fi
+finish
