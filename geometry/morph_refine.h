@@ -8,18 +8,23 @@
  * so at weight 1 every triangle is inside one coarser triangle: the surface, not only the
  * vertices, lies on the coarser level.
  *
- * Method (a common refinement built by local splits, rounds until nothing changes):
- *  1. an edge whose two targets share no coarser triangle is split where the weight-1
- *     chord, walked inside the coarser triangle its first end lies in, leaves that
- *     triangle: the new vertex's target is that point of the coarser edge (it lies in
- *     both triangles of the edge); its weight-0 position is the same fraction along the
- *     finer edge. Each split advances one coarser triangle, so an edge crossing k
- *     coarser edges takes k rounds. Triangles with split edges are re-triangulated by the
- *     usual 2-, 3- and 4-triangle templates, the mesh stays conforming (no T-junction);
- *  2. a triangle whose edges all pass but whose three targets share no coarser triangle
- *     spans a coarser vertex: a vertex targeting that coarser vertex is added inside it
- *     (weight-0 position: the barycentric place of the coarser vertex in the triangle's
- *     targets) and the triangle becomes a fan of three.
+ * Method (a common refinement built by local splits, in rounds):
+ *  1. an edge whose two targets share no coarser triangle is split where its weight-1
+ *     chord crosses the plane halving the dihedral angle at an edge of the coarser
+ *     triangle its first (or else its last) target lies in: the new vertex's target is
+ *     that point of the coarser edge (in both triangles of the edge), its weight-0
+ *     position the same fraction along the finer edge. Where the chord crosses no coarser
+ *     edge from either end (a gap of the closest-point map: a fold, a thin part), the
+ *     split goes to the next vertex of the shortest path along coarser edges. Triangles
+ *     with split edges are re-triangulated by the 2-, 3- and 4-triangle templates (no
+ *     T-junctions). An edge round with no fewer failing edges than the last splits nothing;
+ *  2. a triangle whose targets share no coarser triangle but reach over a coarser vertex
+ *     gets a vertex targeting it (weight-0 position: the barycentric place of the coarser
+ *     vertex in the triangle's targets) and becomes a fan of three. Rounds alternate 2, 1;
+ *  3. what is left is torn: a corner whose target is not in the coarser triangle holding
+ *     most of its triangle's targets gets a copy (same bytes at weight 0) targeting the
+ *     closest point of that coarser triangle; at weight 1 the surface lies on the coarser
+ *     level, in between the tear opens a crack (`tear_max` at weight 1).
  * Every added vertex lies on the finer level's triangle it was made in: its weight-0
  * position is a convex combination of that triangle's corners (kept as up to three
  * source vertices and weights, so normals, colours and texture coordinates interpolate
@@ -28,9 +33,10 @@
  * closest-point targets (sl_morph_closest_points).
  *
  * "Lies in a coarser triangle" is a distance below SL_MORPH_REFINE_EPS of the coarser
- * bounding-box diagonal. Rounds stop at SL_MORPH_REFINE_ROUNDS or when the triangle count
- * reaches SL_MORPH_REFINE_GROWTH times the level's; triangles still spanning coarser
- * triangles then (folds, targets on far-apart sheets) are counted in `unresolved`.
+ * bounding-box diagonal. Rounds stop at SL_MORPH_REFINE_ROUNDS, when two in a row change
+ * nothing, or when the triangle count reaches SL_MORPH_REFINE_GROWTH times the level's;
+ * triangles whose targets still share no coarser triangle after the tears are counted in
+ * `unresolved` (0 on every level measured, docs/morphing.md).
  *
  * Thread safety: reentrant (serial; the closest-point queries run in parallel). The
  * result depends only on the inputs.
