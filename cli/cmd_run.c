@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "cli/commands.h"
+#include "cli/plan.h"
 #include "core/error.h"
 #include "core/log.h"
 #include "core/signals.h"
@@ -219,7 +220,7 @@ int sl_cmd_plan(int argc, char **argv)
     sl_error err;
     sl_error_init(&err);
     uint64_t unplanned = 0;
-    if (sl_engine_plan(e, stdout, a.json, &unplanned, &err) != 0)
+    if (sl_plan_print(e, stdout, a.json, &unplanned, &err) != 0)
         exit_code = report_error(argv[0], &err);
     else
         exit_code = unplanned ? SL_EXIT_DATAERR : SL_EXIT_OK;

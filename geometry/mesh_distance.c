@@ -156,10 +156,11 @@ static void accumulate(partial *acc, double d_sq, int area_sample)
 
 /* Area samples of the triangles in one chunk. `cum` is the area before the chunk and
  * `cum_end` the area after it as the serial prefix sum has it, so the counts of all
- * chunks telescope to exactly `n` samples. */
+ * chunks telescope to exactly `n` samples. With `store`, the samples are written there
+ * (count in the result) instead of measured against `target`. */
 static partial sample_triangles(const sl_mesh *m, uint64_t first, uint64_t end, double cum,
                                 double cum_end, double total, uint64_t n, uint64_t seed,
-                                const sl_triangle_bvh *target)
+                                const sl_triangle_bvh *target, double *store)
 {
     partial acc = {0.0, 0.0, 0.0, 0};
     uint32_t hint = UINT32_MAX;
@@ -181,6 +182,10 @@ static partial sample_triangles(const sl_mesh *m, uint64_t first, uint64_t end, 
             double wa = 1.0 - s, wb = s * (1.0 - r), wc = s * r, p[3];
             for (int i = 0; i < 3; i++)
                 p[i] = wa * a[i] + wb * b[i] + wc * c[i];
+            if (store) { /* drawn for later queries (sl_distance_reference) */
+                memcpy(store + 3 * acc.count++, p, sizeof p);
+                continue;
+            }
             sl_closest q;
             sl_triangle_bvh_closest(target, p, hint, &q);
             hint = q.triangle;
@@ -234,11 +239,12 @@ static void prefix_areas(const sl_mesh *m, double *cum, uint64_t chunks)
 
 /* One direction: samples of `src` against `target`, into `side` (world units). */
 static int measure_side(const surface *src, const sl_triangle_bvh *target,
-                        const sl_mesh_distance_config *cfg, sl_distance_side *side,
-                        sl_progress *progress, sl_error *err)
+                        const sl_mesh_distance_config *cfg, int with_vertices,
+                        sl_distance_side *side, sl_progress *progress, sl_error *err)
 {
     const sl_mesh *m = src->mesh;
-    uint64_t tri_chunks = chunks_of(m->triangle_count), vert_chunks = chunks_of(m->vertex_count);
+    uint64_t tri_chunks = chunks_of(m->triangle_count);
+    uint64_t vert_chunks = with_vertices ? chunks_of(m->vertex_count) : 0;
     double *cum = malloc((tri_chunks + 1) * sizeof *cum);
     partial *parts = malloc((tri_chunks + vert_chunks) * sizeof *parts);
     if (!cum || !parts) {
@@ -265,7 +271,7 @@ static int measure_side(const surface *src, const sl_triangle_bvh *target,
             uint64_t end = (c + 1) * CHUNK < m->triangle_count ? (c + 1) * CHUNK
                                                                : m->triangle_count;
             parts[c] = sample_triangles(m, c * CHUNK, end, cum[c], cum[c + 1], total,
-                                        cfg->samples, cfg->seed, target);
+                                        cfg->samples, cfg->seed, target, NULL);
         } else {
             uint64_t v = (c - tri_chunks) * CHUNK;
             uint64_t end = v + CHUNK < m->vertex_count ? v + CHUNK : m->vertex_count;
@@ -401,16 +407,137 @@ int sl_mesh_distance_compute(const sl_mesh *a, const sl_mesh *b,
         return rc;
     }
     if (rc == SL_OK)
-        rc = measure_side(&sa, &bvh_b, cfg, &out->a_to_b, progress, err);
+        rc = measure_side(&sa, &bvh_b, cfg, 1, &out->a_to_b, progress, err);
     sl_triangle_bvh_release(&bvh_b);
     if (rc == SL_OK)
         rc = sl_triangle_bvh_build(&bvh_a, a, err);
     if (rc == SL_OK)
-        rc = measure_side(&sb, &bvh_a, cfg, &out->b_to_a, progress, err);
+        rc = measure_side(&sb, &bvh_a, cfg, 1, &out->b_to_a, progress, err);
     sl_triangle_bvh_release(&bvh_a);
     if (rc == SL_OK)
         fill_out(out, &sa);
     free(sa.used);
+    free(sb.used);
+    return rc;
+}
+
+/* --- one A, many B: the RMS alone ----------------------------------------------------- */
+
+struct sl_distance_reference {
+    surface a;
+    sl_triangle_bvh bvh;       /* A's tree, for B's samples */
+    sl_mesh_distance_config cfg;
+    double *points;            /* A's area samples, chunk after chunk */
+    uint64_t *chunk_start;     /* chunks + 1 offsets (in samples) into points */
+    uint64_t chunks;
+    double diagonal;
+};
+
+void sl_distance_reference_free(sl_distance_reference *r)
+{
+    if (!r)
+        return;
+    sl_triangle_bvh_release(&r->bvh);
+    free(r->a.used);
+    free(r->points);
+    free(r->chunk_start);
+    free(r);
+}
+
+int sl_distance_reference_build(const sl_mesh *a, const sl_mesh_distance_config *cfg,
+                                sl_distance_reference **out, sl_error *err)
+{
+    sl_mesh_distance_config defaults = sl_mesh_distance_default_config();
+    *out = NULL;
+    if (!cfg)
+        cfg = &defaults;
+    if (cfg->samples == 0)
+        return sl_error_set(err, SL_E_USAGE, 0, NULL, "sample count must be at least 1");
+    sl_distance_reference *r = calloc(1, sizeof *r);
+    if (!r)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "distance reference");
+    r->cfg = *cfg;
+    int rc = check_surface(&r->a, a, "A", NULL, err);
+    if (rc == SL_OK)
+        rc = sl_triangle_bvh_build(&r->bvh, a, err);
+    r->chunks = chunks_of(a->triangle_count);
+    double *cum = NULL;
+    if (rc == SL_OK) {
+        cum = malloc((r->chunks + 1) * sizeof *cum);
+        r->chunk_start = malloc((r->chunks + 1) * sizeof *r->chunk_start);
+        /* the counts telescope to `samples`; a chunk never holds more than that */
+        r->points = malloc(3 * (cfg->samples + r->chunks) * sizeof *r->points);
+        if (!cum || !r->chunk_start || !r->points)
+            rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "%llu distance samples",
+                              (unsigned long long)cfg->samples);
+    }
+    if (rc == SL_OK) {
+        prefix_areas(a, cum, r->chunks);
+        double total = cum[r->chunks];
+        /* serial in chunk order: each chunk's samples follow the previous chunk's */
+        r->chunk_start[0] = 0;
+        for (uint64_t c = 0; c < r->chunks; c++) {
+            uint64_t end = (c + 1) * CHUNK < a->triangle_count ? (c + 1) * CHUNK
+                                                               : a->triangle_count;
+            partial got = sample_triangles(a, c * CHUNK, end, cum[c], cum[c + 1], total,
+                                           cfg->samples, cfg->seed, NULL,
+                                           r->points + 3 * r->chunk_start[c]);
+            r->chunk_start[c + 1] = r->chunk_start[c] + got.count;
+        }
+        double d_sq = 0.0;
+        for (int i = 0; i < 3; i++)
+            d_sq += (r->a.hi[i] - r->a.lo[i]) * (r->a.hi[i] - r->a.lo[i]);
+        r->diagonal = sqrt(d_sq);
+    }
+    free(cum);
+    if (rc != SL_OK) {
+        sl_distance_reference_free(r);
+        return rc;
+    }
+    *out = r;
+    return SL_OK;
+}
+
+int sl_distance_reference_rms(const sl_distance_reference *r, const sl_mesh *b, double *rms,
+                              sl_progress *progress, sl_error *err)
+{
+    *rms = INFINITY;
+    surface sb = {0};
+    sl_triangle_bvh bvh_b = {0};
+    sl_distance_side b_to_a;
+    int rc = check_surface(&sb, b, "B", NULL, err);
+    if (rc == SL_OK)
+        rc = sl_triangle_bvh_build(&bvh_b, b, err);
+    partial *parts = rc == SL_OK ? malloc((r->chunks ? r->chunks : 1) * sizeof *parts) : NULL;
+    if (rc == SL_OK && !parts)
+        rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "sample bookkeeping of mesh A");
+    if (rc == SL_OK) { /* A's samples against B, as measure_side has them, chunk by chunk */
+#pragma omp parallel for schedule(dynamic, 1)
+        for (uint64_t c = 0; c < r->chunks; c++) {
+            partial acc = {0.0, 0.0, 0.0, 0};
+            uint32_t hint = UINT32_MAX;
+            for (uint64_t i = r->chunk_start[c]; i < r->chunk_start[c + 1]; i++) {
+                sl_closest q;
+                sl_triangle_bvh_closest(&bvh_b, r->points + 3 * i, hint, &q);
+                hint = q.triangle;
+                accumulate(&acc, q.distance_sq, 1);
+            }
+            parts[c] = acc;
+        }
+        partial all = {0.0, 0.0, 0.0, 0};
+        for (uint64_t c = 0; c < r->chunks; c++) {
+            all.sum_sq += parts[c].sum_sq;
+            all.count += parts[c].count;
+        }
+        double a_rms = all.count ? sqrt(all.sum_sq / (double)all.count) : 0.0;
+        rc = measure_side(&sb, &r->bvh, &r->cfg, 0, &b_to_a, progress, err);
+        if (rc == SL_OK) {
+            double w = fmax(a_rms, b_to_a.world.rms);
+            *rms = r->diagonal > 0.0 ? w * (1.0 / r->diagonal) : 0.0;
+        }
+    }
+    free(parts);
+    sl_triangle_bvh_release(&bvh_b);
     free(sb.used);
     return rc;
 }

@@ -57,10 +57,24 @@ int sl_engine_verify(sl_engine *e, FILE *out, uint64_t *checked, uint64_t *bad);
 /* Per stage: ready / claimed / done / failed / quarantined counts, and the reasons. */
 int sl_engine_status(sl_engine *e, FILE *out, sl_error *err);
 
-/* `scanlod plan`: per item of [run] input, the expected peak memory, time and disk from
- * its PLY header and the config (a cost model: engine_plan.c), as a table or JSON, nothing
- * run or written. `unplanned`: the items whose header could not be read (each said in the
- * output with its cause). */
-int sl_engine_plan(sl_engine *e, FILE *out, int json, uint64_t *unplanned, sl_error *err);
+/* One entry of the input tree as the scan takes it: `rel` the item id, `path` its file,
+ * `unreadable` why it cannot be a scan (NULL when it can). */
+typedef void (*sl_engine_item_fn)(void *ctx, const char *rel, const char *path,
+                                  const char *unreadable);
+
+/* Walks [run] input with the scan's rules and order but only reports each item to `fn`:
+ * nothing is queued or written (`scanlod plan`). */
+int sl_engine_each_item(sl_engine *e, sl_engine_item_fn fn, void *ctx, sl_error *err);
+
+/* What the engine was opened with, for commands that describe a run without running it. */
+typedef struct sl_engine_facts {
+    const sl_config *cfg;
+    int threads;                       /* [run] threads, 0 resolved to the cores online */
+    int64_t memory_limit_mb;           /* 0 = none */
+    const char *method;                /* [lod] method */
+    const struct sl_stage *const *stages; /* the method's path, in order */
+    int stage_count;
+} sl_engine_facts;
+void sl_engine_facts_of(const sl_engine *e, sl_engine_facts *out);
 
 #endif

@@ -57,8 +57,9 @@ struct sl_engine {
     uint64_t items_total, items_settled, settled_at_start;
     double work_start, bar_fraction;
     char **items;            /* item ids found by the scan (for the collection summary) */
-    struct sl_engine_plan *plan; /* set while `plan` walks the input: items are estimated,
-                                    not reconciled (engine_plan.c) */
+    sl_engine_item_fn item_fn; /* set by sl_engine_each_item: items are reported to it,
+                                  not reconciled */
+    void *item_ctx;
     uint64_t item_count, item_capacity;
 };
 
@@ -136,11 +137,6 @@ int sl_engine_publish_valid(sl_engine *e, const char *item, const char *ticket);
 
 /* engine_summary.c: OUTPUT/summary.json and summary.md over the scanned items. */
 int sl_engine_write_summary(sl_engine *e, sl_error *err);
-
-/* engine_scan.c: walks [run] input, every item to reconcile (or to plan, e->plan). */
-int sl_engine_walk_input(sl_engine *e, sl_error *err);
-/* engine_plan.c: one item's estimate; `unreadable` says why it cannot be a scan, or NULL. */
-int sl_engine_plan_item(sl_engine *e, const char *rel, const char *unreadable);
 
 /* engine_gc.c: temp files and staged folders of dead processes. */
 void sl_engine_gc(sl_engine *e);

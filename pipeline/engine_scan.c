@@ -10,6 +10,7 @@
 #include <string.h>
 #include <strings.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "core/log.h"
 #include "core/progress.h"
@@ -73,8 +74,12 @@ static int quarantine_unreadable(sl_engine *e, const char *item, const char *why
 
 static int scan_item(sl_engine *e, const char *rel, const char *unreadable, sl_error *err)
 {
-    if (e->plan)
-        return sl_engine_plan_item(e, rel, unreadable);
+    if (e->item_fn) {
+        char full[PATH_MAX];
+        if (sl_engine_path(full, sizeof full, "%s/%s", e->input, rel) == 0)
+            e->item_fn(e->item_ctx, rel, full, unreadable);
+        return 0;
+    }
     e->counts.items++;
     sl_engine_scan_mark(e, 1); /* renews the announcement on a long scan */
     if (e->item_count == e->item_capacity) {
@@ -218,9 +223,22 @@ static int walk(sl_engine *e, const char *rel_dir, int depth, sl_error *err)
     return rc;
 }
 
-int sl_engine_walk_input(sl_engine *e, sl_error *err)
+int sl_engine_each_item(sl_engine *e, sl_engine_item_fn fn, void *ctx, sl_error *err)
 {
-    return walk(e, "", 0, err);
+    e->item_fn = fn;
+    e->item_ctx = ctx;
+    int rc = walk(e, "", 0, err);
+    e->item_fn = NULL;
+    e->item_ctx = NULL;
+    return rc;
+}
+
+void sl_engine_facts_of(const sl_engine *e, sl_engine_facts *out)
+{
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    *out = (sl_engine_facts){e->cfg, e->threads > 0 ? e->threads : cores > 0 ? (int)cores : 1,
+                             e->memory_limit_mb, sl_config_string(e->cfg, "lod", "method"),
+                             e->stages, e->stage_count};
 }
 
 int sl_engine_scan(sl_engine *e, sl_error *err)
@@ -229,7 +247,7 @@ int sl_engine_scan(sl_engine *e, sl_error *err)
     sl_engine_scan_mark(e, 1);
     sl_engine_gc(e);
     e->items_settled = 0;
-    int rc = sl_engine_walk_input(e, err);
+    int rc = walk(e, "", 0, err);
     e->items_total = e->counts.items;
     e->work_start = sl_now_seconds();
     e->settled_at_start = e->items_settled;

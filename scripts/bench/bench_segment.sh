@@ -2,6 +2,7 @@
 # The segment method's benchmark (issue 12; docs/segmentation.md, docs/benchmarks.md).
 #
 #   scripts/bench/bench_segment.sh [--quick] [--build DIR] [--docs DIR] [--parts "..."]
+#                                  [--models "..."] [--baseline SCANLOD] [--no-estimate]
 #   scripts/bench/bench_segment.sh --report-only RESULTS.json [--docs DIR]
 #
 # Builds a Release tree (DIR, default build-bench/ like run.sh), then measures with
@@ -22,11 +23,17 @@
 # docs/bench/segment-section.md (included by docs/benchmarks.md) and the paper table
 # and summary into docs/segmentation.md (between its "generated" markers).
 # --quick: fandisk and rocker_arm only, one repetition.
+# --models: the fidelity (and VSA) inputs; a partial run, reported under the full run's
+# tables in docs/benchmarks.md (between its segment-update markers).
+# --baseline: another scanlod (the code before a change) timed alternately with this one
+# in the speed part. --no-estimate: no `--search-samples 0` speed rows.
+# Every timed command also gets its CPU seconds (user + system).
 set -euo pipefail
 export PYTHONDONTWRITEBYTECODE=1
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 build=$root/build-bench docs=$root/docs quick=0 report_only="" parts="paper fidelity finest speed"
+models="" baseline="" estimate=1
 while [ $# -gt 0 ]; do
   case $1 in
     --quick) quick=1 ;;
@@ -34,7 +41,10 @@ while [ $# -gt 0 ]; do
     --docs) docs=$2; shift ;;
     --parts) parts=$2; shift ;;
     --report-only) report_only=$2; shift ;;
-    -h|--help) sed -n '2,25p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    --models) models=$2; shift ;;
+    --baseline) baseline=$(realpath "$2"); shift ;;
+    --no-estimate) estimate=0 ;;
+    -h|--help) sed -n '2,32p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "bench_segment.sh: unknown argument $1 (see --help)" >&2; exit 64 ;;
   esac
   shift
@@ -56,5 +66,5 @@ stamp=$(date -u +%Y%m%dT%H%M%SZ)
 mkdir -p "$build/bench-results" "$build/bench-scratch/segment-$stamp"
 trap 'rm -rf "$build/bench-scratch/segment-$stamp"' EXIT
 python3 "$here/lib/segment.py" run "$root" "$build" "$data" "$build/bench-scratch/segment-$stamp" \
-  "$build/bench-results/segment-$stamp.json" "$quick" "$parts"
+  "$build/bench-results/segment-$stamp.json" "$quick" "$parts" "$models" "$baseline" "$estimate"
 python3 "$here/lib/segment.py" report "$build/bench-results/segment-$stamp.json" "$docs"

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Fits `scanlod plan`'s cost model (pipeline/engine_plan.c) on this machine's own runs.
+"""Fits `scanlod plan`'s cost model (cli/plan.c) on this machine's own runs.
 
     scripts/bench/plan_calibrate.py [--build build] [--sizes 100000,300000,1000000]
                                     [--methods octree,cluster,segment] [--out DIR]
@@ -8,7 +8,7 @@ For every method and size: a gen_surface torus of that many triangles, one `scan
 at 2 threads with fidelity off and one with fidelity on (the export stage's cost differs),
 per stage wall seconds and peak RSS from the published timings.json, and the work and
 published bytes. Then per stage a least-squares line seconds = a + b * N/1e6 and
-MB = c + d * N/1e6 (N = triangles), printed as the C table engine_plan.c holds, with each
+MB = c + d * N/1e6 (N = triangles), printed as the C table cli/plan.c holds, with each
 run's plan/measured ratio under the fitted model. Copy the table in by hand: the model is
 source, reviewed like code. Takes about 10 minutes at the default sizes on 2 cores.
 """

@@ -45,6 +45,9 @@ struct sl_segment_model {
     sl_segment_loops loops;
     uint32_t *seg_tri_start;  /* segment_count + 1, into seg_tris */
     uint32_t *seg_tris;       /* triangles by segment, ascending */
+    uint32_t *by_size;        /* segments, the most triangles first (ties: lower id): the
+                                 order parallel loops over segments hand them out in, so the
+                                 largest do not come last */
     seg_frame *frame;         /* per segment */
     uint8_t *unfit;           /* per segment: enum seg_unfit */
     uint8_t *fixed;           /* per vertex: never removed (corner, anchor, unused) */
@@ -100,6 +103,9 @@ typedef struct seg_patch_params {
     double max_error;         /* world units: the flips' bound (rule error) */
     double tau;               /* rule error: insert while a triangle's score exceeds it (world^2) */
     int record;               /* rule error: record the insertions' scores */
+    int probe;                /* a budget pass asked only whether it fits: when the bases
+                                 alone exceed the budget it stops there, with an empty level
+                                 and stats.over_budget (the full pass would be over too) */
     double cos_max_deviation; /* cos of max_normal_deviation */
 } seg_patch_params;
 

@@ -22,6 +22,52 @@
 #define ERROR_MIN 1e-7
 #define RECORD_BELOW 16.0 /* a pass records insertions down to max_error / this */
 
+sl_segment_config sl_segment_default_config(void)
+{
+    sl_segment_config c;
+    memset(&c, 0, sizeof c);
+    c.delta_seg = 20.0;
+    c.target_segments = 0;
+    c.delta_b = 60.0;
+    c.rule = SL_SEGMENT_RULE_ERROR;
+    c.alpha = -1.5;
+    c.max_error = 0.001;
+    c.max_normal_deviation = 90.0;
+    c.merge_ratio = 25.0;
+    c.merge_angle = 60.0;
+    c.search_samples = 50000;
+    return c;
+}
+
+int sl_segment_check_config(const sl_segment_config *c, sl_error *err)
+{
+    if (!c->target_segments && !(c->delta_seg > 0 && c->delta_seg <= SL_REGION_GROW_MAX_DELTA))
+        return sl_error_set(err, SL_E_USAGE, 0, NULL, "delta_seg %g is outside (0, %g] degrees",
+                            c->delta_seg, SL_REGION_GROW_MAX_DELTA);
+    if (!(c->delta_b >= 0 && c->delta_b <= 180))
+        return sl_error_set(err, SL_E_USAGE, 0, NULL, "delta_b %g is outside [0, 180] degrees",
+                            c->delta_b);
+    if (c->rule < SL_SEGMENT_RULE_ERROR || c->rule > SL_SEGMENT_RULE_PAPER)
+        return sl_error_set(err, SL_E_USAGE, 0, NULL, "unknown vertex rule %d", c->rule);
+    if (!isfinite(c->alpha))
+        return sl_error_set(err, SL_E_USAGE, 0, NULL, "alpha must be a finite number");
+    if (!(c->max_error > 0 && c->max_error <= 1))
+        return sl_error_set(err, SL_E_USAGE, 0, NULL,
+                            "max_error %g is outside (0, 1] (a fraction of the diagonal)",
+                            c->max_error);
+    if (!(c->max_normal_deviation > 0 && c->max_normal_deviation <= 180))
+        return sl_error_set(err, SL_E_USAGE, 0, NULL,
+                            "max_normal_deviation %g is outside (0, 180] degrees",
+                            c->max_normal_deviation);
+    if (!(c->merge_ratio >= 0 && isfinite(c->merge_ratio)))
+        return sl_error_set(err, SL_E_USAGE, 0, NULL, "merge_ratio %g must be >= 0",
+                            c->merge_ratio);
+    if (!(c->merge_angle > 0 && c->merge_angle <= SL_REGION_GROW_MAX_DELTA))
+        return sl_error_set(err, SL_E_USAGE, 0, NULL, "merge_angle %g is outside (0, %g] degrees",
+                            c->merge_angle, SL_REGION_GROW_MAX_DELTA);
+    return SL_OK;
+}
+
 /* Parameters for a pass at max_error `error` (world units). */
 static void params_for(const sl_segment_config *cfg, double error, seg_trim_params *t,
                        seg_patch_params *p)
@@ -34,6 +80,7 @@ static void params_for(const sl_segment_config *cfg, double error, seg_trim_para
     p->max_error = error;
     p->tau = error * error;
     p->record = 0;
+    p->probe = 0;
     p->cos_max_deviation = cos(cfg->max_normal_deviation * (M_PI / 180.0));
 }
 
@@ -72,37 +119,48 @@ static int copy_input(sl_segment_model *m, const sl_segment_config *cfg, sl_segm
 
 /* The symmetric RMS distance between the input and the level, as a fraction of the
  * diagonal, by the project's own fidelity measure (geometry/mesh_distance.h) with fewer
- * samples and another seed than the benchmark's. */
+ * samples and another seed than the benchmark's. The input's side (its tree and samples)
+ * is made once per search into *ref and reused by every candidate. */
 static double level_rms(const sl_segment_model *m, const sl_segment_level *lv, uint64_t samples,
-                        sl_error *err, int *rc)
+                        sl_distance_reference **ref, sl_error *err, int *rc)
 {
-    sl_mesh a, b;
-    sl_mesh_init(&a);
+    sl_mesh b;
     sl_mesh_init(&b);
-    a.vertex_count = b.vertex_count = m->vertex_count;
-    a.positions = b.positions = (float *)m->positions;
-    a.triangle_count = m->triangle_count;
-    a.triangles = (uint32_t *)m->triangles;
+    b.vertex_count = m->vertex_count;
+    b.positions = (float *)m->positions;
     b.triangle_count = lv->triangle_count;
     b.triangles = lv->triangles;
-    sl_mesh_distance_config dc = sl_mesh_distance_default_config();
-    dc.samples = samples;
-    dc.seed = 7;
-    sl_mesh_distance d;
-    *rc = sl_mesh_distance_compute(&a, &b, &dc, &d, NULL, err);
-    return *rc ? INFINITY : d.fraction.rms;
+    if (!*ref) {
+        sl_mesh a;
+        sl_mesh_init(&a);
+        a.vertex_count = m->vertex_count;
+        a.positions = (float *)m->positions;
+        a.triangle_count = m->triangle_count;
+        a.triangles = (uint32_t *)m->triangles;
+        sl_mesh_distance_config dc = sl_mesh_distance_default_config();
+        dc.samples = samples;
+        dc.seed = 7;
+        *rc = sl_distance_reference_build(&a, &dc, ref, err);
+        if (*rc)
+            return INFINITY;
+    }
+    double rms;
+    *rc = sl_distance_reference_rms(*ref, &b, &rms, NULL, err);
+    return *rc ? INFINITY : rms;
 }
 
 /* One pass for a budget with boundary trimming bound `chain` (world): its level and the
  * estimate to minimise (infinite when it does not fit). */
 static double budget_pass(sl_segment_model *m, const sl_segment_config *cfg, double chain,
-                          uint64_t budget, sl_segment_level *lv, sl_progress *progress,
-                          sl_error *err, int *rc)
+                          uint64_t budget, int probe, sl_segment_level *lv,
+                          sl_distance_reference **ref, sl_progress *progress, sl_error *err,
+                          int *rc)
 {
     seg_trim_params t;
     seg_patch_params p;
     params_for(cfg, chain, &t, &p);
     p.tau = (chain / RECORD_BELOW) * (chain / RECORD_BELOW);
+    p.probe = probe;
     *rc = seg_run_pass(m, &t, &p, budget, lv, progress, err);
     if (*rc)
         return INFINITY;
@@ -110,7 +168,7 @@ static double budget_pass(sl_segment_model *m, const sl_segment_config *cfg, dou
                           m->diagonal;
     int fits = !lv->stats.over_budget && lv->triangle_count <= budget;
     if (fits && cfg->search_samples) { /* the objective: the fidelity the project reports */
-        double rms = level_rms(m, lv, cfg->search_samples, err, rc);
+        double rms = level_rms(m, lv, cfg->search_samples, ref, err, rc);
         if (*rc)
             return INFINITY;
         lv->stats.estimate = rms;
@@ -122,17 +180,22 @@ static double budget_pass(sl_segment_model *m, const sl_segment_config *cfg, dou
  * threshold that fits the budget): from the smallest bound whose boundaries fit, up by
  * factors of sqrt(2) while the RMS improves. */
 static int search_budget(sl_segment_model *m, const sl_segment_config *cfg, uint64_t budget,
-                         sl_segment_level *out, sl_progress *progress, sl_error *err)
+                         sl_segment_level *out, sl_distance_reference **ref,
+                         sl_progress *progress, sl_error *err)
 {
     double guess = m->diagonal / (8.0 * sqrt((double)budget));
     sl_segment_level best;
     memset(&best, 0, sizeof best);
     double best_f = INFINITY;
     int rc = SL_OK, passes = 0;
-    /* first a bound whose boundaries fit the budget: doubled until they do */
+    /* first a bound whose boundaries fit the budget: doubled until they do (probing: a
+     * pass over the budget stops as soon as its bases are; the last one, when none fits,
+     * is run again in full as the answer) */
+    double last = guess;
     for (; passes < 8 && !rc; passes++) {
         sl_segment_level lv;
-        double f = budget_pass(m, cfg, guess, budget, &lv, progress, err, &rc);
+        last = guess;
+        double f = budget_pass(m, cfg, guess, budget, 1, &lv, ref, progress, err, &rc);
         if (rc)
             break;
         sl_segment_level_release(&best);
@@ -142,6 +205,11 @@ static int search_budget(sl_segment_model *m, const sl_segment_config *cfg, uint
             break;
         guess *= 2;
     }
+    if (!rc && !isfinite(best_f)) {
+        sl_segment_level_release(&best);
+        budget_pass(m, cfg, last, budget, 0, &best, ref, progress, err, &rc);
+        guess = last;
+    }
     /* then a ladder by factors of sqrt(2), up while the RMS improves, and, when the first
      * step up was no better, down while it improves and the boundaries still fit */
     double at = guess, step = sqrt(2.0);
@@ -150,7 +218,7 @@ static int search_budget(sl_segment_model *m, const sl_segment_config *cfg, uint
         for (int k = 0; k < LADDER_STEPS && !rc; k++, passes++) {
             x *= factor;
             sl_segment_level lv;
-            double f = budget_pass(m, cfg, x, budget, &lv, progress, err, &rc);
+            double f = budget_pass(m, cfg, x, budget, 1, &lv, ref, progress, err, &rc);
             if (rc)
                 break;
             int better = f < best_f;
@@ -315,7 +383,8 @@ static int better(const sl_segment_level *a, const sl_segment_level *b, uint64_t
  * (the lower RMS wins); when even that is over the budget, merged harder (a quarter and
  * an eighth, with a merge angle of 80 degrees) until one fits. */
 static int merged_levels(sl_segment_model *m, const sl_segment_config *cfg, uint64_t budget,
-                         sl_segment_level *out, sl_progress *progress, sl_error *err)
+                         sl_segment_level *out, sl_distance_reference **ref,
+                         sl_progress *progress, sl_error *err)
 {
     uint64_t fixed = 0;
     for (uint32_t v = 0; v < m->vertex_count; v++)
@@ -323,7 +392,7 @@ static int merged_levels(sl_segment_model *m, const sl_segment_config *cfg, uint
     double ratio = cfg->merge_ratio;
     if (ratio <= 0 || m->seg.segment_count <= fmax(1, budget / fmax(ratio, 1)) ||
         10 * fixed <= budget)
-        return search_budget(m, cfg, budget, out, progress, err);
+        return search_budget(m, cfg, budget, out, ref, progress, err);
     const double scale[4] = {1, 2, 4, 8};
     sl_segment_level best;
     memset(&best, 0, sizeof best);
@@ -343,7 +412,7 @@ static int merged_levels(sl_segment_model *m, const sl_segment_config *cfg, uint
         memset(&lv, 0, sizeof lv);
         rc = merged_model(m, &c, target, &merged, err);
         if (!rc)
-            rc = search_budget(merged, &c, budget, &lv, progress, err);
+            rc = search_budget(merged, &c, budget, &lv, ref, progress, err);
         sl_segment_model_free(merged);
         if (!rc && better(&lv, &best, budget)) {
             sl_segment_level_release(&best);
@@ -380,7 +449,10 @@ int sl_segment_model_level(sl_segment_model *m, const sl_segment_config *cfg,
                                 "take no size: give their alpha instead)");
         if (budget >= m->triangle_count)
             return copy_input(m, cfg, out, progress, err);
-        return merged_levels(m, cfg, budget, out, progress, err);
+        sl_distance_reference *ref = NULL; /* the input's side of the search's RMS */
+        rc = merged_levels(m, cfg, budget, out, &ref, progress, err);
+        sl_distance_reference_free(ref);
+        return rc;
     }
     double error = target->max_error > 0 ? target->max_error : cfg->max_error;
     if (!(error > 0 && error <= 1))

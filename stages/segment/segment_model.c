@@ -53,6 +53,7 @@ void sl_segment_model_free(sl_segment_model *m)
     sl_segment_loops_release(&m->loops);
     free(m->seg_tri_start);
     free(m->seg_tris);
+    free(m->by_size);
     free(m->frame);
     free(m->unfit);
     free(m->fixed);
@@ -440,6 +441,31 @@ static int build_base(sl_segment_model *m, const sl_segment_config *cfg, sl_erro
     return sl_region_grow(&m->adj, m->positions, &g, &m->seg, err);
 }
 
+static int cmp_key(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* m->by_size: the segments by triangle count, descending, ties by id. 0 or -1 (memory). */
+static int order_by_size(sl_segment_model *m)
+{
+    uint32_t ns = m->seg.segment_count;
+    uint64_t *key = malloc((ns ? ns : 1) * sizeof *key);
+    m->by_size = malloc((ns ? ns : 1) * sizeof *m->by_size);
+    if (!key || !m->by_size) {
+        free(key);
+        return -1;
+    }
+    for (uint32_t k = 0; k < ns; k++)
+        key[k] = (uint64_t)(UINT32_MAX - (m->seg_tri_start[k + 1] - m->seg_tri_start[k])) << 32 | k;
+    qsort(key, ns, sizeof *key, cmp_key);
+    for (uint32_t i = 0; i < ns; i++)
+        m->by_size[i] = (uint32_t)key[i];
+    free(key);
+    return 0;
+}
+
 /* Everything that follows from the labels: loops, frames, fitness, fixed vertices,
  * chains. Returns 0, SL_E_NOMEM, SL_E_BADINPUT (a label out of range). */
 static int build_labelled(sl_segment_model *m, sl_error *err)
@@ -452,7 +478,8 @@ static int build_labelled(sl_segment_model *m, sl_error *err)
     m->frame = malloc((ns ? ns : 1) * sizeof *m->frame);
     m->unfit = calloc(ns ? ns : 1, 1);
     m->fixed = malloc(m->vertex_count ? m->vertex_count : 1);
-    int ok = m->frame && m->unfit && m->fixed && bucket_triangles(m) == 0;
+    int ok = m->frame && m->unfit && m->fixed && bucket_triangles(m) == 0 &&
+             order_by_size(m) == 0;
     if (ok) {
         int64_t nsi = ns;
 #pragma omp parallel
@@ -463,9 +490,9 @@ static int build_labelled(sl_segment_model *m, sl_error *err)
                 ok = 0;
             }
 #pragma omp for schedule(dynamic, 16)
-            for (int64_t k = 0; k < nsi; k++)
+            for (int64_t i = 0; i < nsi; i++)
                 if (stamp)
-                    fit_segment(m, (uint32_t)k, stamp);
+                    fit_segment(m, m->by_size[i], stamp);
             free(stamp);
         }
     }

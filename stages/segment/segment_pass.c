@@ -26,52 +26,6 @@
 
 enum seg_state { STATE_TRIM = 0, STATE_BOUNDARY = 1, STATE_KEEP = 2 };
 
-sl_segment_config sl_segment_default_config(void)
-{
-    sl_segment_config c;
-    memset(&c, 0, sizeof c);
-    c.delta_seg = 20.0;
-    c.target_segments = 0;
-    c.delta_b = 60.0;
-    c.rule = SL_SEGMENT_RULE_ERROR;
-    c.alpha = -1.5;
-    c.max_error = 0.001;
-    c.max_normal_deviation = 90.0;
-    c.merge_ratio = 25.0;
-    c.merge_angle = 60.0;
-    c.search_samples = 50000;
-    return c;
-}
-
-int sl_segment_check_config(const sl_segment_config *c, sl_error *err)
-{
-    if (!c->target_segments && !(c->delta_seg > 0 && c->delta_seg <= SL_REGION_GROW_MAX_DELTA))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "delta_seg %g is outside (0, %g] degrees",
-                            c->delta_seg, SL_REGION_GROW_MAX_DELTA);
-    if (!(c->delta_b >= 0 && c->delta_b <= 180))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "delta_b %g is outside [0, 180] degrees",
-                            c->delta_b);
-    if (c->rule < SL_SEGMENT_RULE_ERROR || c->rule > SL_SEGMENT_RULE_PAPER)
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "unknown vertex rule %d", c->rule);
-    if (!isfinite(c->alpha))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "alpha must be a finite number");
-    if (!(c->max_error > 0 && c->max_error <= 1))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL,
-                            "max_error %g is outside (0, 1] (a fraction of the diagonal)",
-                            c->max_error);
-    if (!(c->max_normal_deviation > 0 && c->max_normal_deviation <= 180))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL,
-                            "max_normal_deviation %g is outside (0, 180] degrees",
-                            c->max_normal_deviation);
-    if (!(c->merge_ratio >= 0 && isfinite(c->merge_ratio)))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "merge_ratio %g must be >= 0",
-                            c->merge_ratio);
-    if (!(c->merge_angle > 0 && c->merge_angle <= SL_REGION_GROW_MAX_DELTA))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "merge_angle %g is outside (0, %g] degrees",
-                            c->merge_angle, SL_REGION_GROW_MAX_DELTA);
-    return SL_OK;
-}
-
 void sl_segment_level_release(sl_segment_level *l)
 {
     free(l->triangles);
@@ -182,8 +136,9 @@ static int64_t retriangulate(pass *p)
 #pragma omp atomic write
             nomem = 1;
         }
-#pragma omp for schedule(dynamic, 4)
-        for (int64_t k = 0; k < ns; k++) {
+#pragma omp for schedule(dynamic, 1)
+        for (int64_t i = 0; i < ns; i++) {
+            uint32_t k = m->by_size[i]; /* the largest first: no long one left at the end */
             if (!s || p->state[k] == STATE_KEEP)
                 continue;
             uint64_t sig = loop_signature(m, p->kept, (uint32_t)k);
@@ -505,6 +460,7 @@ int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_pat
         p.patch.tau = tau_min;
     }
     uint32_t *ts = NULL;
+    int probed = 0;
     while (!rc) {
         for (uint32_t k = 0; k < ns; k++)
             p.trimmable[k] = p.state[k] == STATE_TRIM;
@@ -538,6 +494,10 @@ int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_pat
                 continue;
             }
             p.over_budget = tau == -2;
+            if (p.over_budget && patch->probe) { /* kept segments only add: over it stays */
+                probed = 1;
+                break;
+            }
             /* a vertex within a billionth of the diagonal never comes back: it would only
              * be rounding noise on a flat patch */
             double floor2 = 1e-18 * m->diagonal * m->diagonal;
@@ -575,7 +535,11 @@ int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_pat
         }
     }
     free(ts);
-    if (!rc) {
+    if (!rc && probed) {
+        sl_segment_level_release(lv);
+        lv->stats.over_budget = 1;
+        lv->stats.tau = INFINITY;
+    } else if (!rc) {
         fill_stats(&p, lv);
         double residual = seg_chain_residual(m, p.kept);
         for (uint32_t k = 0; k < ns; k++)

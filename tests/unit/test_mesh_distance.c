@@ -1,6 +1,8 @@
 /* Surface distance and edge topology on analytic cases: spheres shifted and scaled
  * (closed-form Hausdorff and RMS), identical meshes, a cube with and without a face, a
- * non-manifold fan, bad meshes, and bit-identical results for 1 and 2 threads. */
+ * non-manifold fan, bad meshes, and bit-identical results for 1 and 2 threads; one A
+ * against many B (sl_distance_reference) bit-identical to the full measure on a bundled
+ * scan. */
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
@@ -8,6 +10,7 @@
 
 #include "tests/check.h"
 #include "geometry/mesh_distance.h"
+#include "geometry/ply.h"
 #include "geometry/triangle_bvh.h"
 
 /* Unit sphere from a cube: each face an n x n grid, projected onto the sphere, scaled
@@ -310,8 +313,60 @@ static void test_closest_feature(void)
     CHECK(feature == SL_FEATURE_VERTEX_C && q[0] == 2 && q[1] == 0);
 }
 
+/* sl_distance_reference: the RMS of many B against one A, bit-identical to
+ * sl_mesh_distance_compute's fraction.rms with the same samples and seed, on 1 and 2
+ * threads: a bundled scan against a coarser copy (every other row of triangles dropped
+ * and the gaps' vertices kept), a shifted copy and itself. */
+static void test_reference(void)
+{
+    char path[1024];
+    check_source_path("tests/data/scans/fandisk.ply", path, sizeof path);
+    sl_mesh a;
+    sl_mesh_init(&a);
+    sl_error err;
+    sl_error_init(&err);
+    if (sl_ply_read(path, NULL, &a, NULL, NULL, &err)) {
+        CHECK_MSG(0, "%s: %s", path, err.message);
+        return;
+    }
+    sl_mesh half, shifted;
+    make_mesh(&half, a.positions, a.vertex_count, a.triangles, (a.triangle_count + 1) / 2);
+    for (uint64_t t = 0; t < half.triangle_count; t++) /* every other triangle */
+        memcpy(half.triangles + 3 * t, a.triangles + 6 * t, 3 * sizeof *a.triangles);
+    make_mesh(&shifted, a.positions, a.vertex_count, a.triangles, a.triangle_count);
+    for (uint64_t v = 0; v < shifted.vertex_count; v++)
+        shifted.positions[3 * v + 1] += 0.01f;
+    const sl_mesh *bs[3] = {&half, &shifted, &a};
+    sl_mesh_distance_config cfg = {20000, 7};
+    int threads = omp_get_max_threads();
+    for (int nt = 1; nt <= 2; nt++) {
+        omp_set_num_threads(nt);
+        sl_distance_reference *ref = NULL;
+        CHECK(sl_distance_reference_build(&a, &cfg, &ref, &err) == SL_OK);
+        for (int i = 0; ref && i < 3; i++) {
+            sl_mesh_distance d;
+            CHECK(sl_mesh_distance_compute(&a, bs[i], &cfg, &d, NULL, &err) == SL_OK);
+            double rms = -1;
+            CHECK(sl_distance_reference_rms(ref, bs[i], &rms, NULL, &err) == SL_OK);
+            CHECK_MSG(rms == d.fraction.rms, "B %d, %d threads: reference RMS %.17g, full %.17g",
+                      i, nt, rms, d.fraction.rms);
+            CHECK_MSG(i == 2 ? rms < 1e-12 : rms > 1e-4, "B %d: RMS %g", i, rms);
+        }
+        sl_distance_reference_free(ref);
+    }
+    omp_set_num_threads(threads);
+    sl_mesh empty;
+    sl_mesh_init(&empty);
+    sl_distance_reference *ref = NULL;
+    CHECK(sl_distance_reference_build(&empty, &cfg, &ref, &err) == SL_E_BADINPUT && !ref);
+    sl_mesh_release(&half);
+    sl_mesh_release(&shifted);
+    sl_mesh_release(&a);
+}
+
 int main(void)
 {
+    test_reference();
     test_points_as_a();
     test_closest_feature();
     test_closest_point();

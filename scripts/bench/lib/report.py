@@ -300,7 +300,7 @@ def section_growth(out, h):
     planned = [r for r in g["rows"] if r.get("plan") and "peak_rss_mb" in r["plan"]]
     if planned:
         out.append("`scanlod plan` before each size (the pre-flight estimate, "
-                   "pipeline/engine_plan.c) against the measured medians; ratio = plan / "
+                   "cli/plan.c) against the measured medians; ratio = plan / "
                    "measured (issue 14 asks for memory within 30 %, time within 50 %).\n")
         rows = []
         for r in planned:
@@ -382,11 +382,16 @@ def main():
     section_cluster(out, results, dest)
     section_plots(out)
     # The segment method's section comes from its own benchmark (bench_segment.sh), which
-    # keeps it in docs/bench/segment-section.md; a rerun of this one keeps it too.
+    # keeps it in docs/bench/segment-section.md (and a partial run's in segment-update.md);
+    # a rerun of this one keeps them too.
     seg = os.path.join(os.path.dirname(os.path.abspath(dest)), "bench", "segment-section.md")
     if os.path.exists(seg):
         with open(seg) as f:
             out += ["<!-- segment:begin -->", f.read().rstrip(), "<!-- segment:end -->"]
+    upd = os.path.join(os.path.dirname(seg), "segment-update.md")  # a partial run's, after it
+    if os.path.exists(upd):
+        with open(upd) as f:
+            out += ["<!-- segment-update:begin -->", f.read().rstrip(), "<!-- segment-update:end -->"]
     with open(dest + ".tmp", "w") as f:
         f.write("\n".join(out).rstrip() + "\n")
     os.replace(dest + ".tmp", dest)

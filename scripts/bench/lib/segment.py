@@ -1,8 +1,15 @@
 """The segment method's benchmark (issue 12): bench_segment.sh drives it.
 
-usage: segment.py run ROOT BUILD DATA SCRATCH RESULTS.json QUICK "PARTS"
-       segment.py report RESULTS.json DOCS_DIR
+usage: segment.py run ROOT BUILD DATA SCRATCH RESULTS.json QUICK "PARTS" ["MODELS" [BASELINE [ESTIMATE]]]
+       segment.py report RESULTS.json [MORE.json ...] DOCS_DIR   (parts the first lacks: from the others)
        segment.py remeasure ROOT BUILD DATA SCRATCH RESULTS.json
+
+MODELS (optional, "" for all): the fidelity inputs (and VSA's, where they meet); a run with
+them is partial and its report goes under the full run's tables ("segment-update" markers).
+BASELINE (optional): another scanlod binary (the code before a change), timed in the speed
+part alternately with this one on the same inputs. ESTIMATE "0": no `--search-samples 0` rows.
+Every timed command also has its CPU time (user + system, from the kernel), which a shared
+machine disturbs far less than the wall time.
 
 remeasure: the fidelity rows of a run stopped during its fidelity part, measured again
 from the levels it left in SCRATCH (its simplify and meshopt times are then unknown).
@@ -11,6 +18,7 @@ A run saves its results after every fidelity row, so a stopped run keeps what it
 import datetime
 import json
 import os
+import resource
 import shutil
 import statistics
 import subprocess
@@ -25,6 +33,9 @@ FINEST_MODELS = ["fandisk", "rocker_arm", "armadillo_86kf", "bun_zipper"]
 FINEST_BUDGETS = [5, 10, 20]
 VSA_MODELS = ["fandisk", "rocker_arm", "armadillo_86kf"]
 BUNDLED = {"cow", "fandisk", "rocker_arm"}
+# inputs that are not watertight themselves (`scanlod compare X X --json`, b_topology)
+NOT_WATERTIGHT = {"bun_zipper": "no (open input)",
+                  "dragon_100kf": "no (input: 1 non-manifold edge, kept)"}
 
 
 def log(msg):
@@ -45,10 +56,24 @@ def run_json(cmd):
     return json.loads(run(cmd))
 
 
+def children_cpu():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def run_json_cpu(cmd):
+    """run_json and the CPU seconds (user + system) the command took."""
+    t = children_cpu()
+    d = run_json(cmd)
+    return d, children_cpu() - t
+
+
 class Bench:
-    def __init__(self, root, build, data, scratch, quick):
+    def __init__(self, root, build, data, scratch, quick, models=None, baseline=None,
+                 estimate=True):
         self.root, self.build, self.data, self.scratch = root, build, data, scratch
         self.quick = quick
+        self.models, self.baseline, self.estimate = models, baseline, estimate
         self.scanlod = os.path.join(build, "cli", "scanlod")
         self.peer = lambda n: os.path.join(build, "scripts", "bench", n)
         self.reps = 1 if quick else 3
@@ -70,13 +95,16 @@ class Bench:
                 "watertight": d["b_topology"]["watertight"],
                 "nonmanifold_edges": d["b_topology"]["nonmanifold_edges"]}
 
-    def simplify(self, src, out, args):
-        return run_json([self.scanlod, "simplify", src, "--method", "segment", "-o", out,
-                         "--json"] + list(args))
+    def simplify(self, src, out, args, binary=None):
+        d, cpu = run_json_cpu([binary or self.scanlod, "simplify", src, "--method", "segment",
+                               "-o", out, "--json"] + list(args))
+        d["cpu_seconds"] = cpu
+        return d
 
     def meshopt(self, src, n, prefix):
-        d = run_json([self.peer("meshopt_lod"), src, "--targets", n, "-o", prefix])
+        d, cpu = run_json_cpu([self.peer("meshopt_lod"), src, "--targets", n, "-o", prefix])
         lv = d["levels"][0]
+        lv["cpu_seconds"] = cpu  # the whole process: reading, welding, every target
         return lv, "%s_%d.ply" % (prefix, n)
 
     def octree_model(self, name):
@@ -132,7 +160,7 @@ def part_paper(b):
 
 def part_fidelity(b):
     rows = []
-    models = FIDELITY_MODELS[:2] if b.quick else FIDELITY_MODELS
+    models = b.models or (FIDELITY_MODELS[:2] if b.quick else FIDELITY_MODELS)
     for m in models:
         src = b.ply(m)
         model = b.octree_model(m)
@@ -148,7 +176,8 @@ def part_fidelity(b):
             rows.append({"model": m, "percent": pct, "input_triangles": s["input_triangles"],
                          "segment": seg, "meshopt": mo, "octree": oc,
                          "segments": s["segment"]["segments"],
-                         "seconds": s["simplify_seconds"], "meshopt_seconds": lv["seconds"]})
+                         "seconds": s["simplify_seconds"], "meshopt_seconds": lv["seconds"],
+                         "cpu_seconds": s["cpu_seconds"], "over_budget": s["segment"]["over_budget"]})
             b.checkpoint("fidelity", rows)
             log("fidelity %s %d %%: %d triangles, RMS %.3g vs meshopt %.3g (%.2fx), octree %.3g"
                 % (m, pct, n, seg["rms"], mo["rms"], seg["rms"] / mo["rms"], oc["rms"]))
@@ -183,25 +212,46 @@ def part_speed(b):
         run([b.peer("gen_surface"), "--triangles", 2000000, "-o", surface])
     inputs = [("igea", b.ply("igea"))] + ([] if b.quick else [("surface_2m", surface)])
     for name, src in inputs:
-        modes = (("default", []),) + (() if b.quick else (("estimate", ["--search-samples", "0"]),))
+        modes = (("default", []),) + (() if b.quick or not b.estimate
+                                       else (("estimate", ["--search-samples", "0"]),))
         for mode, extra in modes:
-            seg_t, mo_t, n = [], [], 0
-            for rep in range(b.reps):
+            t = {k: [] for k in ("seg", "seg_cpu", "mo", "mo_cpu", "base", "base_cpu")}
+            n, base_n, base_rms = 0, None, None
+            for rep in range(b.reps):  # alternately: the baseline, this build, meshopt
+                if b.baseline:
+                    base_out = b.tmp("speed", "%s_%s_baseline.ply" % (name, mode))
+                    s = b.simplify(src, base_out, ["--ratio", 0.1] + extra, b.baseline)
+                    t["base"].append(s["simplify_seconds"])
+                    t["base_cpu"].append(s["cpu_seconds"])
+                    base_n = s["triangles"]
                 out = b.tmp("speed", "%s_%s.ply" % (name, mode))
                 s = b.simplify(src, out, ["--ratio", 0.1] + extra)
                 n = s["triangles"]
-                seg_t.append(s["simplify_seconds"])
+                t["seg"].append(s["simplify_seconds"])
+                t["seg_cpu"].append(s["cpu_seconds"])
                 lv, _ = b.meshopt(src, n, b.tmp("speed", "mo_" + name))
-                mo_t.append(lv["seconds"])
+                t["mo"].append(lv["seconds"])
+                t["mo_cpu"].append(lv["cpu_seconds"])
             seg_c = b.compare(src, out)
-            rows.append({"input": name, "mode": mode, "triangles": n,
-                         "seconds": statistics.median(seg_t), "meshopt_seconds": statistics.median(mo_t),
-                         "rms": seg_c["rms"], "reps": b.reps})
-            log("speed %s %s: %.2f s vs meshopt %.2f s" % (name, mode, statistics.median(seg_t),
-                                                            statistics.median(mo_t)))
+            med = lambda k: statistics.median(t[k]) if t[k] else None
+            row = {"input": name, "mode": mode, "triangles": n, "seconds": med("seg"),
+                   "meshopt_seconds": med("mo"), "cpu_seconds": med("seg_cpu"),
+                   "meshopt_cpu_seconds": med("mo_cpu"), "rms": seg_c["rms"], "reps": b.reps,
+                   "all": t}
+            if b.baseline:
+                base_rms = b.compare(src, base_out)["rms"]
+                row.update({"baseline_seconds": med("base"), "baseline_cpu_seconds": med("base_cpu"),
+                            "baseline_triangles": base_n, "baseline_rms": base_rms,
+                            "baseline_identical": open(base_out, "rb").read() == open(out, "rb").read()})
+            rows.append(row)
+            log("speed %s %s: %.2f s (CPU %.2f) vs meshopt %.2f s (CPU %.2f)%s"
+                % (name, mode, med("seg"), med("seg_cpu"), med("mo"), med("mo_cpu"),
+                   ", baseline %.2f s (CPU %.2f)" % (med("base"), med("base_cpu")) if b.baseline else ""))
     vsa = []
     if os.path.exists(b.peer("vsa_lod")):
         models = VSA_MODELS[:2] if b.quick else VSA_MODELS
+        if b.models:
+            models = [m for m in models if m in b.models]
         for m in models:
             src = b.ply(m)
             out = b.tmp("vsa", m + "_seg.ply")
@@ -234,9 +284,16 @@ def machine():
 
 def cmd_run(args):
     global ROOT
-    ROOT, build, data, scratch, results, quick, parts = args
-    b = Bench(ROOT, build, data, scratch, quick == "1")
+    ROOT, build, data, scratch, results, quick, parts = args[:7]
+    models = args[7].split() if len(args) > 7 and args[7].strip() else None
+    baseline = args[8] if len(args) > 8 and args[8] else None
+    estimate = not (len(args) > 9 and args[9] == "0")
+    b = Bench(ROOT, build, data, scratch, quick == "1", models, baseline, estimate)
     res = {"machine": machine(), "samples": SAMPLES, "quick": quick == "1"}
+    if models:
+        res["models"] = models
+    if baseline:
+        res["baseline"] = baseline
     cache = build and os.path.join(build, "CMakeCache.txt")
     if cache and os.path.exists(cache):
         for line in open(cache):
@@ -317,12 +374,13 @@ def table_fidelity(rows):
     for r in rows:
         s, m, o = r["segment"], r["meshopt"], r["octree"]
         opt = lambda v, f: "–" if v is None else f % v
-        out.append("| %s | %d %% | %d | %s | %s | **%s** | %d | %s | %s | %s | %s | %s | %s | %s | %s |"
-                   % (r["model"], r["percent"], s["triangles"], pct(s["rms"]), pct(m["rms"]),
+        tris = "%d%s" % (s["triangles"], " (over budget)" if r.get("over_budget") else "")
+        out.append("| %s | %d %% | %s | %s | %s | **%s** | %d | %s | %s | %s | %s | %s | %s | %s | %s |"
+                   % (r["model"], r["percent"], tris, pct(s["rms"]), pct(m["rms"]),
                       ratio(s["rms"], m["rms"]), o["triangles"], pct(o["rms"]),
                       ratio(s["rms"], o["rms"]), pct(s["hausdorff"]), pct(m["hausdorff"]),
-                      "yes" if s["watertight"] else "no (open input)" if r["model"] == "bun_zipper"
-                      else "no", opt(r["segments"], "%d"), opt(r["seconds"], "%.2f"),
+                      "yes" if s["watertight"] else NOT_WATERTIGHT.get(r["model"], "no"),
+                      opt(r["segments"], "%d"), opt(r["seconds"], "%.2f"),
                       opt(r["meshopt_seconds"], "%.3f")))
     return out
 
@@ -340,13 +398,34 @@ def table_finest(rows):
 
 
 def table_speed(sp):
-    out = ["| input | search | triangles | segment s | meshopt_simplify s | segment / meshopt | RMS |",
-           "|---|---|---:|---:|---:|---:|---:|"]
-    for r in sp["meshopt"]:
-        out.append("| %s | %s | %d | %.2f | %.3f | %.1f | %s |" % (
+    rows = sp["meshopt"]
+    cpu = any(r.get("cpu_seconds") is not None for r in rows)
+    base = any(r.get("baseline_seconds") is not None for r in rows)
+    head = "| input | search | triangles | segment s | meshopt_simplify s | segment / meshopt | RMS |"
+    rule = "|---|---|---:|---:|---:|---:|---:|"
+    if cpu:
+        head += " segment CPU s | meshopt_lod CPU s | CPU ratio |"
+        rule += "---:|---:|---:|"
+    if base:
+        head += " before s | before CPU s | before / now (CPU) | before: triangles, RMS | same file |"
+        rule += "---:|---:|---:|---:|---|"
+    out = [head, rule]
+    for r in rows:
+        line = "| %s | %s | %d | %.2f | %.3f | %.1f | %s |" % (
             r["input"], "RMS (50000 samples)" if r["mode"] == "default" else "vertex estimate",
             r["triangles"], r["seconds"], r["meshopt_seconds"], r["seconds"] / r["meshopt_seconds"],
-            pct(r["rms"])))
+            pct(r["rms"]))
+        if cpu:
+            line += " %.2f | %.2f | %.1f |" % (r["cpu_seconds"], r["meshopt_cpu_seconds"],
+                                               r["cpu_seconds"] / r["meshopt_cpu_seconds"])
+        if base:
+            line += " %.2f | %.2f | %.2f | %d, %s | %s |" % (
+                r["baseline_seconds"], r["baseline_cpu_seconds"],
+                r["baseline_cpu_seconds"] / r["cpu_seconds"], r["baseline_triangles"],
+                pct(r["baseline_rms"]), "yes" if r["baseline_identical"] else "no")
+        out.append(line)
+    if not sp["vsa"]:
+        return out
     out += ["", "| input | triangles | segment s | segment RMS | VSA triangles | VSA proxies | "
             "VSA s (the run at that count) | VSA s (search, %s runs) | VSA / segment | VSA RMS | VSA watertight |" % "n",
             "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
@@ -378,7 +457,7 @@ def plot(rows, dest):
                             r["segment"]["triangles"], 100 * r["segment"]["rms"],
                             r["meshopt"]["triangles"], 100 * r["meshopt"]["rms"],
                             r["octree"]["triangles"], 100 * r["octree"]["rms"]))
-            script += ['set title "%s"' % m, 'set xlabel "triangles"', 'set ylabel "RMS, % of diagonal"',
+            script += ['set title "%s" noenhanced' % m, 'set xlabel "triangles"', 'set ylabel "RMS, % of diagonal"',
                        'plot "%s" u 1:2 w lp t "segment", "" u 3:4 w lp t "meshopt", "" u 5:6 w lp t "octree"' % path]
         script.append("unset multiplot")
         with open(os.path.join(tmp, "p.gp"), "w") as f:
@@ -399,8 +478,20 @@ def replace_between(path, begin, end, text):
 
 
 def cmd_report(args):
-    results, docs = args
+    """report RESULTS.json [MORE.json ...] DOCS: the parts (paper, fidelity, finest, speed)
+    a later file has and the first lacks are taken from it (runs made side by side)."""
+    results, docs = args[0], args[-1]
     res = json.load(open(results))
+    for more in args[1:-1]:
+        extra = json.load(open(more))
+        for part in ("paper", "fidelity", "finest", "speed"):
+            if part in extra and part not in res:
+                res[part] = extra[part]
+                res.setdefault("part_machine", {})[part] = extra["machine"]
+        for key in ("models",):
+            if key in extra and key not in res:
+                res[key] = extra[key]
+        results = results + "` and `" + os.path.basename(more)
     mach = res["machine"]
     head = ("Generated by `scripts/bench/bench_segment.sh` from `%s` (%s, commit %s, %s build, "
             "%s cores, load average %.1f at the start%s); %d area samples per surface in every "
@@ -409,7 +500,20 @@ def cmd_report(args):
                               mach.get("build_type", "?"), mach["cores"], mach["load"],
                               ", %.1f at the end" % mach["load_end"] if "load_end" in mach else "",
                               res["samples"]))
-    sec = ["## 6. The segment method (paper 3, issue 12)\n", head]
+    partial = "models" in res  # a run on some inputs: reported under the full run's tables
+    if partial:
+        head = head.replace("Generated by", "A partial run (fidelity: %s; speed) generated by"
+                            % ", ".join(res["models"]), 1)
+    sec = ["### Update: the faster search (%s)\n" % mach["date"] if partial else
+           "## 6. The segment method (paper 3, issue 12)\n", head]
+    for part, pm in sorted(res.get("part_machine", {}).items()):
+        sec += ["Its %s part ran at the same time, from the second file: %s, commit %s, load "
+                "average %.1f at its start%s.\n" % (part, pm["date"], pm["commit"], pm["load"],
+                ", %.1f at its end" % pm["load_end"] if "load_end" in pm else "")]
+    if "baseline" in res:
+        sec += ["`before` is the same benchmark run with another scanlod binary (`%s`, the code "
+                "before the change), alternately with this build on each input.\n"
+                % os.path.basename(res["baseline"])]
     if "fidelity" in res:
         sec += ["### Fidelity at equal triangle counts\n",
                 "`scanlod simplify --ratio B/100` (default config), then meshopt_simplify to the "
@@ -423,7 +527,10 @@ def cmd_report(args):
                     % res["samples"]]
         sec += table_fidelity(res["fidelity"]) + ["", "![RMS against triangles](bench/segment_rms.png)", ""]
         os.makedirs(os.path.join(docs, "bench"), exist_ok=True)
-        plot(res["fidelity"], os.path.join(docs, "bench", "segment_rms.png"))
+        png = "segment_rms_update.png" if partial else "segment_rms.png"
+        if partial:
+            sec[-2] = "![RMS against triangles](bench/%s)" % png
+        plot(res["fidelity"], os.path.join(docs, "bench", png))
     if "finest" in res:
         sec += ["### The segment method as a pass on the octree's finest level\n",
                 "The octree's finest level (`extract --lod-percent 100`) simplified by the segment "
@@ -442,8 +549,19 @@ def cmd_report(args):
                 "and against CGAL VSA (`vsa_lod --triangles N`), whose figure is the single run "
                 "at the proxy count that meets the count (its search runs it several times).\n"
                 % (res["speed"]["meshopt"][0]["reps"] if res["speed"]["meshopt"] else 0)]
+        if any(r.get("cpu_seconds") is not None for r in res["speed"]["meshopt"]):
+            sec += ["CPU s: user + system seconds of the whole process (reading, cleaning and "
+                    "writing included; meshopt_lod's with its weld), medians of the same runs: "
+                    "a shared machine disturbs them far less than the wall times.\n"]
         sec += table_speed(res["speed"]) + [""]
     os.makedirs(os.path.join(docs, "bench"), exist_ok=True)
+    if partial:
+        with open(os.path.join(docs, "bench", "segment-update.md"), "w") as f:
+            f.write("\n".join(sec).rstrip() + "\n")
+        replace_between(os.path.join(docs, "benchmarks.md"), "<!-- segment-update:begin -->",
+                        "<!-- segment-update:end -->", "\n".join(sec))
+        log("wrote %s/bench/segment-update.md and its part of benchmarks.md" % docs)
+        return
     with open(os.path.join(docs, "bench", "segment-section.md"), "w") as f:
         f.write("\n".join(sec).rstrip() + "\n")
     replace_between(os.path.join(docs, "benchmarks.md"), "<!-- segment:begin -->",

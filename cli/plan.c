@@ -1,28 +1,32 @@
 /* `scanlod plan`: a pre-flight estimate per item of the collection (peak memory, time,
  * disk) from each scan's PLY header and the config, so a scheduler can ask for the right
- * node before anything runs (issue 14; docs/engine.md "Planning a run").
+ * node before anything runs (issue 14). The engine walks the input as its scan would
+ * (sl_engine_each_item); reading headers and costing stages is the command's business,
+ * so the engine stays below geometry/ and knows no stage by name.
  *
  * The estimate is a cost model, not a trial run: every stage of the item's method costs
- * time a + b * N^e and peak memory c + d * N, with N the input's triangles in millions
+ * time a + b * N^e and peak memory c + d * N^f, with N the input's triangles in millions
  * (its points for a point cloud), coefficients fitted on this project's own runs at 2
  * threads (scripts/bench/plan_calibrate.py; docs/cluster.md "Asking for the right node").
  * Stages are separate child processes, so the item's peak is the largest stage's and its
  * time their sum. The benchmark's growth phase prints the plan beside what the run
  * measured, so a drift of the model shows up in docs/benchmarks.md.
  */
-#include "pipeline/engine_internal.h"
+#include "cli/plan.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "core/json.h"
 #include "geometry/ply.h"
+#include "pipeline/stage.h"
 
 /* Cost of one stage, N in millions: seconds = a + b * N^e, peak RSS MB = c + d * N^f. */
 typedef struct stage_cost {
-    const char *stage;     /* a stage name; "export+fidelity" is the export measuring its levels */
+    const char *stage;     /* [METHOD:]STAGE[+fidelity]: +fidelity is the export measuring
+                              its levels, METHOD: a method's own cost for a shared stage */
     double a, b, e, c, d, f;
 } stage_cost;
 
@@ -38,16 +42,38 @@ static const stage_cost mesh_costs[] = {
     {"crack", 0.117, 3.04, 1.049, 47, 333, 0.95},
     {"export", 0.3, 5.06, 1.062, 48, 516, 0.92},
     {"export+fidelity", 2.5, 5.8, 1.062, 48, 516, 0.92},
-    {"segment", 0.20, 60.0, 1.0, 50, 900, 1.0},
-    {"cluster", 0.10, 8.0, 1.0, 50, 600, 1.0},
+    /* The segment and cluster methods: plan_calibrate.py at 30k, 100k and 200k triangles on
+     * a loaded machine, memory as measured, time from CPU seconds / 1.3 (what the wall
+     * time is on a quiet one); their export writes levels from a level list, not a model,
+     * hence its own lines. */
+    {"segment", 1.05, 350, 1.0, 50, 318, 1.0},
+    {"cluster", 0.0, 52.1, 1.0, 46.5, 402, 1.0},
+    {"segment:export", 0.45, 3.2, 1.0, 58, 160, 1.0},
+    {"segment:export+fidelity", 2.2, 18.4, 1.0, 56, 198, 1.0},
+    {"cluster:export", 0.45, 3.2, 1.0, 58, 160, 1.0},
+    {"cluster:export+fidelity", 2.2, 18.4, 1.0, 56, 198, 1.0},
 };
 
-static const stage_cost *cost_of(const char *stage)
+static const stage_cost *find_cost(const char *key)
 {
     for (size_t i = 0; i < sizeof mesh_costs / sizeof mesh_costs[0]; i++)
-        if (!strcmp(mesh_costs[i].stage, stage))
+        if (!strcmp(mesh_costs[i].stage, key))
             return &mesh_costs[i];
     return NULL;
+}
+
+/* The method's own line for the stage ("segment:export") if it has one, else the stage's. */
+static const stage_cost *cost_of(const char *method, const char *stage, int fidelity)
+{
+    char key[96];
+    const char *suffix = fidelity && !strcmp(stage, "export") ? "+fidelity" : "";
+    snprintf(key, sizeof key, "%s:%s%s", method, stage, suffix);
+    const stage_cost *c = find_cost(key);
+    if (!c) {
+        snprintf(key, sizeof key, "%s%s", stage, suffix);
+        c = find_cost(key);
+    }
+    return c;
 }
 
 /* Measured speed-up of the whole pipeline from 1 to 2 threads is 1.2-1.4 (docs/benchmarks.md
@@ -61,36 +87,26 @@ static double thread_factor(int threads)
  * fidelity off (plan_calibrate.py); a from the bundled scans (thumbnails, pages). */
 static const double work_mb[2] = {1, 760}, published_mb[2] = {1.4, 325};
 
-struct sl_engine_plan {
+typedef struct plan_state {
     FILE *out;
     sl_json *json;
-    int threads;
+    sl_engine_facts facts;
     uint64_t items, errors;
     double total_seconds, peak_mb, work_mb, published_mb;
-};
+} plan_state;
 
-static int effective_threads(const sl_engine *e)
+static void plan_item(void *ctx, const char *rel, const char *path, const char *unreadable)
 {
-    if (e->threads > 0)
-        return e->threads;
-    long n = sysconf(_SC_NPROCESSORS_ONLN);
-    return n > 0 ? (int)n : 1;
-}
-
-int sl_engine_plan_item(sl_engine *e, const char *rel, const char *unreadable)
-{
-    struct sl_engine_plan *p = e->plan;
-    char full[PATH_MAX];
+    plan_state *p = ctx;
+    const sl_engine_facts *e = &p->facts;
     sl_ply_info info;
     sl_error err;
     sl_error_init(&err);
     int rc = -1;
     if (unreadable)
-        sl_error_set(&err, SL_E_BADINPUT, 0, rel, "%s", unreadable);
-    else if (sl_engine_path(full, sizeof full, "%s/%s", e->input, rel))
-        sl_error_set(&err, SL_E_BADINPUT, 0, rel, "path too long");
+        sl_error_set(&err, SL_E_BADINPUT, 0, path, "%s", unreadable);
     else
-        rc = sl_ply_read_info(full, NULL, &info, &err);
+        rc = sl_ply_read_info(path, NULL, &info, &err);
     p->items++;
     if (rc != 0) {
         char line[1400];
@@ -104,11 +120,11 @@ int sl_engine_plan_item(sl_engine *e, const char *rel, const char *unreadable)
         } else {
             fprintf(p->out, "%-32s cannot be planned: %s\n", rel, line);
         }
-        return 0; /* one bad scan never stops the plan; the exit code says so */
+        return; /* one bad scan never stops the plan; the exit code says so */
     }
     int points = info.declared_faces == 0;
     double n = (double)(points ? info.declared_vertices : info.declared_faces) / 1e6;
-    double tf = thread_factor(p->threads), seconds = 0, peak = 0;
+    double tf = thread_factor(e->threads), seconds = 0, peak = 0;
     int fidelity = sl_config_bool(e->cfg, "export", "fidelity");
     if (p->json) {
         sl_json_object_begin(p->json, NULL);
@@ -120,8 +136,7 @@ int sl_engine_plan_item(sl_engine *e, const char *rel, const char *unreadable)
     }
     for (int s = 0; s < e->stage_count; s++) {
         const char *name = e->stages[s]->name;
-        const stage_cost *c = cost_of(!strcmp(name, "export") && fidelity ? "export+fidelity"
-                                                                            : name);
+        const stage_cost *c = cost_of(e->method, name, fidelity);
         if (!c)
             continue; /* a stage the model has not been fitted for: costs nothing here */
         double t = (c->a + c->b * pow(n, c->e)) * tf, m = c->c + c->d * pow(n, c->f);
@@ -155,30 +170,29 @@ int sl_engine_plan_item(sl_engine *e, const char *rel, const char *unreadable)
     p->published_mb += published;
     if (peak > p->peak_mb)
         p->peak_mb = peak;
-    return 0;
 }
 
-int sl_engine_plan(sl_engine *e, FILE *out, int json, uint64_t *unplanned, sl_error *err)
+int sl_plan_print(sl_engine *engine, FILE *out, int json, uint64_t *unplanned, sl_error *err)
 {
-    struct sl_engine_plan p = {.out = out, .threads = effective_threads(e)};
+    plan_state p = {.out = out};
+    sl_engine_facts_of(engine, &p.facts);
+    const sl_engine_facts *e = &p.facts;
     sl_json j;
     if (json) {
         sl_json_init(&j, 1);
         p.json = &j;
         sl_json_object_begin(&j, NULL);
-        sl_json_string(&j, "method", sl_config_string(e->cfg, "lod", "method"));
-        sl_json_i64(&j, "threads", p.threads);
+        sl_json_string(&j, "method", e->method);
+        sl_json_i64(&j, "threads", e->threads);
         sl_json_i64(&j, "memory_limit_mb", e->memory_limit_mb);
         sl_json_array_begin(&j, "items");
     } else {
         fprintf(out, "method %s, %d threads; per item: peak memory, time, disk\n",
-                sl_config_string(e->cfg, "lod", "method"), p.threads);
+                e->method, e->threads);
         fprintf(out, "%-32s %12s %-9s %9s %9s %9s %9s\n", "item", "count", "of",
                 "peak MB", "time s", "work MB", "publ. MB");
     }
-    e->plan = &p;
-    int rc = sl_engine_walk_input(e, err);
-    e->plan = NULL;
+    int rc = sl_engine_each_item(engine, plan_item, &p, err);
     if (json) {
         sl_json_array_end(&j);
         sl_json_object_begin(&j, "totals");

@@ -1,0 +1,16 @@
+/* `scanlod plan`: a pre-flight estimate per item of a collection (cli/plan.c). */
+#ifndef SCANLOD_CLI_PLAN_H
+#define SCANLOD_CLI_PLAN_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "core/error.h"
+#include "pipeline/engine.h"
+
+/* Per item of the engine's [run] input: the expected peak memory, time and disk from its
+ * PLY header and the config, as a table or JSON on `out`; nothing run or written.
+ * `unplanned`: the items whose header could not be read (each said with its cause). */
+int sl_plan_print(sl_engine *e, FILE *out, int json, uint64_t *unplanned, sl_error *err);
+
+#endif
