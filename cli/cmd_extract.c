@@ -20,6 +20,7 @@
 #include "core/error.h"
 #include "runtime/lod_io.h"
 #include "runtime/octree_io.h"
+#include "geometry/morph_refine.h"
 #include "geometry/morph_target.h"
 #include "stages/export/export.h"
 
@@ -42,8 +43,10 @@ static const char usage[] =
     "as its size lets it (the cost of the work itself, without a cold start).\n"
     "--morph-to M morphs the level towards the largest level within M triangles, which\n"
     "must be coarser (docs/morphing.md): each vertex goes to its closest point on that\n"
-    "level. A .glb gets the morph target (weight 0: the level, 1: on the coarser level);\n"
-    "a .ply or .obj is the mesh at weight W (--morph-weight, in [0, 1], default 1).\n";
+    "level, and the level is cut along that level's edges so that its surface, not only\n"
+    "its vertices, lies on it at weight 1. A .glb gets the morph target (weight 0: the\n"
+    "level's surface, 1: on the coarser level); a .ply or .obj is the mesh at weight W\n"
+    "(--morph-weight, in [0, 1], default 1; 0 writes the level itself).\n";
 
 typedef struct request {
     const char *input, *output;
@@ -340,6 +343,39 @@ static int time_warm(sl_lod_model *m, uint32_t k, long repeat, int hot, double *
     return rc;
 }
 
+/* The level cut along `coarser`'s edges (geometry/morph_refine.h) at weight r->weight:
+ * its surface lies on `coarser` at weight 1, not only its vertices. */
+static int write_weighted(const request *r, const sl_lod_mesh *mesh, const sl_lod_mesh *coarser,
+                          const char *extras, double *moved, uint64_t *added, sl_error *err)
+{
+    sl_mesh to = sl_mesh_view(coarser->vertex_count, coarser->positions, NULL, NULL,
+                              coarser->triangle_count, coarser->indices);
+    sl_mesh level = sl_mesh_view(mesh->vertex_count, mesh->positions, NULL, NULL,
+                                 mesh->triangle_count, mesh->indices);
+    sl_morph_refined m;
+    int rc = sl_morph_refine(&to, &level, &m, err);
+    if (rc)
+        return rc;
+    size_t n = (size_t)(m.vertex_count ? m.vertex_count : 1);
+    float *nrm = mesh->normals ? malloc(n * 12) : NULL;
+    uint8_t *col = mesh->colors ? malloc(n * 4) : NULL;
+    if ((mesh->normals && !nrm) || (mesh->colors && !col)) {
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, r->input, "out of memory");
+    } else {
+        if (nrm)
+            sl_morph_refined_normals(&m, mesh->normals, nrm);
+        if (col)
+            sl_morph_refined_interpolate_rgba(&m, mesh->colors, col);
+        sl_morph_blend(m.positions, m.targets, m.vertex_count, r->weight, m.positions);
+        sl_lod_mesh at = {m.vertex_count, m.triangle_count, m.positions, nrm, col, m.triangles};
+        rc = sl_export_write_mesh(r->output, &at, extras, NULL, NULL, err);
+    }
+    *moved = m.max_move, *added = m.triangle_count - m.level_triangles;
+    free(nrm), free(col);
+    sl_morph_refined_release(&m);
+    return rc;
+}
+
 /* --morph-to: writes `mesh` morphed towards the largest level within r->morph_to
  * triangles: a .glb with the morph target, another format at weight r->weight. Says what
  * it did in `note`. Returns 0, the usage exit code (printed), or -1 with `err` set. */
@@ -361,30 +397,22 @@ static int write_morph(const request *r, sl_lod_model *m, const sl_lod_mesh *mes
     const char *dot = strrchr(r->output, '.');
     int rc = 0;
     double moved = 0;
+    uint64_t added = 0;
     if (dot && !strcasecmp(dot, ".glb")) {
         sl_export_glb glb = {sl_export_default_config().glb, 1.0, 0, NULL, &coarser};
         rc = sl_export_write_mesh(r->output, mesh, extras, &glb, NULL, err);
         snprintf(note, note_size, ", morph target to expansions %u (%llu triangles)", k,
                  (unsigned long long)coarser.triangle_count);
+    } else if (r->weight == 0) { /* the level itself, byte for byte */
+        rc = sl_export_write_mesh(r->output, mesh, extras, NULL, NULL, err);
+        snprintf(note, note_size, ", at weight 0 of the morph to expansions %u: the level", k);
     } else {
-        size_t n = (size_t)mesh->vertex_count;
-        float *target = malloc((n ? n : 1) * 3 * sizeof *target);
-        sl_mesh to = sl_mesh_view(coarser.vertex_count, coarser.positions, NULL, NULL,
-                                  coarser.triangle_count, coarser.indices);
-        rc = target ? 0 : sl_error_set(err, SL_E_NOMEM, ENOMEM, r->input, "out of memory");
-        if (rc == 0)
-            rc = sl_morph_closest_points(&to, mesh->positions, mesh->vertex_count, target,
-                                         &moved, err);
-        if (rc == 0) {
-            sl_morph_blend(mesh->positions, target, mesh->vertex_count, r->weight, target);
-            sl_lod_mesh at = *mesh;
-            at.positions = target;
-            rc = sl_export_write_mesh(r->output, &at, extras, NULL, NULL, err);
-        }
-        free(target);
+        rc = write_weighted(r, mesh, &coarser, extras, &moved, &added, err);
         snprintf(note, note_size,
-                 ", morphed to expansions %u (%llu triangles) at weight %g (moves up to %.6g)",
-                 k, (unsigned long long)coarser.triangle_count, r->weight, moved);
+                 ", morphed to expansions %u (%llu triangles) at weight %g (moves up to %.6g; "
+                 "%llu triangles added so the surface lies on it at weight 1)",
+                 k, (unsigned long long)coarser.triangle_count, r->weight, moved,
+                 (unsigned long long)added);
     }
     sl_lod_mesh_release(&coarser);
     return rc ? -1 : 0;

@@ -99,6 +99,10 @@ typedef struct sl_glb_stats {
     int morph;                     /* the file has a morph target */
     double morph_error_max;        /* largest distance, decoded vertex + decoded displacement
                                       to the target given (world) */
+    uint64_t morph_added_triangles; /* the export's morph refinement (morph_refine.h): */
+    uint64_t morph_unresolved;      /* triangles it added, those it left spanning, */
+    uint64_t morph_torn_triangles;  /* those it tore, and the widest tear at weight 1 */
+    double morph_tear_max;          /* (metres, glTF frame) */
 } sl_glb_stats;
 
 /* `extras_json`: a JSON object text ("{...}") for mesh.extras, or NULL. `options`: NULL

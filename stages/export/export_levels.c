@@ -145,8 +145,13 @@ static void report_glb(sl_json *r, const sl_export_config *c, const sl_glb_stats
     sl_json_double(r, "normal_error_deg", g->normal_error_max_deg);
     sl_json_double(r, "color_error_srgb_steps", g->color_error_max);
     sl_json_double(r, "max_error", max_error + bound);
-    if (g->morph) /* how far weight 1 lands from the coarser level's surface point */
+    if (g->morph) { /* how far weight 1 lands from the coarser level's surface point */
         sl_json_double(r, "morph_error_world", g->morph_error_max / to_metres);
+        sl_json_u64(r, "morph_added_triangles", g->morph_added_triangles);
+        sl_json_u64(r, "morph_unresolved_triangles", g->morph_unresolved);
+        sl_json_u64(r, "morph_torn_triangles", g->morph_torn_triangles);
+        sl_json_double(r, "morph_tear_world", g->morph_tear_max / to_metres);
+    }
     if (measured)
         sl_json_double(r, "hausdorff", hausdorff + bound / diagonal);
     sl_json_object_end(r);

@@ -16,8 +16,9 @@
 
 /* 5: [export] morph (morph targets in the GLBs). 6: report.json gives each level's
  * connected parts and the largest one's share of the area. 7: the pages name the segment
- * method's levels as such (they said "Clustering levels"). */
-#define EXPORT_STAGE_VERSION 7u
+ * method's levels as such (they said "Clustering levels"). 8: a morphing GLB carries the
+ * level cut along the coarser level's edges, so its weight-1 surface lies on it. */
+#define EXPORT_STAGE_VERSION 8u
 
 static const sl_option export_options[] = {
     {"export", "lod_percents", SL_OPT_LIST, "20,40,60,80,100", 0, 100, NULL,

@@ -4,12 +4,14 @@
  * (metres, +Y up). */
 #include <errno.h>
 #include <meshoptimizer.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
 #include "geometry/glb.h"
 #include "geometry/mesh.h"
+#include "geometry/morph_refine.h"
 #include "geometry/morph_target.h"
 #include "geometry/ply.h"
 #include "geometry/raster.h"
@@ -61,26 +63,11 @@ static sl_export_glb default_glb(void)
     return g;
 }
 
-/* Where each vertex of `m` goes on glb->morph_to (input frame), or NULL with no morph. */
-static int morph_targets(const sl_lod_mesh *m, const sl_export_glb *glb, const char *path,
-                         float **out, sl_error *err)
-{
-    *out = NULL;
-    if (!glb->morph_to)
-        return 0;
-    size_t n = (size_t)m->vertex_count;
-    if (!(*out = malloc((n ? n : 1) * 3 * sizeof **out)))
-        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
-    sl_mesh coarser = sl_export_mesh_view(glb->morph_to);
-    int rc = sl_morph_closest_points(&coarser, m->positions, m->vertex_count, *out, NULL, err);
-    if (rc && !err->file[0])
-        snprintf(err->file, sizeof err->file, "%s", path);
-    return rc;
-}
-
-/* GLB in meshoptimizer's vertex-cache and vertex-fetch order (same surface, same welds). */
-static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
-                     const sl_export_glb *glb, sl_glb_stats *stats, sl_error *err)
+/* GLB in meshoptimizer's vertex-cache and vertex-fetch order (same surface, same welds);
+ * `uv` per vertex or NULL, `morph` (the morph target, input frame) per vertex or NULL. */
+static int write_glb_mesh(const char *path, const sl_lod_mesh *m, const float *uv_in,
+                          const float *morph, const char *extras, const sl_export_glb *glb,
+                          sl_glb_stats *stats, sl_error *err)
 {
     size_t indices = (size_t)m->triangle_count * 3, vertices = (size_t)m->vertex_count;
     uint32_t *order = malloc((indices ? indices : 1) * sizeof *order);
@@ -88,12 +75,11 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
     float *pos = malloc((vertices ? vertices : 1) * 3 * sizeof *pos);
     float *nrm = malloc((vertices ? vertices : 1) * 3 * sizeof *nrm);
     uint8_t *col = m->colors ? malloc((vertices ? vertices : 1) * 4) : NULL;
-    float *uv = glb->texcoords ? malloc((vertices ? vertices : 1) * 2 * sizeof *uv) : NULL;
-    float *morph = NULL, *target = glb->morph_to ? malloc((vertices ? vertices : 1) * 12) : NULL;
-    int rc = morph_targets(m, glb, path, &morph, err);
-    if (rc) {
-    } else if (!order || !remap || !pos || !nrm || (m->colors && !col) ||
-               (glb->texcoords && !uv) || (glb->morph_to && !target)) {
+    float *uv = uv_in ? malloc((vertices ? vertices : 1) * 2 * sizeof *uv) : NULL;
+    float *target = morph ? malloc((vertices ? vertices : 1) * 12) : NULL;
+    int rc = 0;
+    if (!order || !remap || !pos || !nrm || (m->colors && !col) || (uv_in && !uv) ||
+        (morph && !target)) {
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
     } else {
         meshopt_optimizeVertexCache(order, m->indices, indices, vertices);
@@ -104,7 +90,7 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
         if (col)
             meshopt_remapVertexBuffer(col, m->colors, vertices, 4, remap);
         if (uv)
-            meshopt_remapVertexBuffer(uv, glb->texcoords, vertices, 2 * sizeof *uv, remap);
+            meshopt_remapVertexBuffer(uv, uv_in, vertices, 2 * sizeof *uv, remap);
         to_gltf_frame(pos, nrm, used, glb->to_metres, glb->z_up);
         sl_glb_options options = glb->options;
         if (target) {
@@ -116,7 +102,6 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
         g.texcoords = uv;
         rc = sl_glb_write(path, &g, extras, &options, stats, err);
     }
-    free(morph);
     free(target);
     free(order);
     free(remap);
@@ -124,6 +109,45 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
     free(nrm);
     free(col);
     free(uv);
+    return rc;
+}
+
+/* With glb->morph_to: the level cut along the coarser level's edges (morph_refine.h), so
+ * that at weight 1 its surface, not only its vertices, lies on the coarser level; the
+ * level's own vertices keep their bytes, the added ones lie on its triangles. */
+static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
+                     const sl_export_glb *glb, sl_glb_stats *stats, sl_error *err)
+{
+    if (!glb->morph_to)
+        return write_glb_mesh(path, m, glb->texcoords, NULL, extras, glb, stats, err);
+    sl_mesh coarser = sl_export_mesh_view(glb->morph_to), level = sl_export_mesh_view(m);
+    sl_morph_refined r;
+    int rc = sl_morph_refine(&coarser, &level, &r, err);
+    if (rc) {
+        if (!err->file[0])
+            snprintf(err->file, sizeof err->file, "%s", path);
+        return rc;
+    }
+    size_t n = (size_t)(r.vertex_count ? r.vertex_count : 1);
+    float *nrm = malloc(n * 12), *uv = glb->texcoords ? malloc(n * 8) : NULL;
+    uint8_t *col = m->colors ? malloc(n * 4) : NULL;
+    if (!nrm || (glb->texcoords && !uv) || (m->colors && !col)) {
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    } else {
+        sl_morph_refined_normals(&r, m->normals, nrm);
+        if (uv)
+            sl_morph_refined_interpolate(&r, glb->texcoords, 2, uv);
+        if (col)
+            sl_morph_refined_interpolate_rgba(&r, m->colors, col);
+        sl_lod_mesh rm = {r.vertex_count, r.triangle_count, r.positions, nrm, col, r.triangles};
+        rc = write_glb_mesh(path, &rm, uv, r.targets, extras, glb, stats, err);
+        if (rc == 0 && stats)
+            stats->morph_added_triangles = r.triangle_count - r.level_triangles,
+            stats->morph_unresolved = r.unresolved, stats->morph_torn_triangles = r.torn_triangles,
+            stats->morph_tear_max = r.tear_max * glb->to_metres; /* metres, as the rest */
+    }
+    free(nrm), free(uv), free(col);
+    sl_morph_refined_release(&r);
     return rc;
 }
 

@@ -1,5 +1,5 @@
 /* morph_check COARSER.ply MESH.ply
- * morph_check COARSER.ply LEVEL.glb WEIGHT
+ * morph_check COARSER.ply LEVEL.glb WEIGHT [OUT.ply]
  *
  * How far a morphed level lies from the coarser level it morphs to (docs/morphing.md):
  * the largest distance from a vertex of MESH (a PLY written by `scanlod extract
@@ -7,7 +7,10 @@
  * WEIGHT, as a viewer blends it) to the surface of COARSER, exact closest points on its
  * triangles. The GLB is compared in glTF's frame: run with +Y-up inputs in metres.
  * Prints "vertices N max_distance D diagonal G ratio D/G" (G: COARSER's bounding-box
- * diagonal). Exit 0, 2 on a file that cannot be read or a GLB without a morph target.
+ * diagonal). With OUT.ply the decoded GLB at WEIGHT (its triangles too) is written there,
+ * so `scanlod compare COARSER.ply OUT.ply` can measure the *surface* at that weight by area
+ * sampling (b_to_a: the one-sided Hausdorff from it to COARSER).
+ * Exit 0, 2 on a file that cannot be read or a GLB without a morph target.
  */
 #include <math.h>
 #include <stdio.h>
@@ -30,10 +33,29 @@ static double diagonal(const sl_mesh *m)
                 (hi[2] - lo[2]) * (hi[2] - lo[2]));
 }
 
+/* The decoded mesh at the weight asked for, as a float PLY. */
+static int write_weighted(const char *path, const double *points, uint64_t n,
+                          uint32_t *triangles, uint64_t triangle_count)
+{
+    float *p = malloc(12 * (n ? n : 1));
+    if (!p)
+        return 1;
+    for (uint64_t i = 0; i < 3 * n; i++)
+        p[i] = (float)points[i];
+    sl_mesh m = sl_mesh_view(n, p, NULL, NULL, triangle_count, triangles);
+    sl_error err;
+    sl_error_init(&err);
+    int rc = sl_ply_write(path, &m, &err);
+    if (rc)
+        fprintf(stderr, "morph_check: %s: %s\n", path, err.message);
+    free(p);
+    return rc != 0;
+}
+
 int main(int argc, char **argv)
 {
-    if (argc != 3 && argc != 4) {
-        fprintf(stderr, "usage: morph_check COARSER.ply (MESH.ply | LEVEL.glb WEIGHT)\n");
+    if (argc < 3 || argc > 5) {
+        fprintf(stderr, "usage: morph_check COARSER.ply (MESH.ply | LEVEL.glb WEIGHT [OUT.ply])\n");
         return 2;
     }
     MORPH_CHECK_UNUSED(glb_reader_linear_to_srgb);
@@ -72,6 +94,10 @@ int main(int argc, char **argv)
         points = malloc(24 * (n ? n : 1));
         for (uint64_t i = 0; i < 3 * n; i++)
             points[i] = g.positions[i] + w * g.morph[i];
+        if (argc == 5 && write_weighted(argv[4], points, n, g.triangles, g.triangle_count)) {
+            glb_decoded_free(&g);
+            return 2;
+        }
         glb_decoded_free(&g);
     }
     sl_triangle_bvh bvh;

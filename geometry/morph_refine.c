@@ -1,0 +1,474 @@
+/* The finer level cut along the coarser level's edges (morph_refine.h has the method).
+ *
+ * Arithmetic is in double on the float positions and targets as stored, so what is
+ * tested ("lies in a coarser triangle") is what a viewer gets at weight 1. Rounds are
+ * serial and ordered (edges by their vertex pair, triangles by index): the result does
+ * not depend on the thread count.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "geometry/morph_refine_internal.h"
+
+static int nomem(sl_error *err)
+{
+    return sl_error_set(err, SL_E_NOMEM, 0, NULL, "morph refinement: out of memory");
+}
+
+/* The coarser triangles (around the corners of v's hint) v's target lies in. */
+int mr_members(const refine *R, uint32_t v, uint32_t *out)
+{
+    double p[3];
+    mr_target_of(R, v, p);
+    uint32_t h = R->hint[v];
+    int n = 0;
+    for (int k = 0; k < 3; k++) {
+        uint32_t cv = R->c->triangles[3 * (uint64_t)h + k];
+        for (uint32_t i = R->ring_start[cv]; i < R->ring_start[cv + 1]; i++) {
+            uint32_t g = R->ring[i];
+            int seen = 0;
+            for (int j = 0; j < n && !seen; j++)
+                seen = out[j] == g;
+            if (!seen && n < MEMBERS_MAX && mr_lies_in(R, p, g))
+                out[n++] = g;
+        }
+    }
+    return n;
+}
+
+/* Whether the targets of u and w lie in one coarser triangle (and of x too, x != NONE). */
+int mr_share(const refine *R, uint32_t u, uint32_t w, uint32_t x)
+{
+    uint32_t m[MEMBERS_MAX];
+    int n = mr_members(R, u, m);
+    double pw[3], px[3];
+    mr_target_of(R, w, pw);
+    if (x != NONE)
+        mr_target_of(R, x, px);
+    for (int i = 0; i < n; i++)
+        if (mr_lies_in(R, pw, m[i]) && (x == NONE || mr_lies_in(R, px, m[i])))
+            return 1;
+    return 0;
+}
+
+
+static int reserve(refine *R, uint64_t vertices, uint64_t triangles, sl_error *err)
+{
+    sl_morph_refined *r = R->r;
+    if (vertices > UINT32_MAX)
+        return sl_error_set(err, SL_E_LIMIT, 0, NULL,
+                            "morph refinement: more than 2^32 - 1 vertices");
+    if (vertices > R->vcap) {
+        uint64_t cap = vertices + vertices / 2 + 64;
+        float *p = realloc(r->positions, cap * 12), *t = p ? realloc(r->targets, cap * 12) : NULL;
+        if (p)
+            r->positions = p;
+        if (t)
+            r->targets = t;
+        uint32_t *s = t ? realloc(r->source, cap * 12) : NULL;
+        if (s)
+            r->source = s;
+        float *w = s ? realloc(r->weight, cap * 12) : NULL;
+        if (w)
+            r->weight = w;
+        uint32_t *h = w ? realloc(R->hint, cap * 4) : NULL;
+        if (!h)
+            return nomem(err);
+        R->hint = h;
+        R->vcap = cap;
+    }
+    if (triangles > R->tcap) {
+        uint64_t cap = triangles + triangles / 2 + 64;
+        uint32_t *t = realloc(r->triangles, cap * 12);
+        if (!t)
+            return nomem(err);
+        r->triangles = t;
+        R->tcap = cap;
+    }
+    return 0;
+}
+
+/* Adds the vertex sum_k f[k] * (vertex v[k]) of the level's triangle they lie in, with
+ * target `t` (in coarser triangle `hint`). Sources merge by level vertex. */
+uint32_t mr_add_vertex(refine *R, int count, const uint32_t *v, const double *f,
+                           const double t[3], uint32_t hint)
+{
+    sl_morph_refined *r = R->r;
+    uint32_t id[9];
+    double w[9];
+    int n = 0;
+    for (int i = 0; i < count; i++)
+        for (int k = 0; k < 3; k++) {
+            uint32_t s = r->source[3 * (uint64_t)v[i] + k];
+            double x = f[i] * r->weight[3 * (uint64_t)v[i] + k];
+            if (x == 0)
+                continue;
+            int j = 0;
+            while (j < n && id[j] != s)
+                j++;
+            if (j == n)
+                id[n] = s, w[n++] = 0;
+            w[j] += x;
+        }
+    while (n > 3) { /* not on one level triangle (cannot happen): keep the heaviest three */
+        int low = 0;
+        for (int j = 1; j < n; j++)
+            low = w[j] < w[low] ? j : low;
+        id[low] = id[n - 1], w[low] = w[n - 1], n--;
+    }
+    double sum = 0, p[3] = {0, 0, 0};
+    for (int j = 0; j < n; j++)
+        sum += w[j];
+    uint64_t i = r->vertex_count++;
+    for (int j = 0; j < 3; j++) {
+        r->source[3 * i + j] = j < n ? id[j] : id[0];
+        r->weight[3 * i + j] = j < n ? (float)(w[j] / sum) : 0.0f;
+        for (int k = 0; k < 3 && j < n; k++)
+            p[k] += w[j] / sum * R->level->positions[3 * (uint64_t)id[j] + k];
+    }
+    for (int k = 0; k < 3; k++)
+        r->positions[3 * i + k] = (float)p[k], r->targets[3 * i + k] = (float)t[k];
+    R->hint[i] = hint;
+    return (uint32_t)i;
+}
+
+static void emit(refine *R, uint32_t a, uint32_t b, uint32_t c)
+{
+    uint32_t *t = R->r->triangles + 3 * R->r->triangle_count++;
+    t[0] = a, t[1] = b, t[2] = c;
+}
+
+/* Quad a, b, c, d (counter-clockwise) as two triangles: along the diagonal whose ends'
+ * targets share a coarser triangle, else the shorter one at weight 1. */
+static void emit_quad(refine *R, uint32_t a, uint32_t b, uint32_t c, uint32_t d)
+{
+    int ac = mr_share(R, a, c, NONE), bd = mr_share(R, b, d, NONE);
+    if (ac == bd) {
+        double pa[3], pb[3], pc[3], pd[3], l1 = 0, l2 = 0;
+        mr_target_of(R, a, pa), mr_target_of(R, b, pb), mr_target_of(R, c, pc), mr_target_of(R, d, pd);
+        for (int k = 0; k < 3; k++)
+            l1 += (pa[k] - pc[k]) * (pa[k] - pc[k]), l2 += (pb[k] - pd[k]) * (pb[k] - pd[k]);
+        ac = l1 <= l2;
+    }
+    if (ac)
+        emit(R, a, b, c), emit(R, a, c, d);
+    else
+        emit(R, a, b, d), emit(R, b, c, d);
+}
+
+/* Triangle v[0..2] with split vertices s[k] on edge v[k] v[k+1] (NONE: not split). */
+static void emit_split(refine *R, const uint32_t *v, const uint32_t *s)
+{
+    int n = (s[0] != NONE) + (s[1] != NONE) + (s[2] != NONE), r = 0;
+    if (n == 1)
+        r = s[0] != NONE ? 0 : s[1] != NONE ? 1 : 2; /* the split edge first */
+    if (n == 2)
+        r = s[2] == NONE ? 0 : s[0] == NONE ? 1 : 2; /* the unsplit edge last */
+    uint32_t a = v[r], b = v[(r + 1) % 3], c = v[(r + 2) % 3];
+    uint32_t x = s[r], y = s[(r + 1) % 3], z = s[(r + 2) % 3];
+    if (n == 0)
+        emit(R, a, b, c);
+    else if (n == 1)
+        emit(R, a, x, c), emit(R, x, b, c);
+    else if (n == 2)
+        emit(R, x, b, y), emit_quad(R, a, x, y, c);
+    else
+        emit(R, a, x, z), emit(R, x, b, y), emit(R, z, y, c), emit(R, x, y, z);
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+static uint64_t edge_key(uint32_t a, uint32_t b)
+{
+    return a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a;
+}
+
+/* One round: `split_edges` 0 adds a vertex in each triangle that spans a coarser vertex,
+ * 1 splits each failing edge at its first coarser edge. The two alternate: a triangle
+ * around a coarser vertex gets that vertex before its edges are split, or the splits
+ * would close in on the vertex without reaching it. *changed: whether anything was.
+ * *failing_edges: in: the failing edges of the last edge round (UINT64_MAX: none yet);
+ * out: this one's. An edge round with no fewer failing edges than the last makes no
+ * progress (splits chasing a fold of the closest-point map): it splits nothing. */
+static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *changed,
+                      sl_error *err)
+{
+    sl_morph_refined *r = R->r;
+    uint64_t tn = r->triangle_count, nb = 0;
+    uint64_t *bad = malloc((3 * tn + 1) * sizeof *bad);
+    uint32_t *old = malloc((3 * tn + 1) * sizeof *old);
+    if (!bad || !old) {
+        free(bad), free(old);
+        return nomem(err);
+    }
+    memcpy(old, r->triangles, 3 * tn * sizeof *old);
+    for (uint64_t t = 0; split_edges && t < tn; t++)
+        for (int k = 0; k < 3; k++) {
+            uint32_t u = old[3 * t + k], w = old[3 * t + (k + 1) % 3];
+            if (!mr_share(R, u, w, NONE))
+                bad[nb++] = edge_key(u, w);
+        }
+    qsort(bad, nb, sizeof *bad, cmp_u64);
+    uint64_t nu = 0;
+    for (uint64_t i = 0; i < nb; i++)
+        if (nu == 0 || bad[i] != bad[nu - 1])
+            bad[nu++] = bad[i];
+    *changed = 0;
+    if (split_edges && nu >= *failing_edges) {
+        free(bad), free(old);
+        return 0;
+    }
+    if (split_edges)
+        *failing_edges = nu;
+    uint32_t *split = malloc((nu + 1) * sizeof *split);
+    /* at most one vertex per failing edge and per triangle; at most 4 triangles each */
+    int rc = split ? reserve(R, r->vertex_count + nu + tn, 4 * tn, err) : nomem(err);
+    for (uint64_t i = 0; rc == 0 && i < nu; i++)
+        split[i] = mr_split_edge(R, (uint32_t)(bad[i] >> 32), (uint32_t)bad[i]);
+    *changed = 0;
+    for (uint64_t i = 0; rc == 0 && i < nu; i++)
+        *changed |= split[i] != NONE;
+    r->triangle_count = 0;
+    for (uint64_t t = 0; rc == 0 && t < tn; t++) {
+        uint32_t *v = old + 3 * t, s[3];
+        int failing = 0;
+        for (int k = 0; k < 3; k++) {
+            uint64_t key = edge_key(v[k], v[(k + 1) % 3]);
+            uint64_t *at = nu ? bsearch(&key, bad, nu, sizeof *bad, cmp_u64) : NULL;
+            s[k] = at ? split[at - bad] : NONE;
+            failing |= at != NULL;
+        }
+        uint32_t x = split_edges || failing || mr_share(R, v[0], v[1], v[2])
+                         ? NONE : mr_split_triangle(R, v[0], v[1], v[2]);
+        if (x != NONE) {
+            emit(R, v[0], v[1], x), emit(R, v[1], v[2], x), emit(R, v[2], v[0], x);
+            *changed = 1;
+        } else {
+            emit_split(R, v, s);
+        }
+    }
+    free(bad), free(old), free(split);
+    return rc;
+}
+
+/* The coarser triangle holding the most of v's three targets (the first such), and a
+ * bit per corner whose target it holds. */
+static uint32_t best_face(const refine *R, const uint32_t *v, int *held)
+{
+    uint32_t best = R->hint[v[0]];
+    int most = -1;
+    *held = 0;
+    for (int c = 0; c < 3; c++) {
+        uint32_t m[MEMBERS_MAX];
+        int n = mr_members(R, v[c], m);
+        for (int i = 0; i < n; i++) {
+            int bits = 0, count = 0;
+            for (int k = 0; k < 3; k++) {
+                double p[3];
+                mr_target_of(R, v[k], p);
+                if (mr_lies_in(R, p, m[i]))
+                    bits |= 1 << k, count++;
+            }
+            if (count > most)
+                most = count, best = m[i], *held = bits;
+        }
+    }
+    return best;
+}
+
+/* Tears what no split mends (targets on pieces of the coarser surface that do not meet:
+ * a fold, a thin part, another component): in each such triangle, the corners whose
+ * targets are not in the coarser triangle holding most of them get a copy (same bytes at
+ * weight 0) whose target is the closest point of that coarser triangle; triangles that
+ * tear the same vertex towards the same coarser triangle share the copy. */
+static int tear(refine *R, sl_error *err)
+{
+    sl_morph_refined *r = R->r;
+    uint64_t nk = 0, tn = r->triangle_count;
+    uint64_t *keys = malloc((3 * tn + 1) * sizeof *keys);
+    if (!keys)
+        return nomem(err);
+    for (uint64_t t = 0; t < tn; t++) {
+        const uint32_t *v = r->triangles + 3 * t;
+        int held = 7;
+        uint32_t g = mr_share(R, v[0], v[1], v[2]) ? NONE : best_face(R, v, &held);
+        for (int k = 0; k < 3; k++)
+            if (!(held >> k & 1))
+                keys[nk++] = (uint64_t)v[k] << 32 | g;
+    }
+    qsort(keys, nk, sizeof *keys, cmp_u64);
+    uint64_t nu = 0;
+    for (uint64_t i = 0; i < nk; i++)
+        if (nu == 0 || keys[i] != keys[nu - 1])
+            keys[nu++] = keys[i];
+    uint32_t *copy = malloc((nu + 1) * sizeof *copy);
+    int rc = copy ? reserve(R, r->vertex_count + nu, tn, err) : nomem(err);
+    for (uint64_t i = 0; rc == 0 && i < nu; i++) {
+        uint32_t v = (uint32_t)(keys[i] >> 32), g = (uint32_t)keys[i];
+        double p[3], a[3], b[3], c[3], t[3], f = 1;
+        mr_target_of(R, v, p);
+        mr_corner(R->c, g, 0, a), mr_corner(R->c, g, 1, b), mr_corner(R->c, g, 2, c);
+        double d2 = sl_closest_point_triangle(p, a, b, c, t);
+        copy[i] = mr_add_vertex(R, 1, &v, &f, t, g);
+        r->tear_max = fmax(r->tear_max, sqrt(d2));
+    }
+    for (uint64_t t = 0; rc == 0 && t < tn; t++) {
+        uint32_t *v = r->triangles + 3 * t;
+        int held = 7;
+        uint32_t g = mr_share(R, v[0], v[1], v[2]) ? NONE : best_face(R, v, &held);
+        uint32_t was[3] = {v[0], v[1], v[2]};
+        for (int k = 0; k < 3; k++)
+            if (!(held >> k & 1)) {
+                uint64_t key = (uint64_t)was[k] << 32 | g;
+                v[k] = copy[(uint64_t *)bsearch(&key, keys, nu, sizeof *keys, cmp_u64) - keys];
+            }
+        r->torn_triangles += held != 7;
+    }
+    r->torn_vertices = rc == 0 ? nu : 0;
+    free(keys), free(copy);
+    return rc;
+}
+
+/* Coarser vertex -> triangle lists, and the BVH. */
+static int build_coarse(refine *R, sl_error *err)
+{
+    const sl_mesh *c = R->c;
+    R->ring_start = calloc(c->vertex_count + 2, sizeof *R->ring_start);
+    R->ring = malloc((3 * c->triangle_count + 1) * sizeof *R->ring);
+    R->dist = malloc((c->vertex_count + 1) * sizeof *R->dist);
+    R->prev = malloc((c->vertex_count + 1) * sizeof *R->prev);
+    R->stamp = calloc(c->vertex_count + 1, sizeof *R->stamp);
+    if (!R->ring_start || !R->ring || !R->dist || !R->prev || !R->stamp)
+        return nomem(err);
+    for (uint64_t i = 0; i < 3 * c->triangle_count; i++)
+        R->ring_start[c->triangles[i] + 2]++;
+    for (uint64_t v = 0; v < c->vertex_count; v++)
+        R->ring_start[v + 2] += R->ring_start[v + 1];
+    for (uint64_t i = 0; i < 3 * c->triangle_count; i++)
+        R->ring[R->ring_start[c->triangles[i] + 1]++] = (uint32_t)(i / 3);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (uint64_t i = 0; i < c->vertex_count; i++)
+        for (int k = 0; k < 3; k++)
+            lo[k] = fmin(lo[k], c->positions[3 * i + k]), hi[k] = fmax(hi[k], c->positions[3 * i + k]);
+    double diag2 = 0;
+    for (int k = 0; k < 3; k++)
+        diag2 += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    R->eps2 = SL_MORPH_REFINE_EPS * SL_MORPH_REFINE_EPS * diag2;
+    return sl_triangle_bvh_build(&R->bvh, c, err);
+}
+
+/* The level's vertices, their closest points and the triangles they start in. */
+static int start(refine *R, sl_error *err)
+{
+    const sl_mesh *l = R->level;
+    sl_morph_refined *r = R->r;
+    int rc = reserve(R, l->vertex_count, l->triangle_count, err);
+    if (rc)
+        return rc;
+    memcpy(r->positions, l->positions, 12 * l->vertex_count);
+    memcpy(r->triangles, l->triangles, 12 * l->triangle_count);
+    r->vertex_count = r->level_vertices = l->vertex_count;
+    r->triangle_count = r->level_triangles = l->triangle_count;
+    int64_t chunks = (int64_t)((l->vertex_count + 1023) / 1024);
+    double worst2 = 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(max : worst2)
+    for (int64_t ch = 0; ch < chunks; ch++) {
+        uint32_t hint = NONE;
+        for (uint64_t i = (uint64_t)ch * 1024; i < (uint64_t)(ch + 1) * 1024 && i < l->vertex_count; i++) {
+            double q[3] = {l->positions[3 * i], l->positions[3 * i + 1], l->positions[3 * i + 2]};
+            sl_closest hit;
+            sl_triangle_bvh_closest(&R->bvh, q, hint, &hit);
+            hint = hit.triangle;
+            for (int k = 0; k < 3; k++)
+                r->targets[3 * i + k] = (float)hit.point[k];
+            R->hint[i] = R->bvh.source[hit.triangle];
+            r->source[3 * i] = r->source[3 * i + 1] = r->source[3 * i + 2] = (uint32_t)i;
+            r->weight[3 * i] = 1, r->weight[3 * i + 1] = r->weight[3 * i + 2] = 0;
+            worst2 = hit.distance_sq > worst2 ? hit.distance_sq : worst2;
+        }
+    }
+    r->max_move = sqrt(worst2);
+    return 0;
+}
+
+int sl_morph_refine(const sl_mesh *coarser, const sl_mesh *level, sl_morph_refined *out,
+                    sl_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (coarser->triangle_count == 0)
+        return sl_error_set(err, SL_E_BADINPUT, 0, NULL,
+                            "morph target: the coarser level has no triangles");
+    refine R;
+    memset(&R, 0, sizeof R);
+    R.c = coarser, R.level = level, R.r = out;
+    int rc = build_coarse(&R, err);
+    if (rc == 0)
+        rc = start(&R, err);
+    int idle = 0; /* rounds in a row that changed nothing */
+    uint64_t failing = UINT64_MAX;
+    for (int round = 0; rc == 0 && idle < 2 && round < SL_MORPH_REFINE_ROUNDS &&
+                        out->triangle_count <= SL_MORPH_REFINE_GROWTH * level->triangle_count;
+         round++) {
+        int changed = 0;
+        rc = round_once(&R, round % 2, &failing, &changed, err);
+        idle = changed ? 0 : idle + 1;
+    }
+    if (rc == 0)
+        rc = tear(&R, err);
+    for (uint64_t t = 0; rc == 0 && t < out->triangle_count; t++) {
+        const uint32_t *v = out->triangles + 3 * t;
+        out->unresolved += !mr_share(&R, v[0], v[1], v[2]);
+    }
+    sl_triangle_bvh_release(&R.bvh);
+    free(R.ring_start), free(R.ring), free(R.hint);
+    free(R.dist), free(R.prev), free(R.stamp), free(R.heap_v), free(R.heap_k);
+    if (rc)
+        sl_morph_refined_release(out);
+    return rc;
+}
+
+void sl_morph_refined_release(sl_morph_refined *r)
+{
+    free(r->positions), free(r->targets), free(r->triangles), free(r->source), free(r->weight);
+    memset(r, 0, sizeof *r);
+}
+
+void sl_morph_refined_interpolate(const sl_morph_refined *r, const float *level_attr, int comps,
+                                  float *out)
+{
+    for (uint64_t i = 0; i < r->vertex_count; i++)
+        for (int k = 0; k < comps; k++) {
+            double s = 0;
+            for (int j = 0; j < 3; j++)
+                s += (double)r->weight[3 * i + j] * level_attr[(uint64_t)comps * r->source[3 * i + j] + k];
+            out[(uint64_t)comps * i + k] = (float)s;
+        }
+}
+
+void sl_morph_refined_normals(const sl_morph_refined *r, const float *level_normals, float *out)
+{
+    sl_morph_refined_interpolate(r, level_normals, 3, out);
+    for (uint64_t i = r->level_vertices; i < r->vertex_count; i++) {
+        float *q = out + 3 * i;
+        double l = sqrt((double)q[0] * q[0] + (double)q[1] * q[1] + (double)q[2] * q[2]);
+        for (int k = 0; l > 0 && k < 3; k++)
+            q[k] = (float)(q[k] / l);
+    }
+}
+
+void sl_morph_refined_interpolate_rgba(const sl_morph_refined *r, const uint8_t *level_rgba,
+                                       uint8_t *out)
+{
+    for (uint64_t i = 0; i < r->vertex_count; i++)
+        for (int k = 0; k < 4; k++) {
+            double s = 0;
+            for (int j = 0; j < 3; j++)
+                s += (double)r->weight[3 * i + j] * level_rgba[4 * (uint64_t)r->source[3 * i + j] + k];
+            out[4 * i + k] = (uint8_t)(s < 0 ? 0 : s > 255 ? 255 : lrint(s));
+        }
+}

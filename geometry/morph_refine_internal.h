@@ -1,0 +1,63 @@
+/* Internals of the morph refinement (morph_refine.h): the state its rounds share, and
+ * the steps that place new vertices (morph_refine_step.c). */
+#ifndef SCANLOD_GEOMETRY_MORPH_REFINE_INTERNAL_H
+#define SCANLOD_GEOMETRY_MORPH_REFINE_INTERNAL_H
+
+#include <stdint.h>
+
+#include "geometry/morph_refine.h"
+#include "geometry/triangle_bvh.h"
+
+#define NONE UINT32_MAX
+#define MEMBERS_MAX 128 /* coarser triangles a target is tested against */
+
+typedef struct refine {
+    const sl_mesh *c, *level;
+    sl_triangle_bvh bvh;
+    uint32_t *ring_start, *ring; /* coarser vertex -> its triangles */
+    double eps2;                 /* "lies in": squared distance bound, world^2 */
+    sl_morph_refined *r;
+    uint32_t *hint;              /* per vertex: a coarser triangle its target lies in */
+    uint64_t vcap, tcap;
+    double *dist;                /* path search, per coarser vertex: length, */
+    uint32_t *prev, *stamp;      /* previous vertex, search it belongs to */
+    uint32_t stamp_now;
+    uint32_t *heap_v;
+    double *heap_k;
+    uint64_t heap_n, heap_cap;
+} refine;
+
+static inline void mr_corner(const sl_mesh *m, uint32_t t, int k, double out[3])
+{
+    const float *p = m->positions + 3 * (uint64_t)m->triangles[3 * (uint64_t)t + k];
+    out[0] = p[0], out[1] = p[1], out[2] = p[2];
+}
+
+static inline void mr_target_of(const refine *R, uint32_t v, double out[3])
+{
+    const float *t = R->r->targets + 3 * (uint64_t)v;
+    out[0] = t[0], out[1] = t[1], out[2] = t[2];
+}
+
+static inline int mr_lies_in(const refine *R, const double p[3], uint32_t g)
+{
+    double a[3], b[3], c[3], q[3];
+    mr_corner(R->c, g, 0, a), mr_corner(R->c, g, 1, b), mr_corner(R->c, g, 2, c);
+    return sl_closest_point_triangle(p, a, b, c, q) <= R->eps2;
+}
+
+/* The coarser triangles (around the corners of v's hint) v's target lies in, into out
+ * (MEMBERS_MAX); returns how many. */
+int mr_members(const refine *R, uint32_t v, uint32_t *out);
+/* Whether the targets of u and w lie in one coarser triangle (and of x too, x != NONE). */
+int mr_share(const refine *R, uint32_t u, uint32_t w, uint32_t x);
+/* Adds the vertex sum_k f[k] * (vertex v[k]) with target t in coarser triangle `hint`
+ * (room reserved by the caller); returns its index. */
+uint32_t mr_add_vertex(refine *R, int count, const uint32_t *v, const double *f,
+                       const double t[3], uint32_t hint);
+/* The vertex splitting failing edge (u, w), or NONE (morph_refine_step.c). */
+uint32_t mr_split_edge(refine *R, uint32_t u, uint32_t w);
+/* A vertex inside triangle (a, b, c) targeting the coarser vertex it spans, or NONE. */
+uint32_t mr_split_triangle(refine *R, uint32_t a, uint32_t b, uint32_t c);
+
+#endif

@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# The weight-1 *surface* of a morphing level lies on the coarser level (issue 13,
+# docs/morphing.md "The surface at weight 1"), for every LOD method: octree (bunny,
+# bun_zipper_res3: lod100 -> lod60 -> lod30), cluster (cow: lod100 -> lod40 -> thumb) and
+# segment (fandisk: lod100 -> lod40 -> thumb), float GLBs with [export] morph = true:
+#   - the GLB decoded by the tests' own reader at weight 1 (triangles and all, morph_check
+#     OUT.ply) is measured against the coarser level's PLY by `scanlod compare`: the
+#     area-sampled one-sided Hausdorff from it to the coarser level (b_to_a) is at most
+#     1e-5 of the diagonal (vertices alone are not enough: a triangle whose corners land
+#     on different coarser faces is a chord, 3 to 4 % of the diagonal without the cut);
+#   - at weight 0 the GLB's surface is the level's: symmetric Hausdorff to the level's PLY
+#     at most 1e-6 of the diagonal;
+# and `scanlod extract --morph-to` at weight 1 (PLY): the same bound on the octree model.
+source "$(dirname "$0")/../lib.sh"
+mc="${SCANLOD_BUILD_DIR:?}/tests/morph_check"
+samples=200000
+
+# b_to_a / symmetric Hausdorff (fraction of A's diagonal) of `scanlod compare A B`.
+hausdorff() { # hausdorff A B b_to_a|symmetric
+  "$SCANLOD" compare "$1" "$2" --samples "$samples" --json | python3 -c "
+import json, sys; r = json.load(sys.stdin)
+print(r['b_to_a']['hausdorff'] if '$3' == 'b_to_a' else r['hausdorff'])"
+}
+within() { python3 -c "import sys; sys.exit(0 if '$1' and float('$1') <= float('$2') else 1)"; }
+
+# check_pairs NAME DIR "FINE:COARSER ...": the checks above on one run's published levels.
+check_pairs() {
+  local name=$1 dir=$2 pair fine coarse h1 h0
+  for pair in $3; do
+    IFS=: read -r fine coarse <<<"$pair"
+    "$mc" "$dir/$coarse.ply" "$dir/$fine.glb" 1 "$TMP/$name-$fine-w1.ply" >/dev/null
+    "$mc" "$dir/$fine.ply" "$dir/$fine.glb" 0 "$TMP/$name-$fine-w0.ply" >/dev/null
+    h1=$(hausdorff "$dir/$coarse.ply" "$TMP/$name-$fine-w1.ply" b_to_a)
+    h0=$(hausdorff "$dir/$fine.ply" "$TMP/$name-$fine-w0.ply" symmetric)
+    added=$(python3 -c "
+import json; r = json.load(open('$dir/report.json'))
+g = [l for l in r['stages']['export']['levels'] if l['name'] == '$fine'][0]['glb']
+print(g['morph_added_triangles'], 'added,', g['morph_unresolved_triangles'], 'unresolved')")
+    echo "$name $fine -> $coarse: weight 1 one-sided Hausdorff $h1, weight 0 $h0 ($added)"
+    check "$name $fine: weight-1 surface on $coarse (b_to_a $h1 <= 1e-5 of the diagonal)" within "$h1" 1e-5
+    check "$name $fine: weight-0 surface is the level (symmetric $h0 <= 1e-6)" within "$h0" 1e-6
+  done
+}
+
+export_lines=("formats = ply,glb" "thumbnail_size = 0" "fidelity = false" "compression = none"
+              "quantize = false" "morph = true")
+# Octree: the bunny's published levels, and extract on its model.
+mkdir -p "$TMP/in-octree"
+cp "$SCANS/bun_zipper_res3.ply" "$TMP/in-octree/"
+write_config "$TMP/octree.ini" "$TMP/in-octree" "$TMP/work-octree" "$TMP/out-octree" "[export]" \
+  "lod_percents = 30,60,100" "budgets =" "${export_lines[@]}"
+run_scanlod run "$TMP/octree.ini" -q
+check "octree: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
+check_pairs octree "$TMP/out-octree/bun_zipper_res3.ply" "lod100:lod60 lod60:lod30"
+
+model="$TMP/out-octree/bun_zipper_res3.ply/model.slod"
+run_scanlod extract "$model" --triangles 1500 -o "$TMP/coarse.ply"
+check "extract the coarser cut: exit 0 ($err)" [ "$rc" -eq 0 ]
+run_scanlod extract "$model" --triangles 3000 --morph-to 1500 -o "$TMP/w1.ply"
+check "extract weight 1: exit 0 ($err)" [ "$rc" -eq 0 ]
+h=$(hausdorff "$TMP/coarse.ply" "$TMP/w1.ply" b_to_a)
+echo "extract 3000 -> 1500 at weight 1: one-sided Hausdorff $h ($out)"
+check "extract: weight-1 surface on the coarser cut (b_to_a $h <= 1e-5)" within "$h" 1e-5
+
+# Cluster and segment: their stages' level lists.
+for method in cluster:cow.ply segment:fandisk.ply; do
+  IFS=: read -r name item <<<"$method"
+  mkdir -p "$TMP/in-$name"
+  cp "$SCANS/$item" "$TMP/in-$name/"
+  write_config "$TMP/$name.ini" "$TMP/in-$name" "$TMP/work-$name" "$TMP/out-$name" "[export]" \
+    "lod_percents = 40,100" "budgets = thumb:1000" "${export_lines[@]}"
+  run_scanlod run "$TMP/$name.ini" -q -s lod.method="$name"
+  check "$name: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
+  check_pairs "$name" "$TMP/out-$name/$item" "lod100:lod40 lod40:thumb"
+done
+finish
