@@ -6,18 +6,7 @@
 #include <string.h>
 
 #include "geometry/morph_refine_internal.h"
-
-static double dot(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
+#include "geometry/vec3.h"
 
 static void face_normal(const refine *R, uint32_t g, double n[3])
 {
@@ -26,8 +15,8 @@ static void face_normal(const refine *R, uint32_t g, double n[3])
         mr_corner(R->c, g, k, q[k]);
     for (int k = 0; k < 3; k++)
         e1[k] = q[1][k] - q[0][k], e2[k] = q[2][k] - q[0][k];
-    cross(e1, e2, n);
-    double len = sqrt(dot(n, n));
+    sl_cross3(e1, e2, n);
+    double len = sqrt(sl_dot3(n, n));
     for (int k = 0; k < 3; k++)
         n[k] = len > 0 ? n[k] / len : 0;
 }
@@ -54,7 +43,7 @@ static double chord_exit(const refine *R, uint32_t g, const double tu[3], const 
 {
     double n[3], exit = INFINITY;
     face_normal(R, g, n);
-    if (!(dot(n, n) > 0))
+    if (!(sl_dot3(n, n) > 0))
         return 0;
     const uint32_t *t = R->c->triangles + 3 * (uint64_t)g;
     for (int k = 0; k < 3; k++) {
@@ -66,12 +55,12 @@ static double chord_exit(const refine *R, uint32_t g, const double tu[3], const 
             face_normal(R, h, nh);
         for (int j = 0; j < 3; j++)
             pq[j] = q[j] - p[j], rel[j] = p[j] - tu[j], m[j] = n[j] + nh[j];
-        if (dot(m, n) <= 0.05) /* folded flat onto itself: g's own normal */
+        if (sl_dot3(m, n) <= 0.05) /* folded flat onto itself: g's own normal */
             memcpy(m, n, sizeof m);
-        cross(pq, m, o); /* outward for a counter-clockwise triangle */
-        double den = dot(d, o);
-        if (den > 0 && dot(rel, o) / den < exit)
-            exit = dot(rel, o) / den, *edge = k;
+        sl_cross3(pq, m, o); /* outward for a counter-clockwise triangle */
+        double den = sl_dot3(d, o);
+        if (den > 0 && sl_dot3(rel, o) / den < exit)
+            exit = sl_dot3(rel, o) / den, *edge = k;
     }
     return isfinite(exit) && exit > 0 ? exit : 0;
 }
@@ -94,7 +83,7 @@ static double chord_step(const refine *R, uint32_t u, uint32_t w, uint32_t *g, i
             best = l, *g = m[i], *e = edge;
     }
     /* a step must leave both ends by more than "lies in": no splits closing in on one */
-    double len = sqrt(dot(d, d)), eps = sqrt(R->eps2);
+    double len = sqrt(sl_dot3(d, d)), eps = sqrt(R->eps2);
     return best * len > eps && (1 - best) * len > eps ? best : 0;
 }
 
@@ -266,13 +255,13 @@ uint32_t mr_split_triangle(refine *R, uint32_t a, uint32_t b, uint32_t c)
             double e1[3], e2[3], n[3], sum = 0;
             for (int j = 0; j < 3; j++)
                 e1[j] = t[1][j] - t[0][j], e2[j] = t[2][j] - t[0][j];
-            cross(e1, e2, n);
+            sl_cross3(e1, e2, n);
             for (int j = 0; j < 3; j++) { /* barycentrics from sub-triangle areas */
                 double u[3], w[3], s[3];
                 for (int h = 0; h < 3; h++)
                     u[h] = t[(j + 1) % 3][h] - p[h], w[h] = t[(j + 2) % 3][h] - p[h];
-                cross(u, w, s);
-                l[j] = dot(s, n);
+                sl_cross3(u, w, s);
+                l[j] = sl_dot3(s, n);
                 sum += l[j];
             }
             int inside = sum > 0;

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "geometry/predicates.h"
+#include "geometry/vec3.h"
 
 static void point(const float *positions, const uint32_t *index, uint64_t k, double p[3])
 {
@@ -18,21 +19,9 @@ static void point(const float *positions, const uint32_t *index, uint64_t k, dou
         p[a] = positions[3 * i + a];
 }
 
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 static void normalize3(double a[3])
 {
-    double len = sqrt(dot3(a, a));
+    double len = sqrt(sl_dot3(a, a));
     for (int k = 0; k < 3; k++)
         a[k] /= len;
 }
@@ -149,11 +138,11 @@ static void finish_plane(sl_plane *out)
             least = a;
     double axis[3] = {0, 0, 0};
     axis[least] = 1;
-    cross3(n, axis, out->u);
+    sl_cross3(n, axis, out->u);
     normalize3(out->u);
-    cross3(n, out->u, out->v);
+    sl_cross3(n, out->u, out->v);
     normalize3(out->v);
-    out->offset = dot3(n, out->centroid);
+    out->offset = sl_dot3(n, out->centroid);
 }
 
 static int fit_z_form(const double cov[3][3], sl_plane *out, sl_error *err)
@@ -198,7 +187,7 @@ int sl_plane_fit(const float *positions, const uint32_t *index, uint64_t count,
         point(positions, index, k, p);
         for (int a = 0; a < 3; a++)
             p[a] -= out->centroid[a];
-        double d = dot3(out->normal, p), d2 = d * d;
+        double d = sl_dot3(out->normal, p), d2 = d * d;
         total += w, sum += w * d2;
         if (w > 0 && d2 > out->max_dist2)
             out->max_dist2 = d2;
@@ -209,7 +198,7 @@ int sl_plane_fit(const float *positions, const uint32_t *index, uint64_t count,
 
 void sl_plane_orient(sl_plane *plane, const double reference[3])
 {
-    if (dot3(plane->normal, reference) >= 0)
+    if (sl_dot3(plane->normal, reference) >= 0)
         return;
     for (int a = 0; a < 3; a++) {
         plane->normal[a] = -plane->normal[a];
@@ -226,8 +215,8 @@ void sl_plane_project(const sl_plane *plane, const float *positions, const uint3
         point(positions, index, k, p);
         for (int a = 0; a < 3; a++)
             p[a] -= plane->centroid[a];
-        uv[2 * k] = dot3(p, plane->u);
-        uv[2 * k + 1] = dot3(p, plane->v);
+        uv[2 * k] = sl_dot3(p, plane->u);
+        uv[2 * k + 1] = sl_dot3(p, plane->v);
     }
 }
 
