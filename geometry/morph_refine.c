@@ -1,9 +1,10 @@
 /* The finer level cut along the coarser level's edges (morph_refine.h has the method).
  *
  * Arithmetic is in double on the float positions and targets as stored, so what is
- * tested ("lies in a coarser triangle") is what a viewer gets at weight 1. Rounds are
- * serial and ordered (edges by their vertex pair, triangles by index): the result does
- * not depend on the thread count.
+ * tested ("lies in a coarser triangle") is what a viewer gets at weight 1. A round's
+ * tests run in parallel and are used in order; its splits are serial and ordered (edges
+ * by their vertex pair, triangles by index): the result does not depend on the thread
+ * count.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -16,12 +17,9 @@ static int nomem(sl_error *err)
     return sl_error_set(err, SL_E_NOMEM, 0, NULL, "morph refinement: out of memory");
 }
 
-/* The coarser triangles (around the corners of v's hint) v's target lies in. */
-int mr_members(const refine *R, uint32_t v, uint32_t *out)
+/* The coarser triangles (around the corners of coarser triangle h) point p lies in. */
+static int members_of(const refine *R, const double p[3], uint32_t h, uint32_t *out)
 {
-    double p[3];
-    mr_target_of(R, v, p);
-    uint32_t h = R->hint[v];
     int n = 0;
     for (int k = 0; k < 3; k++) {
         uint32_t cv = R->c->triangles[3 * (uint64_t)h + k];
@@ -35,6 +33,22 @@ int mr_members(const refine *R, uint32_t v, uint32_t *out)
         }
     }
     return n;
+}
+
+/* Keeps vertex v's members (m, n) for mr_members; 0, or -1 out of memory. */
+static int members_keep(refine *R, uint32_t v, const uint32_t *m, int n)
+{
+    if (R->members_n + (uint64_t)n > R->members_cap) {
+        uint64_t cap = 2 * R->members_cap + (uint64_t)n + 1024;
+        uint32_t *p = realloc(R->members_pool, cap * sizeof *p);
+        if (!p)
+            return -1;
+        R->members_pool = p, R->members_cap = cap;
+    }
+    memcpy(R->members_pool + R->members_n, m, (size_t)n * sizeof *m);
+    R->members_at[v] = R->members_n << 8 | (uint64_t)n;
+    R->members_n += (uint64_t)n;
+    return 0;
 }
 
 /* Whether the targets of u and w lie in one coarser triangle (and of x too, x != NONE). */
@@ -73,9 +87,12 @@ static int reserve(refine *R, uint64_t vertices, uint64_t triangles, sl_error *e
         if (w)
             r->weight = w;
         uint32_t *h = w ? realloc(R->hint, cap * 4) : NULL;
-        if (!h)
+        if (h)
+            R->hint = h;
+        uint64_t *at = h ? realloc(R->members_at, cap * sizeof *at) : NULL;
+        if (!at)
             return nomem(err);
-        R->hint = h;
+        R->members_at = at;
         R->vcap = cap;
     }
     if (triangles > R->tcap) {
@@ -130,6 +147,10 @@ uint32_t mr_add_vertex(refine *R, int count, const uint32_t *v, const double *f,
     for (int k = 0; k < 3; k++)
         r->positions[3 * i + k] = (float)p[k], r->targets[3 * i + k] = (float)t[k];
     R->hint[i] = hint;
+    uint32_t m[MEMBERS_MAX];
+    double q[3] = {r->targets[3 * i], r->targets[3 * i + 1], r->targets[3 * i + 2]};
+    if (members_keep(R, (uint32_t)i, m, members_of(R, q, hint, m)))
+        R->failed = 1, R->members_at[i] = 0; /* reported by the round that made it */
     return (uint32_t)i;
 }
 
@@ -207,12 +228,28 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
         return nomem(err);
     }
     memcpy(old, r->triangles, 3 * tn * sizeof *old);
+    /* The tests read only the vertices there are (in parallel); what they find is used
+     * in triangle order. Per triangle: bit k, edge k fails; bit 3, its targets share a
+     * coarser triangle. */
+    uint8_t *test = malloc(tn + 1);
+    if (!test) {
+        free(bad), free(old);
+        return nomem(err);
+    }
+#pragma omp parallel for schedule(dynamic, 256)
+    for (int64_t t = 0; t < (int64_t)tn; t++) {
+        const uint32_t *v = old + 3 * t;
+        uint8_t bits = 0;
+        for (int k = 0; split_edges && k < 3; k++)
+            bits |= (uint8_t)(!mr_share(R, v[k], v[(k + 1) % 3], NONE) << k);
+        if (!split_edges && mr_share(R, v[0], v[1], v[2]))
+            bits |= 8;
+        test[t] = bits;
+    }
     for (uint64_t t = 0; split_edges && t < tn; t++)
-        for (int k = 0; k < 3; k++) {
-            uint32_t u = old[3 * t + k], w = old[3 * t + (k + 1) % 3];
-            if (!mr_share(R, u, w, NONE))
-                bad[nb++] = edge_key(u, w);
-        }
+        for (int k = 0; k < 3; k++)
+            if (test[t] >> k & 1)
+                bad[nb++] = edge_key(old[3 * t + k], old[3 * t + (k + 1) % 3]);
     qsort(bad, nb, sizeof *bad, cmp_u64);
     uint64_t nu = 0;
     for (uint64_t i = 0; i < nb; i++)
@@ -220,7 +257,7 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
             bad[nu++] = bad[i];
     *changed = 0;
     if (split_edges && nu >= *failing_edges) {
-        free(bad), free(old);
+        free(bad), free(old), free(test);
         return 0;
     }
     if (split_edges)
@@ -243,7 +280,7 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
             s[k] = at ? split[at - bad] : NONE;
             failing |= at != NULL;
         }
-        uint32_t x = split_edges || failing || mr_share(R, v[0], v[1], v[2])
+        uint32_t x = split_edges || failing || test[t] & 8
                          ? NONE : mr_split_triangle(R, v[0], v[1], v[2]);
         if (x != NONE) {
             emit(R, v[0], v[1], x), emit(R, v[1], v[2], x), emit(R, v[2], v[0], x);
@@ -252,8 +289,8 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
             emit_split(R, v, s);
         }
     }
-    free(bad), free(old), free(split);
-    return rc;
+    free(bad), free(old), free(split), free(test);
+    return rc == 0 && R->failed ? nomem(err) : rc;
 }
 
 /* The coarser triangle holding the most of v's three targets (the first such), and a
@@ -291,16 +328,23 @@ static int tear(refine *R, sl_error *err)
     sl_morph_refined *r = R->r;
     uint64_t nk = 0, tn = r->triangle_count;
     uint64_t *keys = malloc((3 * tn + 1) * sizeof *keys);
-    if (!keys)
+    uint32_t *face = malloc((tn + 1) * sizeof *face); /* per triangle: best_face, */
+    uint8_t *holds = malloc(tn + 1);                   /* and the corners it holds */
+    if (!keys || !face || !holds) {
+        free(keys), free(face), free(holds);
         return nomem(err);
-    for (uint64_t t = 0; t < tn; t++) {
+    }
+#pragma omp parallel for schedule(dynamic, 256)
+    for (int64_t t = 0; t < (int64_t)tn; t++) {
         const uint32_t *v = r->triangles + 3 * t;
         int held = 7;
-        uint32_t g = mr_share(R, v[0], v[1], v[2]) ? NONE : best_face(R, v, &held);
-        for (int k = 0; k < 3; k++)
-            if (!(held >> k & 1))
-                keys[nk++] = (uint64_t)v[k] << 32 | g;
+        face[t] = mr_share(R, v[0], v[1], v[2]) ? NONE : best_face(R, v, &held);
+        holds[t] = (uint8_t)held;
     }
+    for (uint64_t t = 0; t < tn; t++)
+        for (int k = 0; k < 3; k++)
+            if (!(holds[t] >> k & 1))
+                keys[nk++] = (uint64_t)r->triangles[3 * t + k] << 32 | face[t];
     qsort(keys, nk, sizeof *keys, cmp_u64);
     uint64_t nu = 0;
     for (uint64_t i = 0; i < nk; i++)
@@ -318,9 +362,8 @@ static int tear(refine *R, sl_error *err)
         r->tear_max = fmax(r->tear_max, sqrt(d2));
     }
     for (uint64_t t = 0; rc == 0 && t < tn; t++) {
-        uint32_t *v = r->triangles + 3 * t;
-        int held = 7;
-        uint32_t g = mr_share(R, v[0], v[1], v[2]) ? NONE : best_face(R, v, &held);
+        uint32_t *v = r->triangles + 3 * t, g = face[t];
+        int held = holds[t];
         uint32_t was[3] = {v[0], v[1], v[2]};
         for (int k = 0; k < 3; k++)
             if (!(held >> k & 1)) {
@@ -330,8 +373,8 @@ static int tear(refine *R, sl_error *err)
         r->torn_triangles += held != 7;
     }
     r->torn_vertices = rc == 0 ? nu : 0;
-    free(keys), free(copy);
-    return rc;
+    free(keys), free(copy), free(face), free(holds);
+    return rc == 0 && R->failed ? nomem(err) : rc;
 }
 
 /* Coarser vertex -> triangle lists, and the BVH. */
@@ -393,7 +436,32 @@ static int start(refine *R, sl_error *err)
         }
     }
     r->max_move = sqrt(worst2);
-    return 0;
+    /* Their members, in parallel into up to SMALL slots each, kept in vertex order (the
+     * few with more are found again when kept). */
+    enum { SMALL = 8 };
+    uint32_t *small = malloc((SMALL * l->vertex_count + 1) * sizeof *small);
+    uint8_t *count = malloc(l->vertex_count + 1);
+    if (!small || !count) {
+        free(small), free(count);
+        return nomem(err);
+    }
+#pragma omp parallel for schedule(dynamic, 1024)
+    for (int64_t i = 0; i < (int64_t)l->vertex_count; i++) {
+        uint32_t m[MEMBERS_MAX];
+        double p[3] = {r->targets[3 * i], r->targets[3 * i + 1], r->targets[3 * i + 2]};
+        int n = members_of(R, p, R->hint[i], m);
+        count[i] = (uint8_t)n;
+        memcpy(small + SMALL * i, m, (size_t)(n < SMALL ? n : SMALL) * sizeof *m);
+    }
+    for (uint64_t i = 0; rc == 0 && i < l->vertex_count; i++) {
+        uint32_t m[MEMBERS_MAX];
+        double p[3] = {r->targets[3 * i], r->targets[3 * i + 1], r->targets[3 * i + 2]};
+        int n = count[i] <= SMALL ? count[i] : members_of(R, p, R->hint[i], m);
+        if (members_keep(R, (uint32_t)i, count[i] <= SMALL ? small + SMALL * i : m, n))
+            rc = nomem(err);
+    }
+    free(small), free(count);
+    return rc;
 }
 
 int sl_morph_refine(const sl_mesh *coarser, const sl_mesh *level, sl_morph_refined *out,
@@ -420,13 +488,17 @@ int sl_morph_refine(const sl_mesh *coarser, const sl_mesh *level, sl_morph_refin
     }
     if (rc == 0)
         rc = tear(&R, err);
-    for (uint64_t t = 0; rc == 0 && t < out->triangle_count; t++) {
+    uint64_t unresolved = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : unresolved)
+    for (int64_t t = 0; t < (rc == 0 ? (int64_t)out->triangle_count : 0); t++) {
         const uint32_t *v = out->triangles + 3 * t;
-        out->unresolved += !mr_share(&R, v[0], v[1], v[2]);
+        unresolved += !mr_share(&R, v[0], v[1], v[2]);
     }
+    out->unresolved = unresolved;
     sl_triangle_bvh_release(&R.bvh);
     free(R.ring_start), free(R.ring), free(R.hint);
     free(R.dist), free(R.prev), free(R.stamp), free(R.heap_v), free(R.heap_k);
+    free(R.members_at), free(R.members_pool);
     if (rc)
         sl_morph_refined_release(out);
     return rc;

@@ -38,8 +38,9 @@
  * triangles whose targets still share no coarser triangle after the tears are counted in
  * `unresolved` (0 on every level measured, docs/morphing.md).
  *
- * Thread safety: reentrant (serial; the closest-point queries run in parallel). The
- * result depends only on the inputs.
+ * Thread safety: reentrant. The closest-point queries and each round's tests run in
+ * parallel (OpenMP), the splits serially in a fixed order: the result depends only on the
+ * inputs, not on the thread count.
  */
 #ifndef SCANLOD_GEOMETRY_MORPH_REFINE_H
 #define SCANLOD_GEOMETRY_MORPH_REFINE_H

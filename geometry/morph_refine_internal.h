@@ -9,7 +9,7 @@
 #include "geometry/triangle_bvh.h"
 
 #define NONE UINT32_MAX
-#define MEMBERS_MAX 128 /* coarser triangles a target is tested against */
+#define MEMBERS_MAX 128 /* coarser triangles a target is tested against (< 256) */
 
 typedef struct refine {
     const sl_mesh *c, *level;
@@ -18,6 +18,13 @@ typedef struct refine {
     double eps2;                 /* "lies in": squared distance bound, world^2 */
     sl_morph_refined *r;
     uint32_t *hint;              /* per vertex: a coarser triangle its target lies in */
+    /* Per vertex, the coarser triangles its target lies in (mr_members), computed once
+     * when the vertex is made (target and hint never change): members_at[v] >> 8 is its
+     * first entry in members_pool, & 0xff how many. */
+    uint64_t *members_at;
+    uint32_t *members_pool;
+    uint64_t members_n, members_cap;
+    int failed;                  /* a vertex's members did not fit in memory */
     uint64_t vcap, tcap;
     double *dist;                /* path search, per coarser vertex: length, */
     uint32_t *prev, *stamp;      /* previous vertex, search it belongs to */
@@ -48,7 +55,14 @@ static inline int mr_lies_in(const refine *R, const double p[3], uint32_t g)
 
 /* The coarser triangles (around the corners of v's hint) v's target lies in, into out
  * (MEMBERS_MAX); returns how many. */
-int mr_members(const refine *R, uint32_t v, uint32_t *out);
+static inline int mr_members(const refine *R, uint32_t v, uint32_t *out)
+{
+    uint64_t at = R->members_at[v];
+    int n = (int)(at & 0xff);
+    for (int i = 0; i < n; i++)
+        out[i] = R->members_pool[(at >> 8) + i];
+    return n;
+}
 /* Whether the targets of u and w lie in one coarser triangle (and of x too, x != NONE). */
 int mr_share(const refine *R, uint32_t u, uint32_t w, uint32_t x);
 /* Adds the vertex sum_k f[k] * (vertex v[k]) with target t in coarser triangle `hint`
