@@ -1,4 +1,6 @@
-// extern "C" shim around OpenImageIO (see oiio_shim.h for the contract).
+// extern "C" shim around OpenImageIO (see oiio_shim.h for the contract), built as the
+// module scanlod-oiio.so: it exports one table (oiio_module.h) that oiio_loader.c loads
+// on the first image call.
 //
 // Rules of the C++ edge: every entry point catches every exception; OIIO's per-thread
 // error text (OIIO::geterror / ImageInput::geterror) becomes one sl_error naming the file;
@@ -11,10 +13,12 @@
 extern "C" {
 #include "core/error.h"
 }
+#include "shim/oiio_module.h"
 #include "shim/oiio_shim.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
+#include <OpenImageIO/oiioversion.h>
 
 #include <atomic>
 #include <cerrno>
@@ -145,15 +149,6 @@ int read_image(const char *path, uint64_t max_pixels, sl_image *out, sl_error *e
 
 } // namespace
 
-extern "C" void sl_oiio_init(void)
-{
-    try {
-        init_threads();
-    } catch (...) {
-        // Nothing to report through: the first read/write retries and reports.
-    }
-}
-
 // Runs `body` with every exception turned into an sl_error about `path`; `code` is the
 // class of a std::exception (bad input when reading, I/O when writing).
 namespace {
@@ -172,7 +167,7 @@ template <class Body> int guarded(const char *path, int code, sl_error *err, Bod
 }
 } // namespace
 
-extern "C" int sl_image_read(const char *path, uint64_t max_pixels, sl_image *out, sl_error *err)
+static int image_read(const char *path, uint64_t max_pixels, sl_image *out, sl_error *err)
 {
     out->width = out->height = out->channels = 0;
     out->pixels = nullptr;
@@ -180,8 +175,8 @@ extern "C" int sl_image_read(const char *path, uint64_t max_pixels, sl_image *ou
                    [&] { return read_image(path, max_pixels, out, err); });
 }
 
-extern "C" int sl_image_write(const char *path, int width, int height, int channels,
-                              const float *pixels, sl_error *err)
+static int image_write(const char *path, int width, int height, int channels,
+                       const float *pixels, sl_error *err)
 {
     if (width <= 0 || height <= 0 || channels <= 0)
         return sl_error_set(err, SL_E_INTERNAL, 0, path, "image write: bad size %dx%dx%d",
@@ -218,9 +213,9 @@ int encode_image(const char *format, int width, int height, int channels, const 
 }
 } // namespace
 
-extern "C" int sl_image_encode(const char *format, int width, int height, int channels,
-                               const float *pixels, int quality, void **out, size_t *out_size,
-                               sl_error *err)
+static int image_encode(const char *format, int width, int height, int channels,
+                        const float *pixels, int quality, void **out, size_t *out_size,
+                        sl_error *err)
 {
     *out = nullptr;
     *out_size = 0;
@@ -232,11 +227,10 @@ extern "C" int sl_image_encode(const char *format, int width, int height, int ch
     });
 }
 
-extern "C" void sl_image_release(sl_image *img)
+// The module's one export (everything else is hidden: -fvisibility=hidden).
+extern "C" __attribute__((visibility("default"))) const sl_oiio_api *sl_oiio_module_api(void)
 {
-    if (!img)
-        return;
-    std::free(img->pixels);
-    img->pixels = nullptr;
-    img->width = img->height = img->channels = 0;
+    static const sl_oiio_api api = {SL_OIIO_MODULE_VERSION, OIIO_VERSION_STRING, image_read,
+                                    image_write, image_encode};
+    return &api;
 }

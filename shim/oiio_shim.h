@@ -1,7 +1,10 @@
 /* extern "C" shim around OpenImageIO (C++). Every entry point catches every exception
  * and turns OIIO's per-thread geterror() into an sl_error naming the file.
- * OIIO's own thread pool is set to 1 thread (sl_oiio_init): we call it from inside
- * OpenMP regions, as OIIO's docs ask of applications with their own threads.
+ * OIIO's own thread pool is set to 1 thread: we call it from inside OpenMP regions, as
+ * OIIO's docs ask of applications with their own threads.
+ * OpenImageIO lives in a module loaded on the first call (oiio_loader.c, oiio_module.h):
+ * a process that touches no image does not pay for loading it. When the module cannot be
+ * loaded every call here fails with SL_E_INTERNAL and a message naming what was tried.
  */
 #ifndef SCANLOD_SHIM_OIIO_SHIM_H
 #define SCANLOD_SHIM_OIIO_SHIM_H
@@ -19,7 +22,13 @@ typedef struct sl_image {
     float *pixels;               /* width * height * channels, row 0 = top */
 } sl_image;
 
+/* Loads the module now (optional: the first image call does it). */
 void sl_oiio_init(void);
+/* The module's path and OpenImageIO's version, loading it; NULL when it cannot load. */
+const char *sl_oiio_module_path(void);
+const char *sl_oiio_library_version(void);
+/* Why the module did not load (the paths tried and dlerror()), or NULL when it did. */
+const char *sl_oiio_load_error(void);
 
 /* Reads any image OIIO knows, converted to float, at most max_pixels pixels
  * (SL_E_LIMIT beyond; checked from the header before reading). */

@@ -3,6 +3,9 @@
 # the scanlod binary, libscanlod_runtime.so, its header and scanlod.pc under a prefix;
 # examples/cut_level.c builds against that prefix with pkg-config alone, runs, and cuts
 # the same level as `scanlod extract`; the library exports the public API and nothing else.
+# The installed binary loads the installed OpenImageIO module (shim/oiio_loader.c), not the
+# build tree's, and draws a thumbnail with it; without the module, only image work fails,
+# with one error naming the module.
 source "$(dirname "$0")/../lib.sh"
 build="${SCANLOD_BUILD_DIR:?}"
 prefix="$TMP/prefix"
@@ -34,6 +37,21 @@ SCANLOD="$prefix/bin/scanlod" # from here on, the installed binary
 run_scanlod run "$TMP/c.ini" -q
 check "the installed binary's pipeline ran (rc $rc: $err)" [ "$rc" -eq 0 ]
 model="$TMP/out/fandisk.ply/model.slod"
+run_scanlod --version
+check "the installed binary loads the installed image module ($out)" \
+  contains "^images: OpenImageIO .*($prefix/.*/scanlod/scanlod-oiio.so)" "$out"
+write_config "$TMP/thumb.ini" "$TMP/in" "$TMP/work-thumb" "$TMP/out-thumb" "[export]" \
+  "lod_percents = 50" "budgets =" "formats = ply" "thumbnail_size = 64" "fidelity = false"
+run_scanlod run "$TMP/thumb.ini" -q
+check "the installed binary draws a thumbnail (rc $rc: $err)" \
+  [ "$rc" -eq 0 -a -s "$TMP/out-thumb/fandisk.ply/lod50.png" ]
+rm -rf "$TMP/work-thumb" "$TMP/out-thumb"
+SCANLOD_OIIO_MODULE="$TMP/no-such-module.so" run_scanlod run "$TMP/thumb.ini" -q
+check "without the image module the thumbnail's item fails (rc $rc)" [ "$rc" -ne 0 ]
+check "and the error names the module ($(tail -c 300 <<<"$err"))" contains "scanlod-oiio.so" "$err"
+check "nothing is published for it" [ ! -e "$TMP/out-thumb/fandisk.ply" ]
+SCANLOD_OIIO_MODULE="$TMP/no-such-module.so" run_scanlod run "$TMP/c.ini" -q
+check "without the image module a run with no images still works (rc $rc: $err)" [ "$rc" -eq 0 ]
 set +e
 cut=$(LD_LIBRARY_PATH="$libdir" "$TMP/cut_level" "$model" 3000 2>&1)
 crc=$?

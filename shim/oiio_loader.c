@@ -1,0 +1,140 @@
+/* The public image calls of oiio_shim.h, forwarded to the OpenImageIO module
+ * (oiio_module.h), which is loaded on the first call. Where it is looked for, in order:
+ *   1. $SCANLOD_OIIO_MODULE, when set (a path to the module);
+ *   2. beside the installed binary: <dir of /proc/self/exe>/SL_OIIO_MODULE_INSTALLED
+ *      (../lib/<arch>/scanlod/scanlod-oiio.so under an install prefix);
+ *   3. the build tree's copy (SL_OIIO_MODULE_BUILT, an absolute path the build sets), so
+ *      binaries and tests run from the build folder without an install.
+ * A module that cannot be loaded makes every image call fail with one error naming the
+ * paths tried and dlerror(); the rest of scanlod (everything but textures, thumbnails
+ * and image writing) works without it. */
+#include <dlfcn.h>
+#include <limits.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "shim/oiio_module.h"
+
+static pthread_once_t load_once = PTHREAD_ONCE_INIT;
+static const sl_oiio_api *api;
+static char module_path[PATH_MAX];
+static char load_error[1024];
+
+/* Tries one candidate; 1 when the module is loaded, else appends why not to load_error. */
+static int try_load(const char *path)
+{
+    void *h = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    const char *why = NULL;
+    if (h) {
+        sl_oiio_api_fn fn;
+        *(void **)&fn = dlsym(h, SL_OIIO_MODULE_SYMBOL);
+        const sl_oiio_api *a = fn ? fn() : NULL;
+        if (a && a->version == SL_OIIO_MODULE_VERSION) {
+            api = a;
+            snprintf(module_path, sizeof module_path, "%s", path);
+            return 1;
+        }
+        why = a ? "another module version" : "no " SL_OIIO_MODULE_SYMBOL;
+        dlclose(h);
+    } else {
+        why = dlerror();
+    }
+    size_t used = strlen(load_error);
+    snprintf(load_error + used, sizeof load_error - used, "%s%s (%s)", used ? "; " : "", path,
+             why ? why : "unknown");
+    return 0;
+}
+
+static void load(void)
+{
+    const char *env = getenv("SCANLOD_OIIO_MODULE");
+    if (env && *env) {
+        try_load(env); /* an explicit choice: no fallback behind it */
+        return;
+    }
+    char exe[PATH_MAX], path[PATH_MAX + 64];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (n > 0) {
+        exe[n] = 0;
+        char *slash = strrchr(exe, '/');
+        if (slash) {
+            *slash = 0;
+            snprintf(path, sizeof path, "%s/%s", exe, SL_OIIO_MODULE_INSTALLED);
+            if (try_load(path))
+                return;
+        }
+    }
+#ifdef SL_OIIO_MODULE_BUILT
+    try_load(SL_OIIO_MODULE_BUILT);
+#endif
+}
+
+static const sl_oiio_api *module(const char *path, sl_error *err)
+{
+    pthread_once(&load_once, load);
+    if (!api)
+        sl_error_set(err, SL_E_INTERNAL, 0, path,
+                     "image support unavailable: cannot load the OpenImageIO module "
+                     "scanlod-oiio.so: %s", load_error[0] ? load_error : "not found");
+    return api;
+}
+
+void sl_oiio_init(void)
+{
+    pthread_once(&load_once, load);
+}
+
+const char *sl_oiio_module_path(void)
+{
+    pthread_once(&load_once, load);
+    return api ? module_path : NULL;
+}
+
+const char *sl_oiio_load_error(void)
+{
+    pthread_once(&load_once, load);
+    return api ? NULL : load_error[0] ? load_error : "not found";
+}
+
+const char *sl_oiio_library_version(void)
+{
+    pthread_once(&load_once, load);
+    return api ? api->library_version : NULL;
+}
+
+int sl_image_read(const char *path, uint64_t max_pixels, sl_image *out, sl_error *err)
+{
+    out->width = out->height = out->channels = 0;
+    out->pixels = NULL;
+    const sl_oiio_api *a = module(path, err);
+    return a ? a->read(path, max_pixels, out, err) : SL_E_INTERNAL;
+}
+
+int sl_image_write(const char *path, int width, int height, int channels, const float *pixels,
+                   sl_error *err)
+{
+    const sl_oiio_api *a = module(path, err);
+    return a ? a->write(path, width, height, channels, pixels, err) : SL_E_INTERNAL;
+}
+
+int sl_image_encode(const char *format, int width, int height, int channels, const float *pixels,
+                    int quality, void **out, size_t *out_size, sl_error *err)
+{
+    *out = NULL;
+    *out_size = 0;
+    const sl_oiio_api *a = module(NULL, err);
+    return a ? a->encode(format, width, height, channels, pixels, quality, out, out_size, err)
+             : SL_E_INTERNAL;
+}
+
+void sl_image_release(sl_image *img)
+{
+    if (!img)
+        return;
+    free(img->pixels);
+    img->pixels = NULL;
+    img->width = img->height = img->channels = 0;
+}
