@@ -43,12 +43,12 @@ int main(int argc, char **argv)
         printf("scanlod %s\n", SCANLOD_VERSION);
         /* Loads the image module (shim/oiio_loader.c), which nothing else does up front:
          * where it came from, or that images are unavailable. */
-        const char *module = sl_oiio_module_path();
-        if (module)
-            printf("images: OpenImageIO %s (%s)\n", sl_oiio_library_version(), module);
+        const char *module, *version, *why = sl_oiio_module_info(&module, &version);
+        if (!why)
+            printf("images: OpenImageIO %s (%s)\n", version, module);
         else
             printf("images: unavailable (textures, thumbnails and image files fail): the "
-                   "OpenImageIO module scanlod-oiio.so did not load: %s\n", sl_oiio_load_error());
+                   "OpenImageIO module scanlod-oiio.so did not load: %s\n", why);
         return SL_EXIT_OK;
     }
     if (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {

@@ -87,22 +87,12 @@ void sl_oiio_init(void)
     pthread_once(&load_once, load);
 }
 
-const char *sl_oiio_module_path(void)
+const char *sl_oiio_module_info(const char **path, const char **version)
 {
     pthread_once(&load_once, load);
-    return api ? module_path : NULL;
-}
-
-const char *sl_oiio_load_error(void)
-{
-    pthread_once(&load_once, load);
+    *path = api ? module_path : NULL;
+    *version = api ? api->library_version : NULL;
     return api ? NULL : load_error[0] ? load_error : "not found";
-}
-
-const char *sl_oiio_library_version(void)
-{
-    pthread_once(&load_once, load);
-    return api ? api->library_version : NULL;
 }
 
 int sl_image_read(const char *path, uint64_t max_pixels, sl_image *out, sl_error *err)

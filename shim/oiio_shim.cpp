@@ -169,8 +169,7 @@ template <class Body> int guarded(const char *path, int code, sl_error *err, Bod
 
 static int image_read(const char *path, uint64_t max_pixels, sl_image *out, sl_error *err)
 {
-    out->width = out->height = out->channels = 0;
-    out->pixels = nullptr;
+    // *out is cleared by the caller (oiio_loader.c), which fails without the module too.
     return guarded(path, SL_E_BADINPUT, err,
                    [&] { return read_image(path, max_pixels, out, err); });
 }
@@ -217,8 +216,7 @@ static int image_encode(const char *format, int width, int height, int channels,
                         const float *pixels, int quality, void **out, size_t *out_size,
                         sl_error *err)
 {
-    *out = nullptr;
-    *out_size = 0;
+    // *out and *out_size are cleared by the caller (oiio_loader.c).
     if (width <= 0 || height <= 0 || channels <= 0)
         return sl_error_set(err, SL_E_INTERNAL, 0, nullptr, "image encode: bad size %dx%dx%d",
                             width, height, channels);

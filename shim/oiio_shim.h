@@ -24,11 +24,9 @@ typedef struct sl_image {
 
 /* Loads the module now (optional: the first image call does it). */
 void sl_oiio_init(void);
-/* The module's path and OpenImageIO's version, loading it; NULL when it cannot load. */
-const char *sl_oiio_module_path(void);
-const char *sl_oiio_library_version(void);
-/* Why the module did not load (the paths tried and dlerror()), or NULL when it did. */
-const char *sl_oiio_load_error(void);
+/* Loads the module: NULL and its path and OpenImageIO's version in *path, *version; or
+ * why it did not load (the paths tried and dlerror()) and NULLs. */
+const char *sl_oiio_module_info(const char **path, const char **version);
 
 /* Reads any image OIIO knows, converted to float, at most max_pixels pixels
  * (SL_E_LIMIT beyond; checked from the header before reading). */
