@@ -7,8 +7,9 @@
  * pass is beta = max over retriangulated clusters A of sqrt(w_A^2 + d_A^2) (d_A the
  * largest deviation of A's borders) plus the rounding margin; kept clusters add nothing.
  *
- * Refusals: a polygon the triangulation refuses has all its borders' straightening
- * undone (they keep every vertex) and is tried again with its neighbours across those
+ * Refusals: a polygon the triangulation refuses has the straightening of the borders
+ * whose segments cross (in its projection) undone, or, when none cross, of all its
+ * borders (they keep every vertex), and is tried again with its neighbours across those
  * borders; a polygon refused with nothing left to undo keeps its input triangles. Each
  * round only undoes, so the loop ends; rounds are ordered by cluster index.
  */
@@ -43,38 +44,59 @@ static void set_tolerances(const cl_clusters *c, cl_borders *b, double eps)
     }
 }
 
-/* Undoes the straightening of cluster k's borders; marks the clusters they touch dirty.
- * Returns how many borders changed. */
+/* Undoes the straightening of border br and marks its clusters dirty; 0 when it had
+ * removed no vertex. */
+static int revert_border(cl_borders *b, uint32_t br, uint8_t *dirty)
+{
+    uint32_t s = b->start[br], e = b->start[br + 1];
+    int removed = 0;
+    for (uint32_t i = s; i < e; i++)
+        removed |= !b->keep[i];
+    if (!removed)
+        return 0;
+    memset(b->keep + s, 1, e - s);
+    b->flags[br] |= CL_BORDER_REVERTED;
+    b->deviation[br] = 0.0;
+    dirty[b->left[br]] = 1;
+    if (b->right[br] != CL_NONE)
+        dirty[b->right[br]] = 1;
+    return 1;
+}
+
+/* Undoes the straightening of cluster k's borders. Returns how many borders changed. */
 static uint32_t revert_cluster(cl_borders *b, uint32_t k, uint8_t *dirty)
 {
     uint32_t changed = 0;
     for (uint32_t l = b->cluster_loop[k]; l < b->cluster_loop[k + 1]; l++)
-        for (uint32_t p = b->loop_piece[l]; p < b->loop_piece[l + 1]; p++) {
-            uint32_t br = b->pieces[p] >> 1, s = b->start[br], e = b->start[br + 1];
-            int removed = 0;
-            for (uint32_t i = s; i < e; i++)
-                removed |= !b->keep[i];
-            if (!removed)
-                continue;
-            memset(b->keep + s, 1, e - s);
-            b->flags[br] |= CL_BORDER_REVERTED;
-            b->deviation[br] = 0.0;
-            dirty[b->left[br]] = 1;
-            if (b->right[br] != CL_NONE)
-                dirty[b->right[br]] = 1;
-            changed++;
+        for (uint32_t p = b->loop_piece[l]; p < b->loop_piece[l + 1]; p++)
+            changed += (uint32_t)revert_border(b, b->pieces[p] >> 1, dirty);
+    return changed;
+}
+
+/* Undoes the straightening of the borders marked (clearing the marks). Returns how many
+ * borders changed. */
+static uint32_t revert_marked(cl_borders *b, uint8_t *marked, uint8_t *dirty)
+{
+    uint32_t changed = 0;
+    for (uint32_t br = 0; br < b->count; br++)
+        if (marked[br]) {
+            marked[br] = 0;
+            changed += (uint32_t)revert_border(b, br, dirty);
         }
     return changed;
 }
 
 /* Triangulates every cluster, undoing straightening around refused polygons until none
- * is refused. */
+ * is refused: first only the borders whose segments cross in the polygon's projection,
+ * and when none do (a fold, or a point on a segment of its own loop), all its borders. */
 static int settle(cl_clusters *c, cl_borders *b, const cl_pass_input *in, cl_triangulation *t,
                   sl_cluster_pass_stats *st, sl_error *err)
 {
     uint32_t n = c->count;
     uint8_t *dirty = malloc(n ? n : 1), *failed = calloc(n ? n : 1, 1);
-    if (!dirty || !failed) {
+    uint8_t *marked = calloc(b->count ? b->count : 1, 1);
+    if (!dirty || !failed || !marked) {
+        free(marked);
         free(dirty);
         free(failed);
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "triangulating %u clusters", n);
@@ -94,7 +116,13 @@ static int settle(cl_clusters *c, cl_borders *b, const cl_pass_input *in, cl_tri
                 continue;
             failed[k] = 0;
             st->triangulation_failures++;
-            uint32_t changed = revert_cluster(b, k, dirty);
+            /* first only the borders whose segments cross: the fewest vertices back */
+            int crossing = cl_polygon_crossings(c, b, in->positions, b->keep, k, marked);
+            if (crossing < 0) {
+                rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "polygon of cluster %u", k);
+                break;
+            }
+            uint32_t changed = crossing ? revert_marked(b, marked, dirty) : revert_cluster(b, k, dirty);
             st->borders_reverted += changed;
             if (!changed) { /* nothing left to undo: the input's triangles */
                 c->kept[k] = CL_KEPT_REFUSED;
@@ -107,6 +135,7 @@ static int settle(cl_clusters *c, cl_borders *b, const cl_pass_input *in, cl_tri
     }
     free(dirty);
     free(failed);
+    free(marked);
     return rc;
 }
 

@@ -220,3 +220,108 @@ int cl_triangulate(const cl_clusters *c, const cl_borders *b, const float *posit
     }
     return rc;
 }
+
+/* One segment of a cluster's polygon: its two vertices, their projections and the border
+ * it lies on. */
+typedef struct poly_segment {
+    uint32_t v[2], border;
+    double a[2], b[2];
+    double lo[2], hi[2];
+} poly_segment;
+
+/* 1 when collinear points p, q, r have r within the box of p and q. */
+static int on_segment(const double p[2], const double q[2], const double r[2])
+{
+    return r[0] >= (p[0] < q[0] ? p[0] : q[0]) && r[0] <= (p[0] > q[0] ? p[0] : q[0]) &&
+           r[1] >= (p[1] < q[1] ? p[1] : q[1]) && r[1] <= (p[1] > q[1] ? p[1] : q[1]);
+}
+
+/* 1 when segments s and t of one polygon meet anywhere except at a vertex they share as
+ * loop neighbours (then only when they overlap along a line). */
+static int segments_meet(const poly_segment *s, const poly_segment *t)
+{
+    for (int k = 0; k < 2; k++)
+        if (s->hi[k] < t->lo[k] || t->hi[k] < s->lo[k])
+            return 0;
+    int shared = (s->v[0] == t->v[0]) + (s->v[0] == t->v[1]) + (s->v[1] == t->v[0]) +
+                 (s->v[1] == t->v[1]);
+    if (shared >= 2)
+        return 1; /* the same segment twice */
+    if (shared == 1) { /* meeting at the shared vertex is what a loop does: overlap only */
+        const double *o = s->v[0] == t->v[0] || s->v[0] == t->v[1] ? s->a : s->b;
+        const double *p = o == s->a ? s->b : s->a;
+        const double *q = t->v[0] == s->v[0] || t->v[0] == s->v[1] ? t->b : t->a;
+        if (sl_orient2d(o, p, q) != 0)
+            return 0;
+        return (p[0] - o[0]) * (q[0] - o[0]) + (p[1] - o[1]) * (q[1] - o[1]) > 0;
+    }
+    int o1 = sl_orient2d(s->a, s->b, t->a), o2 = sl_orient2d(s->a, s->b, t->b);
+    int o3 = sl_orient2d(t->a, t->b, s->a), o4 = sl_orient2d(t->a, t->b, s->b);
+    if (o1 * o2 < 0 && o3 * o4 < 0)
+        return 1;
+    return (o1 == 0 && on_segment(s->a, s->b, t->a)) || (o2 == 0 && on_segment(s->a, s->b, t->b)) ||
+           (o3 == 0 && on_segment(t->a, t->b, s->a)) || (o4 == 0 && on_segment(t->a, t->b, s->b));
+}
+
+static int border_straightened(const cl_borders *b, const uint8_t *keep, uint32_t br)
+{
+    for (uint32_t i = b->start[br]; i < b->start[br + 1]; i++)
+        if (!keep[i])
+            return 1;
+    return 0;
+}
+
+int cl_polygon_crossings(const cl_clusters *c, const cl_borders *b, const float *positions,
+                         const uint8_t *keep, uint32_t k, uint8_t *marked)
+{
+    const double *frame = c->frame + 12 * (uint64_t)k;
+    uint32_t count = 0, cap = 0;
+    poly_segment *seg = NULL;
+    int found = 0;
+    for (uint32_t l = b->cluster_loop[k]; l < b->cluster_loop[k + 1]; l++) {
+        uint32_t loop_first = count;
+        for (uint32_t p = b->loop_piece[l]; p < b->loop_piece[l + 1]; p++) {
+            uint32_t br = b->pieces[p] >> 1, rev = b->pieces[p] & 1u;
+            uint32_t s = b->start[br], e = b->start[br + 1] - 1;
+            for (uint32_t i = 0; i < e - s; i++) { /* the last entry starts the next piece */
+                uint32_t at = rev ? e - i : s + i;
+                if (!keep[at])
+                    continue;
+                if (grow((void **)&seg, count + 1, &cap, sizeof *seg)) {
+                    free(seg);
+                    return -1;
+                }
+                seg[count].v[0] = b->verts[at]; /* the segment from here lies on border br */
+                seg[count++].border = br;
+            }
+        }
+        for (uint32_t i = loop_first; i < count; i++)
+            seg[i].v[1] = seg[i + 1 < count ? i + 1 : loop_first].v[0];
+    }
+    /* a quadratic scan: refused polygons are few and small; larger ones are left to the
+     * caller's undoing of every border */
+    if (count > 4096) {
+        free(seg);
+        return 0;
+    }
+    for (uint32_t i = 0; i < count; i++) {
+        poly_segment *s = seg + i;
+        cl_project(frame, positions + 3 * (uint64_t)s->v[0], s->a, NULL);
+        cl_project(frame, positions + 3 * (uint64_t)s->v[1], s->b, NULL);
+        for (int d = 0; d < 2; d++)
+            s->lo[d] = s->a[d] < s->b[d] ? s->a[d] : s->b[d],
+            s->hi[d] = s->a[d] > s->b[d] ? s->a[d] : s->b[d];
+    }
+    for (uint32_t i = 0; i < count; i++)
+        for (uint32_t j = i + 1; j < count; j++) {
+            if (!segments_meet(seg + i, seg + j))
+                continue;
+            uint32_t bi = seg[i].border, bj = seg[j].border;
+            if (border_straightened(b, keep, bi) && !marked[bi])
+                marked[bi] = 1, found++;
+            if (border_straightened(b, keep, bj) && !marked[bj])
+                marked[bj] = 1, found++;
+        }
+    free(seg);
+    return found;
+}
