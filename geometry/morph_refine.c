@@ -51,8 +51,9 @@ static int members_keep(refine *R, uint32_t v, const uint32_t *m, int n)
     return 0;
 }
 
-/* Whether the targets of u and w lie in one coarser triangle (and of x too, x != NONE). */
-int mr_share(const refine *R, uint32_t u, uint32_t w, uint32_t x)
+/* Whether the targets of u and w lie in one coarser triangle (and of x too, x != NONE),
+ * or in a flat pair of them (mr_flat_share). */
+static int share(const refine *R, uint32_t u, uint32_t w, uint32_t x, int flat)
 {
     uint32_t m[MEMBERS_MAX];
     int n = mr_members(R, u, m);
@@ -63,7 +64,18 @@ int mr_share(const refine *R, uint32_t u, uint32_t w, uint32_t x)
     for (int i = 0; i < n; i++)
         if (mr_lies_in(R, pw, m[i]) && (x == NONE || mr_lies_in(R, px, m[i])))
             return 1;
-    return 0;
+    if (!flat)
+        return 0;
+    double p[3][3];
+    mr_target_of(R, u, p[0]);
+    for (int k = 0; k < 3; k++)
+        p[1][k] = pw[k], p[2][k] = x == NONE ? 0.0 : px[k];
+    return mr_flat_share(R, (const double (*)[3])p, x == NONE ? 2 : 3, m, n);
+}
+
+int mr_share(const refine *R, uint32_t u, uint32_t w, uint32_t x)
+{
+    return share(R, u, w, x, 1);
 }
 
 
@@ -242,6 +254,11 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
         uint8_t bits = 0;
         for (int k = 0; split_edges && k < 3; k++)
             bits |= (uint8_t)(!mr_share(R, v[k], v[(k + 1) % 3], NONE) << k);
+        /* edges that lie on the coarser surface only as flat pairs, in a triangle that
+         * does not: split as before (else nothing would, and it would tear) */
+        if (split_edges && bits == 0 && !mr_share(R, v[0], v[1], v[2]))
+            for (int k = 0; k < 3; k++)
+                bits |= (uint8_t)(!share(R, v[k], v[(k + 1) % 3], NONE, 0) << k);
         if (!split_edges && mr_share(R, v[0], v[1], v[2]))
             bits |= 8;
         test[t] = bits;

@@ -65,6 +65,12 @@ static inline int mr_members(const refine *R, uint32_t v, uint32_t *out)
 }
 /* Whether the targets of u and w lie in one coarser triangle (and of x too, x != NONE). */
 int mr_share(const refine *R, uint32_t u, uint32_t w, uint32_t x);
+/* Whether points p[0..count) (count 2 or 3; targets, the first in members[]) lie in a
+ * pair of coplanar coarser triangles sharing an edge, one of them in members, with every
+ * chord between the two crossing that edge: then the segment or triangle they span lies
+ * on the coarser surface (morph_refine_flat.c). */
+int mr_flat_share(const refine *R, const double (*p)[3], int count, const uint32_t *members,
+                  int member_count);
 /* Adds the vertex sum_k f[k] * (vertex v[k]) with target t in coarser triangle `hint`
  * (room reserved by the caller); returns its index. */
 uint32_t mr_add_vertex(refine *R, int count, const uint32_t *v, const double *f,

@@ -252,6 +252,15 @@ uint32_t mr_split_triangle(refine *R, uint32_t a, uint32_t b, uint32_t c)
             const float *q = R->c->positions + 3 * (uint64_t)cv;
             p[0] = q[0], p[1] = q[1], p[2] = q[2];
             mr_target_of(R, a, t[0]), mr_target_of(R, b, t[1]), mr_target_of(R, c, t[2]);
+            int there = 0; /* a corner targets it already: another vertex there mends nothing */
+            for (int j = 0; j < 3; j++) {
+                double d2 = 0;
+                for (int h = 0; h < 3; h++)
+                    d2 += (t[j][h] - p[h]) * (t[j][h] - p[h]);
+                there |= d2 <= R->eps2;
+            }
+            if (there)
+                continue;
             double e1[3], e2[3], n[3], sum = 0;
             for (int j = 0; j < 3; j++)
                 e1[j] = t[1][j] - t[0][j], e2[j] = t[2][j] - t[0][j];
