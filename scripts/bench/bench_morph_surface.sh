@@ -4,7 +4,9 @@
 # GLBs): the triangles the morph refinement adds, the triangles it tears and the widest
 # tear (fraction of the coarser diagonal), and the area-sampled one-sided Hausdorff from
 # the GLB at weight 1 to the coarser level before (SCANLOD_BEFORE: a build without the
-# refinement, e.g. commit 6b995e5) and after (this build).
+# refinement, e.g. commit 6b995e5) and after (this build), and the export stage's wall
+# seconds of both runs (timings.json; one run each, `nice -n 15`: quote them from a quiet
+# machine, as ratios).
 set -u
 root=$(cd "$(dirname "$0")/../.." && pwd)
 NEW=${SCANLOD:-$root/build/cli/scanlod}; OLD=${SCANLOD_BEFORE:?SCANLOD_BEFORE: a scanlod without the refinement (e.g. main before issue 13 part 3b)}
@@ -12,7 +14,7 @@ MC=${MORPH_CHECK:-$root/build/tests/morph_check}; SC=$root/tests/data/scans
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 h() { nice -n 15 $NEW compare "$1" "$2" --samples 200000 --json | python3 -c "import json,sys; r=json.load(sys.stdin); print('%.3g' % r['b_to_a']['hausdorff'])"; }
-printf "method scan level->coarser level_tris glb_tris added torn tear/diag unresolved H1_before H1_after\n"
+printf "method scan level->coarser level_tris glb_tris added torn tear/diag unresolved H1_before H1_after export_s_before export_s_after\n"
 for method in octree cluster segment; do
   for scan in bun_zipper_res3 fandisk cow; do
     for which in new old; do
@@ -37,6 +39,9 @@ INI
       nice -n 15 $bin run $W/$which.ini -q -s lod.method=$method >/dev/null 2>$W/err-$which || { echo "$method $scan $which failed: $(head -c 200 $W/err-$which)"; continue 2; }
     done
     d=$W/out-new/$scan.ply; o=$W/out-old/$scan.ply
+    # the export stage's wall seconds (it makes every level's GLB, the refinement included)
+    secs() { python3 -c "import json,sys; print('%.2f' % json.load(open(sys.argv[1]))['stages']['export']['seconds'])" "$1/timings.json"; }
+    t_old=$(secs $o) t_new=$(secs $d)
     python3 - "$d/report.json" > $W/pairs <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1])); L = r['stages']['export']['levels']
@@ -50,7 +55,7 @@ PY
       $MC $d/$coarse.ply $d/$fine.glb 1 $W/w1-new.ply >/dev/null
       $MC $o/$coarse.ply $o/$fine.glb 1 $W/w1-old.ply >/dev/null
       diag=$(nice $NEW compare $d/$coarse.ply $d/$coarse.ply --samples 10 --json | python3 -c "import json,sys; print(json.load(sys.stdin)['diagonal'])")
-      printf "%s %s %s->%s %s %s %s %s %.3g %s %s %s\n" $method $scan $fine $coarse $lt $gt $added $torn $(python3 -c "print($tear/$diag)") $unres $(h $o/$coarse.ply $W/w1-old.ply) $(h $d/$coarse.ply $W/w1-new.ply)
+      printf "%s %s %s->%s %s %s %s %s %.3g %s %s %s %s %s\n" $method $scan $fine $coarse $lt $gt $added $torn $(python3 -c "print($tear/$diag)") $unres $(h $o/$coarse.ply $W/w1-old.ply) $(h $d/$coarse.ply $W/w1-new.ply) $t_old $t_new
     done < $W/pairs
   done
 done
