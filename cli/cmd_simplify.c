@@ -20,6 +20,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <time.h>
 
 #include "cli/commands.h"
@@ -180,6 +181,11 @@ static int parse_args(int argc, char **argv, simplify_args *a)
         return usage_error("%s", "needs an input PLY file");
     if (counted > 1)
         return usage_error("%s", "give one of --triangles, --ratio and --max-error");
+    /* it writes PLY only: a .glb name would get PLY bytes a viewer cannot read */
+    const char *dot = a->output ? strrchr(a->output, '.') : NULL;
+    if (a->output && (!dot || strcasecmp(dot, ".ply")))
+        return usage_error("-o %s: simplify writes PLY (OUT.ply); GLB levels come from a "
+                           "run with [lod] method = segment or cluster", a->output);
     a->job.has_output = a->output != NULL;
     if (a->method->check(&a->job)) /* the method said what, in one line */
         return SL_EXIT_USAGE;

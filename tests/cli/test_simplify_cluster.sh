@@ -74,6 +74,11 @@ bad_option() { # bad_option WORDS ARGS...
   check "$* : no output written" [ ! -e "$TMP/x.ply" ]
 }
 bad_option "--max-error needs a fraction" --max-error 0
+# -o names a PLY: a .glb name would get PLY bytes
+run_scanlod simplify "$cow" --method cluster --max-error 0.01 -o "$TMP/x.glb"
+check "-o x.glb: exit 64 (got $rc)" [ "$rc" -eq 64 ]
+check "-o x.glb: one line saying it writes PLY ($err)" one_line_with "simplify writes PLY" "$err"
+check "-o x.glb: nothing written" [ ! -e "$TMP/x.glb" ]
 bad_option "--max-error needs a fraction" --max-error -0.01
 bad_option "--max-error needs a fraction" --max-error nan
 bad_option "--max-error needs a fraction" --max-error 1.5
