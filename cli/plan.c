@@ -91,9 +91,11 @@ static double thread_factor(int threads)
     return pow(2.0 / (threads > 0 ? threads : 1), 0.4);
 }
 
-/* Disk per item, MB = a + b * N (work folder; published folder), octree at 0.1-1 M with
- * fidelity off (plan_calibrate.py); a from the bundled scans (thumbnails, pages). */
-static const double work_mb[2] = {1, 760}, published_mb[2] = {1.4, 325};
+/* Disk per item, MB = a + b * N (work folder; published folder): b from the growth
+ * benchmark's 1/5/20 M surfaces on model format 3 (work 378-407, published 106-134 MB per
+ * million triangles, default ladder, fidelity off; docs/benchmarks.md section 4), a from
+ * the bundled scans (thumbnails, pages). */
+static const double work_mb[2] = {1, 380}, published_mb[2] = {1.4, 110};
 
 typedef struct plan_state {
     FILE *out;
