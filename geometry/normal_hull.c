@@ -6,11 +6,7 @@
 #include <string.h>
 
 #include "geometry/predicates.h"
-
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
+#include "geometry/vec3.h"
 
 void sl_normal_hull_init(sl_normal_hull *h)
 {
@@ -71,7 +67,7 @@ void sl_normal_hull_start(sl_normal_hull *h, const double s[3])
     ax[fabs(s[0]) <= fabs(s[1]) && fabs(s[0]) <= fabs(s[2]) ? 0 : fabs(s[1]) <= fabs(s[2]) ? 1 : 2] = 1.0;
     double e[3] = {s[1] * ax[2] - s[2] * ax[1], s[2] * ax[0] - s[0] * ax[2],
                    s[0] * ax[1] - s[1] * ax[0]};
-    double len = sqrt(dot3(e, e));
+    double len = sqrt(sl_dot3(e, e));
     for (int i = 0; i < 3; i++)
         h->e1[i] = e[i] / len;
     h->e2[0] = s[1] * h->e1[2] - s[2] * h->e1[1];
@@ -82,9 +78,9 @@ void sl_normal_hull_start(sl_normal_hull *h, const double s[3])
 
 static void gnomonic(const sl_normal_hull *h, const double *n, double p[2])
 {
-    double d = dot3(n, h->s);
-    p[0] = dot3(n, h->e1) / d;
-    p[1] = dot3(n, h->e2) / d;
+    double d = sl_dot3(n, h->s);
+    p[0] = sl_dot3(n, h->e1) / d;
+    p[1] = sl_dot3(n, h->e2) / d;
 }
 
 /* Is p inside or on the hull? (count >= 3: a counter-clockwise polygon) */
@@ -185,7 +181,7 @@ double sl_normal_hull_min_dot(const sl_normal_hull *h, const double m[3])
 {
     double lo = 1.0;
     for (uint32_t i = 0; i < h->count; i++) {
-        double d = dot3(m, h->n + 3 * (size_t)i);
+        double d = sl_dot3(m, h->n + 3 * (size_t)i);
         lo = d < lo ? d : lo;
     }
     return lo;

@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include "geometry/raster.h"
+#include "geometry/vec3.h"
 #include "shim/oiio_shim.h"
 
 #define AZIMUTH_DEG 30.0
@@ -43,14 +44,9 @@ typedef struct sample_grid {
     uint32_t *tri;    /* visible triangle or NO_TRIANGLE */
 } sample_grid;
 
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
 static void normalize3(double *v)
 {
-    double l = sqrt(dot3(v, v));
+    double l = sqrt(sl_dot3(v, v));
     if (l > 0)
         for (int k = 0; k < 3; k++)
             v[k] /= l;
@@ -87,7 +83,7 @@ static void fit_camera(const sl_mesh *m, int width, int height, camera *c)
     double lo[2] = {DBL_MAX, DBL_MAX}, hi[2] = {-DBL_MAX, -DBL_MAX};
     for (uint64_t i = 0; i < 3 * m->triangle_count; i++) {
         const float *p = m->positions + 3 * (uint64_t)m->triangles[i];
-        double q[3] = {p[0], p[1], p[2]}, r = dot3(q, right), u = dot3(q, up);
+        double q[3] = {p[0], p[1], p[2]}, r = sl_dot3(q, right), u = sl_dot3(q, up);
         lo[0] = r < lo[0] ? r : lo[0];
         hi[0] = r > hi[0] ? r : hi[0];
         lo[1] = u < lo[1] ? u : lo[1];
@@ -110,9 +106,9 @@ static void project(const sl_mesh *m, const camera *c, float *screen)
     for (uint64_t i = 0; i < m->vertex_count; i++) {
         const float *p = m->positions + 3 * i;
         double q[3] = {p[0] - c->center[0], p[1] - c->center[1], p[2] - c->center[2]};
-        screen[3 * i] = (float)(0.5 * c->width + dot3(q, c->right) * c->scale);
-        screen[3 * i + 1] = (float)(0.5 * c->height - dot3(q, c->up) * c->scale);
-        screen[3 * i + 2] = (float)dot3(q, c->back);
+        screen[3 * i] = (float)(0.5 * c->width + sl_dot3(q, c->right) * c->scale);
+        screen[3 * i + 1] = (float)(0.5 * c->height - sl_dot3(q, c->up) * c->scale);
+        screen[3 * i + 2] = (float)sl_dot3(q, c->back);
     }
 }
 
@@ -206,7 +202,7 @@ static void shade(const shader *sh, uint64_t t, float px, float py, float rgb[3]
     double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                    e1[0] * e2[1] - e1[1] * e2[0]};
     normalize3(n);
-    double facing = dot3(n, sh->cam->back) < 0 ? -1 : 1;
+    double facing = sl_dot3(n, sh->cam->back) < 0 ? -1 : 1;
     for (int k = 0; k < 3; k++)
         n[k] *= facing;
     if (m->normals) {
@@ -217,12 +213,12 @@ static void shade(const shader *sh, uint64_t t, float px, float py, float rgb[3]
             for (int k = 0; k < 3; k++)
                 s[k] += w[i] * vn[k];
         }
-        double along = dot3(s, n) < 0 ? -1 : 1, len = sqrt(dot3(s, s));
+        double along = sl_dot3(s, n) < 0 ? -1 : 1, len = sqrt(sl_dot3(s, s));
         if (len > 1e-6)
             for (int k = 0; k < 3; k++)
                 n[k] = along * s[k] / len;
     }
-    double key = dot3(n, sh->light), head = dot3(n, sh->cam->back);
+    double key = sl_dot3(n, sh->light), head = sl_dot3(n, sh->cam->back);
     float light = (float)(0.10 + 0.80 * (key > 0 ? key : 0) + 0.14 * (head > 0 ? head : 0));
     for (int k = 0; k < 3; k++) {
         float albedo = sh->clay[k];

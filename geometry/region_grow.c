@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "geometry/normal_hull.h"
+#include "geometry/vec3.h"
 
 #define NONE UINT32_MAX
 #define FLATNESS_BINS 1024
@@ -57,11 +58,6 @@ void sl_face_normals(const sl_mesh_adjacency *adj, const float *positions, doubl
     }
 }
 
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
 static int has_normal(const double *n)
 {
     return n[0] != 0.0 || n[1] != 0.0 || n[2] != 0.0;
@@ -70,7 +66,7 @@ static int has_normal(const double *n)
 /* Equation 1 against the whole segment: every hull vertex within delta of n. */
 static int passes(const sl_normal_hull *h, const double *n, double cos_delta)
 {
-    return dot3(n, h->s) >= cos_delta && sl_normal_hull_min_dot(h, n) >= cos_delta;
+    return sl_dot3(n, h->s) >= cos_delta && sl_normal_hull_min_dot(h, n) >= cos_delta;
 }
 
 /* --- the growth front: a binary heap of (key, triangle), smallest first ------------- */
@@ -158,8 +154,8 @@ static int seed_order(const sl_mesh_adjacency *adj, const double *normals, uint3
             if (tw == NONE)
                 continue;
             const double *o = normals + 3 * (uint64_t)sl_halfedge_face(tw);
-            if (has_normal(o) && 1.0 - dot3(m, o) > worst)
-                worst = 1.0 - dot3(m, o);
+            if (has_normal(o) && 1.0 - sl_dot3(m, o) > worst)
+                worst = 1.0 - sl_dot3(m, o);
         }
         double q = sqrt(worst / 2.0) * (FLATNESS_BINS - 1e-9); /* ~ angle / 180 */
         bin[t] = (uint16_t)(q < FLATNESS_BINS - 1 ? q : FLATNESS_BINS - 1);
@@ -223,7 +219,7 @@ static int64_t grow(grow_work *w, double delta_degrees, uint32_t *label, uint32_
                 if (label[o] != NONE || w->stamp[o] == k)
                     continue;
                 w->stamp[o] = k;
-                if (front_push(&w->f, -dot3(w->normals + 3 * (uint64_t)o, s), o))
+                if (front_push(&w->f, -sl_dot3(w->normals + 3 * (uint64_t)o, s), o))
                     return -1;
             }
             t = NONE;

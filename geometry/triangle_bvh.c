@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "geometry/axis_select.h"
+#include "geometry/vec3.h"
 
 #define PARALLEL_CUTOFF 65536
 
@@ -187,11 +188,6 @@ void sl_triangle_bvh_release(sl_triangle_bvh *bvh)
     memset(bvh, 0, sizeof *bvh);
 }
 
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
 /* Closest point on segment ab to p; returns the squared distance. *end = 0 inside the
  * segment, 1 at a, 2 at b. */
 static double closest_point_segment(const double p[3], const double a[3], const double b[3],
@@ -199,9 +195,9 @@ static double closest_point_segment(const double p[3], const double a[3], const 
 {
     double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     double ap[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
-    double len_sq = dot3(ab, ab), t = 0.0;
+    double len_sq = sl_dot3(ab, ab), t = 0.0;
     if (len_sq > 0.0) {
-        t = dot3(ap, ab) / len_sq;
+        t = sl_dot3(ap, ab) / len_sq;
         t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
     }
     *end = t <= 0.0 ? 1 : t >= 1.0 ? 2 : 0;
@@ -239,7 +235,7 @@ static double closest_point_sliver(const double p[3], const double a[3], const d
 static double finish(const double p[3], double out[3])
 {
     double d[3] = {p[0] - out[0], p[1] - out[1], p[2] - out[2]};
-    return dot3(d, d);
+    return sl_dot3(d, d);
 }
 
 static void set_lerp(double out[3], const double a[3], const double d[3], double t)
@@ -269,18 +265,18 @@ double sl_closest_point_triangle_feature(const double p[3], const double a[3], c
     n[0] = ab[1] * ac[2] - ab[2] * ac[1];
     n[1] = ab[2] * ac[0] - ab[0] * ac[2];
     n[2] = ab[0] * ac[1] - ab[1] * ac[0];
-    double area_sq = dot3(n, n);
-    if (!(area_sq > 1e-12 * dot3(ab, ab) * dot3(ac, ac)))
+    double area_sq = sl_dot3(n, n);
+    if (!(area_sq > 1e-12 * sl_dot3(ab, ab) * sl_dot3(ac, ac)))
         return closest_point_sliver(p, a, b, c, out, feature);
 
     /* Ericson 5.1.5: find the Voronoi region of p among vertices, edges and face. */
-    double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+    double d1 = sl_dot3(ab, ap), d2 = sl_dot3(ac, ap);
     if (d1 <= 0.0 && d2 <= 0.0) {
         *feature = SL_FEATURE_VERTEX_A;
         memcpy(out, a, 3 * sizeof *out);
         return finish(p, out);
     }
-    double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+    double d3 = sl_dot3(ab, bp), d4 = sl_dot3(ac, bp);
     if (d3 >= 0.0 && d4 <= d3) {
         *feature = SL_FEATURE_VERTEX_B;
         memcpy(out, b, 3 * sizeof *out);
@@ -292,7 +288,7 @@ double sl_closest_point_triangle_feature(const double p[3], const double a[3], c
         set_lerp(out, a, ab, d1 / (d1 - d3));
         return finish(p, out);
     }
-    double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+    double d5 = sl_dot3(ab, cp), d6 = sl_dot3(ac, cp);
     if (d6 >= 0.0 && d5 <= d6) {
         *feature = SL_FEATURE_VERTEX_C;
         memcpy(out, c, 3 * sizeof *out);

@@ -19,19 +19,13 @@
 
 #include "geometry/cdt.h"
 #include "geometry/predicates.h"
+#include "geometry/vec3.h"
 #include "stages/segment/segment_internal.h"
 
 void seg_sub(const float *a, const float *b, double out[3])
 {
     for (int k = 0; k < 3; k++)
         out[k] = (double)a[k] - (double)b[k];
-}
-
-static void cross(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
 }
 
 static double dist2(const float *a, const float *b)
@@ -194,7 +188,7 @@ static void fit_segment(sl_segment_model *m, uint32_t k, uint32_t *stamp)
         double x[3], u[3], w[3];
         seg_sub(m->positions + 3 * (uint64_t)c[1], m->positions + 3 * (uint64_t)c[0], u);
         seg_sub(m->positions + 3 * (uint64_t)c[2], m->positions + 3 * (uint64_t)c[0], w);
-        cross(u, w, x);
+        sl_cross3(u, w, x);
         double a = sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
         area_sum += a;
         for (int j = 0; j < 3; j++) {
@@ -216,11 +210,11 @@ static void fit_segment(sl_segment_model *m, uint32_t k, uint32_t *stamp)
     const double *n = f->normal;
     double ax[3] = {0, 0, 0};
     ax[fabs(n[0]) <= fabs(n[1]) && fabs(n[0]) <= fabs(n[2]) ? 0 : fabs(n[1]) <= fabs(n[2]) ? 1 : 2] = 1;
-    cross(n, ax, f->u);
+    sl_cross3(n, ax, f->u);
     double ul = sqrt(f->u[0] * f->u[0] + f->u[1] * f->u[1] + f->u[2] * f->u[2]);
     for (int j = 0; j < 3; j++)
         f->u[j] /= ul;
-    cross(n, f->u, f->v);
+    sl_cross3(n, f->u, f->v);
     if (m->loops.outer[k] == SEG_NONE) {
         m->unfit[k] = SEG_UNFIT_NO_OUTER;
         return;
@@ -407,7 +401,7 @@ static int vertex_normals(sl_segment_model *m)
         double u[3], w[3], x[3];
         seg_sub(m->positions + 3 * (uint64_t)c[1], m->positions + 3 * (uint64_t)c[0], u);
         seg_sub(m->positions + 3 * (uint64_t)c[2], m->positions + 3 * (uint64_t)c[0], w);
-        cross(u, w, x);
+        sl_cross3(u, w, x);
         for (int q = 0; q < 3; q++)
             for (int j = 0; j < 3; j++)
                 m->vertex_normal[3 * (size_t)c[q] + j] += x[j];

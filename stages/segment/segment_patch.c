@@ -26,6 +26,7 @@
 #include "geometry/cdt.h"
 #include "geometry/plane_fit.h"
 #include "geometry/predicates.h"
+#include "geometry/vec3.h"
 #include "stages/segment/segment_internal.h"
 
 enum slot_role { ROLE_DROPPED = 0, ROLE_LOOP = 1, ROLE_CANDIDATE = 2, ROLE_INSERTED = 3 };
@@ -159,13 +160,6 @@ static uint32_t slot_of(patch *p, uint32_t v)
     s->role[i] = ROLE_DROPPED;
     s->cdt_index[i] = SEG_NONE;
     return i;
-}
-
-static void cross3(const double a[3], const double b[3], double out[3])
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
 }
 
 /* Slots for every vertex of the segment, their input normals, roles, and the loops as
@@ -413,7 +407,7 @@ static uint32_t measure_round(patch *p, const sl_cdt_result *res, const grid *g,
             u[j] = s->pos[3 * (size_t)sl[1] + j] - s->pos[3 * (size_t)sl[0] + j];
             w[j] = s->pos[3 * (size_t)sl[2] + j] - s->pos[3 * (size_t)sl[0] + j];
         }
-        cross3(u, w, n);
+        sl_cross3(u, w, n);
         double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
         for (int j = 0; j < 3; j++)
             n[j] = len > 0 ? n[j] / len : 0;
