@@ -30,28 +30,33 @@ static uint32_t across(const refine *R, uint32_t g, int k)
     return NONE;
 }
 
-/* Whether h's corner off the shared edge lies within eps of g's plane, normals alike. */
+/* Coarser triangle t's (unnormalised) normal. */
+static void normal_of(const refine *R, uint32_t t, double n[3])
+{
+    double a[3], b[3], c[3], ab[3], ac[3];
+    mr_corner(R->c, t, 0, a), mr_corner(R->c, t, 1, b), mr_corner(R->c, t, 2, c);
+    for (int k = 0; k < 3; k++)
+        ab[k] = b[k] - a[k], ac[k] = c[k] - a[k];
+    sl_cross3(ab, ac, n);
+}
+
+/* Whether h's corner off the edge it shares with g lies within eps of g's plane (normal
+ * n, length nl), the two normals alike. */
 static int coplanar(const refine *R, uint32_t g, uint32_t h, const double n[3], double nl)
 {
-    double a[3], d[3];
-    mr_corner(R->c, g, 0, a);
+    double hn[3], a[3], d[3], ad[3];
+    normal_of(R, h, hn);
+    if (sl_dot3(hn, n) <= 0)
+        return 0;
     const uint32_t *tg = R->c->triangles + 3 * (uint64_t)g, *th = R->c->triangles + 3 * (uint64_t)h;
     int off = 0;
     for (int k = 0; k < 3; k++)
         if (th[k] != tg[0] && th[k] != tg[1] && th[k] != tg[2])
             off = k;
-    mr_corner(R->c, h, off, d);
-    double ab[3], ac[3], hn[3], pa[3], b[3], c[3];
-    mr_corner(R->c, h, 0, a), mr_corner(R->c, h, 1, b), mr_corner(R->c, h, 2, c);
+    mr_corner(R->c, g, 0, a), mr_corner(R->c, h, off, d);
     for (int k = 0; k < 3; k++)
-        ab[k] = b[k] - a[k], ac[k] = c[k] - a[k];
-    sl_cross3(ab, ac, hn);
-    if (sl_dot3(hn, n) <= 0)
-        return 0;
-    mr_corner(R->c, g, 0, a);
-    for (int k = 0; k < 3; k++)
-        pa[k] = d[k] - a[k];
-    double dist = sl_dot3(pa, n) / nl;
+        ad[k] = d[k] - a[k];
+    double dist = sl_dot3(ad, n) / nl;
     return dist * dist <= R->eps2;
 }
 
@@ -105,11 +110,8 @@ int mr_flat_share(const refine *R, const double (*p)[3], int count, const uint32
 {
     for (int i = 0; i < member_count; i++) {
         uint32_t g = members[i];
-        double a[3], b[3], c[3], ab[3], ac[3], n[3];
-        mr_corner(R->c, g, 0, a), mr_corner(R->c, g, 1, b), mr_corner(R->c, g, 2, c);
-        for (int j = 0; j < 3; j++)
-            ab[j] = b[j] - a[j], ac[j] = c[j] - a[j];
-        sl_cross3(ab, ac, n);
+        double n[3];
+        normal_of(R, g, n);
         double nl = sqrt(sl_dot3(n, n));
         if (!(nl > 0))
             continue;

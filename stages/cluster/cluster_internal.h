@@ -122,11 +122,11 @@ int cl_triangulate(const cl_clusters *c, const cl_borders *b, const float *posit
                    const uint8_t *keep, const uint8_t *dirty, uint8_t *failed,
                    cl_triangulation *t, sl_error *err, uint64_t vertex_count);
 /* The borders of cluster k's polygon (as cl_triangulate builds it) whose segments cross,
- * touch or overlap another of its segments, and that can be undone (they dropped a
- * vertex): each sets marked[border] = 1 once. Returns how many it marked (0: none, or the
- * polygon is too large to scan), or -1 out of memory. */
+ * touch or overlap another of its segments, each once, into out (room for every border;
+ * marked: zero per border, used and left zero). Returns how many (0: none, or the polygon
+ * is too large to scan), or -1 out of memory. */
 int cl_polygon_crossings(const cl_clusters *c, const cl_borders *b, const float *positions,
-                         const uint8_t *keep, uint32_t k, uint8_t *marked);
+                         const uint8_t *keep, uint32_t k, uint8_t *marked, uint32_t *out);
 /* Cluster k's input triangles as its triangulation (a kept cluster); -1 out of memory. */
 int cl_keep_input(const cl_clusters *c, const uint32_t *triangles, uint32_t k,
                   cl_triangulation *t);

@@ -73,19 +73,6 @@ static uint32_t revert_cluster(cl_borders *b, uint32_t k, uint8_t *dirty)
     return changed;
 }
 
-/* Undoes the straightening of the borders marked (clearing the marks). Returns how many
- * borders changed. */
-static uint32_t revert_marked(cl_borders *b, uint8_t *marked, uint8_t *dirty)
-{
-    uint32_t changed = 0;
-    for (uint32_t br = 0; br < b->count; br++)
-        if (marked[br]) {
-            marked[br] = 0;
-            changed += (uint32_t)revert_border(b, br, dirty);
-        }
-    return changed;
-}
-
 /* Triangulates every cluster, undoing straightening around refused polygons until none
  * is refused: first only the borders whose segments cross in the polygon's projection,
  * and when none do (a fold, or a point on a segment of its own loop), all its borders. */
@@ -95,8 +82,10 @@ static int settle(cl_clusters *c, cl_borders *b, const cl_pass_input *in, cl_tri
     uint32_t n = c->count;
     uint8_t *dirty = malloc(n ? n : 1), *failed = calloc(n ? n : 1, 1);
     uint8_t *marked = calloc(b->count ? b->count : 1, 1);
-    if (!dirty || !failed || !marked) {
+    uint32_t *crossing = malloc((b->count ? b->count : 1) * sizeof *crossing);
+    if (!dirty || !failed || !marked || !crossing) {
         free(marked);
+        free(crossing);
         free(dirty);
         free(failed);
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "triangulating %u clusters", n);
@@ -117,12 +106,16 @@ static int settle(cl_clusters *c, cl_borders *b, const cl_pass_input *in, cl_tri
             failed[k] = 0;
             st->triangulation_failures++;
             /* first only the borders whose segments cross: the fewest vertices back */
-            int crossing = cl_polygon_crossings(c, b, in->positions, b->keep, k, marked);
-            if (crossing < 0) {
+            int nc = cl_polygon_crossings(c, b, in->positions, b->keep, k, marked, crossing);
+            if (nc < 0) {
                 rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "polygon of cluster %u", k);
                 break;
             }
-            uint32_t changed = crossing ? revert_marked(b, marked, dirty) : revert_cluster(b, k, dirty);
+            uint32_t changed = 0;
+            for (int i = 0; i < nc; i++)
+                changed += (uint32_t)revert_border(b, crossing[i], dirty);
+            if (!changed) /* none crossing, or none of those straightened */
+                changed = revert_cluster(b, k, dirty);
             st->borders_reverted += changed;
             if (!changed) { /* nothing left to undo: the input's triangles */
                 c->kept[k] = CL_KEPT_REFUSED;
@@ -136,6 +129,7 @@ static int settle(cl_clusters *c, cl_borders *b, const cl_pass_input *in, cl_tri
     free(dirty);
     free(failed);
     free(marked);
+    free(crossing);
     return rc;
 }
 

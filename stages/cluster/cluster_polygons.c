@@ -263,16 +263,8 @@ static int segments_meet(const poly_segment *s, const poly_segment *t)
            (o3 == 0 && on_segment(t->a, t->b, s->a)) || (o4 == 0 && on_segment(t->a, t->b, s->b));
 }
 
-static int border_straightened(const cl_borders *b, const uint8_t *keep, uint32_t br)
-{
-    for (uint32_t i = b->start[br]; i < b->start[br + 1]; i++)
-        if (!keep[i])
-            return 1;
-    return 0;
-}
-
 int cl_polygon_crossings(const cl_clusters *c, const cl_borders *b, const float *positions,
-                         const uint8_t *keep, uint32_t k, uint8_t *marked)
+                         const uint8_t *keep, uint32_t k, uint8_t *marked, uint32_t *out)
 {
     const double *frame = c->frame + 12 * (uint64_t)k;
     uint32_t count = 0, cap = 0;
@@ -317,11 +309,13 @@ int cl_polygon_crossings(const cl_clusters *c, const cl_borders *b, const float 
             if (!segments_meet(seg + i, seg + j))
                 continue;
             uint32_t bi = seg[i].border, bj = seg[j].border;
-            if (border_straightened(b, keep, bi) && !marked[bi])
-                marked[bi] = 1, found++;
-            if (border_straightened(b, keep, bj) && !marked[bj])
-                marked[bj] = 1, found++;
+            if (!marked[bi])
+                marked[bi] = 1, out[found++] = bi;
+            if (!marked[bj])
+                marked[bj] = 1, out[found++] = bj;
         }
+    for (int i = 0; i < found; i++)
+        marked[out[i]] = 0;
     free(seg);
     return found;
 }
