@@ -181,7 +181,7 @@ const simplify_method sl_simplify_segment = {
     "  lies from the new surface (no search; default 0.001); --strict refuses non-manifold edges\n"
     "    --delta-seg D      largest angle between two triangles of a segment, degrees (20)\n"
      "    --segments K       instead: the smallest delta-seg giving at most K segments\n"
-     "    --delta-b D        boundary vertices within D degrees of straight may go (60)\n"
+     "    --delta-b D        boundary vertices within D degrees of straight may go (180: any)\n"
      "    --rule R           interior vertices: error (far from the new patch stay; the\n"
      "                       default), near (near the plane go), paper (equation 8 as printed)\n"
      "    --alpha A          equation 8's control parameter, rules near and paper (-1.5)\n"

@@ -45,7 +45,8 @@ typedef struct sl_segment_config {
                                   many segments (delta_seg is then ignored); default 0 */
     double delta_b;            /* eq. 2: a two-segment boundary vertex may go when its
                                   angle is within delta_b of 180 degrees; [0, 180];
-                                  default 60 */
+                                  default 180: no angle test, the error bound alone
+                                  decides (the paper's 20 and 60 stay reachable) */
     int rule;                  /* enum sl_segment_rule; default SL_SEGMENT_RULE_ERROR */
     double alpha;              /* eq. 8 control parameter (rules near and paper); default -1.5 */
     double max_error;          /* rule error: the largest distance of a removed vertex from

@@ -28,7 +28,7 @@ sl_segment_config sl_segment_default_config(void)
     memset(&c, 0, sizeof c);
     c.delta_seg = 20.0;
     c.target_segments = 0;
-    c.delta_b = 60.0;
+    c.delta_b = 180.0;
     c.rule = SL_SEGMENT_RULE_ERROR;
     c.alpha = -1.5;
     c.max_error = 0.001;

@@ -33,9 +33,10 @@ static const sl_option segment_options[] = {
     {"segment", "target_segments", SL_OPT_INT, "0", 0, 4294967295.0, NULL,
      "Min-delta instead: the smallest delta_seg giving at most this many segments "
      "(0: Min-# with delta_seg)."},
-    {"segment", "delta_b", SL_OPT_DOUBLE, "60", 0, 180, NULL,
+    {"segment", "delta_b", SL_OPT_DOUBLE, "180", 0, 180, NULL,
      "Equation 2: a boundary vertex on exactly two segments may go when its angle is "
-     "within delta_b degrees of straight."},
+     "within delta_b degrees of straight (180: no angle test, the error bound alone "
+     "decides; the paper uses 20 and 60)."},
     {"segment", "rule", SL_OPT_ENUM, "error", 0, 0, "error|near|paper",
      "Which interior vertices go (section 3.3, equation 8): error = greedy insertion, "
      "the vertices far from the rebuilt patch stay (levels of any size); near = those "
