@@ -477,6 +477,17 @@ def replace_between(path, begin, end, text):
     os.replace(path + ".tmp", path)
 
 
+def remove_between(path, begin, end):
+    """Drops the block from `begin` to `end` (markers included), if it is there."""
+    s = open(path).read() if os.path.exists(path) else ""
+    if begin not in s or end not in s:
+        return
+    s = s[:s.index(begin)].rstrip() + "\n" + s[s.index(end) + len(end):]
+    with open(path + ".tmp", "w") as f:
+        f.write(s)
+    os.replace(path + ".tmp", path)
+
+
 def cmd_report(args):
     """report RESULTS.json [MORE.json ...] DOCS: the parts (paper, fidelity, finest, speed)
     a later file has and the first lacks are taken from it (runs made side by side)."""
@@ -564,6 +575,12 @@ def cmd_report(args):
         return
     with open(os.path.join(docs, "bench", "segment-section.md"), "w") as f:
         f.write("\n".join(sec).rstrip() + "\n")
+    # a full run supersedes a partial one's tables
+    for stale in ("segment-update.md", "segment_rms_update.png"):
+        if os.path.exists(os.path.join(docs, "bench", stale)):
+            os.remove(os.path.join(docs, "bench", stale))
+    remove_between(os.path.join(docs, "benchmarks.md"), "<!-- segment-update:begin -->",
+                   "<!-- segment-update:end -->")
     replace_between(os.path.join(docs, "benchmarks.md"), "<!-- segment:begin -->",
                     "<!-- segment:end -->", "\n".join(sec))
     if "paper" in res:
