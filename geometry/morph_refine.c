@@ -12,13 +12,13 @@
 
 #include "geometry/morph_refine_internal.h"
 
-static int nomem(sl_error *err)
+int mr_nomem(sl_error *err)
 {
     return sl_error_set(err, SL_E_NOMEM, 0, NULL, "morph refinement: out of memory");
 }
 
 /* The coarser triangles (around the corners of coarser triangle h) point p lies in. */
-static int members_of(const refine *R, const double p[3], uint32_t h, uint32_t *out)
+int mr_members_of(const refine *R, const double p[3], uint32_t h, uint32_t *out)
 {
     int n = 0;
     for (int k = 0; k < 3; k++) {
@@ -36,7 +36,7 @@ static int members_of(const refine *R, const double p[3], uint32_t h, uint32_t *
 }
 
 /* Keeps vertex v's members (m, n) for mr_members; 0, or -1 out of memory. */
-static int members_keep(refine *R, uint32_t v, const uint32_t *m, int n)
+int mr_members_keep(refine *R, uint32_t v, const uint32_t *m, int n)
 {
     if (R->members_n + (uint64_t)n > R->members_cap) {
         uint64_t cap = 2 * R->members_cap + (uint64_t)n + 1024;
@@ -79,7 +79,7 @@ int mr_share(const refine *R, uint32_t u, uint32_t w, uint32_t x)
 }
 
 
-static int reserve(refine *R, uint64_t vertices, uint64_t triangles, sl_error *err)
+int mr_reserve(refine *R, uint64_t vertices, uint64_t triangles, sl_error *err)
 {
     sl_morph_refined *r = R->r;
     if (vertices > UINT32_MAX)
@@ -103,7 +103,7 @@ static int reserve(refine *R, uint64_t vertices, uint64_t triangles, sl_error *e
             R->hint = h;
         uint64_t *at = h ? realloc(R->members_at, cap * sizeof *at) : NULL;
         if (!at)
-            return nomem(err);
+            return mr_nomem(err);
         R->members_at = at;
         R->vcap = cap;
     }
@@ -111,7 +111,7 @@ static int reserve(refine *R, uint64_t vertices, uint64_t triangles, sl_error *e
         uint64_t cap = triangles + triangles / 2 + 64;
         uint32_t *t = realloc(r->triangles, cap * 12);
         if (!t)
-            return nomem(err);
+            return mr_nomem(err);
         r->triangles = t;
         R->tcap = cap;
     }
@@ -161,7 +161,7 @@ uint32_t mr_add_vertex(refine *R, int count, const uint32_t *v, const double *f,
     R->hint[i] = hint;
     uint32_t m[MEMBERS_MAX];
     double q[3] = {r->targets[3 * i], r->targets[3 * i + 1], r->targets[3 * i + 2]};
-    if (members_keep(R, (uint32_t)i, m, members_of(R, q, hint, m)))
+    if (mr_members_keep(R, (uint32_t)i, m, mr_members_of(R, q, hint, m)))
         R->failed = 1, R->members_at[i] = 0; /* reported by the round that made it */
     return (uint32_t)i;
 }
@@ -210,7 +210,7 @@ static void emit_split(refine *R, const uint32_t *v, const uint32_t *s)
         emit(R, a, x, z), emit(R, x, b, y), emit(R, z, y, c), emit(R, x, y, z);
 }
 
-static int cmp_u64(const void *a, const void *b)
+int mr_cmp_u64(const void *a, const void *b)
 {
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
     return x < y ? -1 : x > y;
@@ -237,7 +237,7 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
     uint32_t *old = malloc((3 * tn + 1) * sizeof *old);
     if (!bad || !old) {
         free(bad), free(old);
-        return nomem(err);
+        return mr_nomem(err);
     }
     memcpy(old, r->triangles, 3 * tn * sizeof *old);
     /* The tests read only the vertices there are (in parallel); what they find is used
@@ -246,7 +246,7 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
     uint8_t *test = malloc(tn + 1);
     if (!test) {
         free(bad), free(old);
-        return nomem(err);
+        return mr_nomem(err);
     }
 #pragma omp parallel for schedule(dynamic, 256)
     for (int64_t t = 0; t < (int64_t)tn; t++) {
@@ -267,7 +267,7 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
         for (int k = 0; k < 3; k++)
             if (test[t] >> k & 1)
                 bad[nb++] = edge_key(old[3 * t + k], old[3 * t + (k + 1) % 3]);
-    qsort(bad, nb, sizeof *bad, cmp_u64);
+    qsort(bad, nb, sizeof *bad, mr_cmp_u64);
     uint64_t nu = 0;
     for (uint64_t i = 0; i < nb; i++)
         if (nu == 0 || bad[i] != bad[nu - 1])
@@ -281,7 +281,7 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
         *failing_edges = nu;
     uint32_t *split = malloc((nu + 1) * sizeof *split);
     /* at most one vertex per failing edge and per triangle; at most 4 triangles each */
-    int rc = split ? reserve(R, r->vertex_count + nu + tn, 4 * tn, err) : nomem(err);
+    int rc = split ? mr_reserve(R, r->vertex_count + nu + tn, 4 * tn, err) : mr_nomem(err);
     for (uint64_t i = 0; rc == 0 && i < nu; i++)
         split[i] = mr_split_edge(R, (uint32_t)(bad[i] >> 32), (uint32_t)bad[i]);
     *changed = 0;
@@ -293,7 +293,7 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
         int failing = 0;
         for (int k = 0; k < 3; k++) {
             uint64_t key = edge_key(v[k], v[(k + 1) % 3]);
-            uint64_t *at = nu ? bsearch(&key, bad, nu, sizeof *bad, cmp_u64) : NULL;
+            uint64_t *at = nu ? bsearch(&key, bad, nu, sizeof *bad, mr_cmp_u64) : NULL;
             s[k] = at ? split[at - bad] : NONE;
             failing |= at != NULL;
         }
@@ -307,91 +307,7 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
         }
     }
     free(bad), free(old), free(split), free(test);
-    return rc == 0 && R->failed ? nomem(err) : rc;
-}
-
-/* The coarser triangle holding the most of v's three targets (the first such), and a
- * bit per corner whose target it holds. */
-static uint32_t best_face(const refine *R, const uint32_t *v, int *held)
-{
-    uint32_t best = R->hint[v[0]];
-    int most = -1;
-    *held = 0;
-    for (int c = 0; c < 3; c++) {
-        uint32_t m[MEMBERS_MAX];
-        int n = mr_members(R, v[c], m);
-        for (int i = 0; i < n; i++) {
-            int bits = 0, count = 0;
-            for (int k = 0; k < 3; k++) {
-                double p[3];
-                mr_target_of(R, v[k], p);
-                if (mr_lies_in(R, p, m[i]))
-                    bits |= 1 << k, count++;
-            }
-            if (count > most)
-                most = count, best = m[i], *held = bits;
-        }
-    }
-    return best;
-}
-
-/* Tears what no split mends (targets on pieces of the coarser surface that do not meet:
- * a fold, a thin part, another component): in each such triangle, the corners whose
- * targets are not in the coarser triangle holding most of them get a copy (same bytes at
- * weight 0) whose target is the closest point of that coarser triangle; triangles that
- * tear the same vertex towards the same coarser triangle share the copy. */
-static int tear(refine *R, sl_error *err)
-{
-    sl_morph_refined *r = R->r;
-    uint64_t nk = 0, tn = r->triangle_count;
-    uint64_t *keys = malloc((3 * tn + 1) * sizeof *keys);
-    uint32_t *face = malloc((tn + 1) * sizeof *face); /* per triangle: best_face, */
-    uint8_t *holds = malloc(tn + 1);                   /* and the corners it holds */
-    if (!keys || !face || !holds) {
-        free(keys), free(face), free(holds);
-        return nomem(err);
-    }
-#pragma omp parallel for schedule(dynamic, 256)
-    for (int64_t t = 0; t < (int64_t)tn; t++) {
-        const uint32_t *v = r->triangles + 3 * t;
-        int held = 7;
-        face[t] = mr_share(R, v[0], v[1], v[2]) ? NONE : best_face(R, v, &held);
-        holds[t] = (uint8_t)held;
-    }
-    for (uint64_t t = 0; t < tn; t++)
-        for (int k = 0; k < 3; k++)
-            if (!(holds[t] >> k & 1))
-                keys[nk++] = (uint64_t)r->triangles[3 * t + k] << 32 | face[t];
-    qsort(keys, nk, sizeof *keys, cmp_u64);
-    uint64_t nu = 0;
-    for (uint64_t i = 0; i < nk; i++)
-        if (nu == 0 || keys[i] != keys[nu - 1])
-            keys[nu++] = keys[i];
-    uint32_t *copy = malloc((nu + 1) * sizeof *copy);
-    int rc = copy ? reserve(R, r->vertex_count + nu, tn, err) : nomem(err);
-    for (uint64_t i = 0; rc == 0 && i < nu; i++) {
-        uint32_t v = (uint32_t)(keys[i] >> 32), g = (uint32_t)keys[i];
-        double p[3], a[3], b[3], c[3], t[3], f = 1;
-        mr_target_of(R, v, p);
-        mr_corner(R->c, g, 0, a), mr_corner(R->c, g, 1, b), mr_corner(R->c, g, 2, c);
-        double d2 = sl_closest_point_triangle(p, a, b, c, t);
-        copy[i] = mr_add_vertex(R, 1, &v, &f, t, g);
-        r->tear_max = fmax(r->tear_max, sqrt(d2));
-    }
-    for (uint64_t t = 0; rc == 0 && t < tn; t++) {
-        uint32_t *v = r->triangles + 3 * t, g = face[t];
-        int held = holds[t];
-        uint32_t was[3] = {v[0], v[1], v[2]};
-        for (int k = 0; k < 3; k++)
-            if (!(held >> k & 1)) {
-                uint64_t key = (uint64_t)was[k] << 32 | g;
-                v[k] = copy[(uint64_t *)bsearch(&key, keys, nu, sizeof *keys, cmp_u64) - keys];
-            }
-        r->torn_triangles += held != 7;
-    }
-    r->torn_vertices = rc == 0 ? nu : 0;
-    free(keys), free(copy), free(face), free(holds);
-    return rc == 0 && R->failed ? nomem(err) : rc;
+    return rc == 0 && R->failed ? mr_nomem(err) : rc;
 }
 
 /* Coarser vertex -> triangle lists, and the BVH. */
@@ -404,7 +320,7 @@ static int build_coarse(refine *R, sl_error *err)
     R->prev = malloc((c->vertex_count + 1) * sizeof *R->prev);
     R->stamp = calloc(c->vertex_count + 1, sizeof *R->stamp);
     if (!R->ring_start || !R->ring || !R->dist || !R->prev || !R->stamp)
-        return nomem(err);
+        return mr_nomem(err);
     for (uint64_t i = 0; i < 3 * c->triangle_count; i++)
         R->ring_start[c->triangles[i] + 2]++;
     for (uint64_t v = 0; v < c->vertex_count; v++)
@@ -427,7 +343,7 @@ static int start(refine *R, sl_error *err)
 {
     const sl_mesh *l = R->level;
     sl_morph_refined *r = R->r;
-    int rc = reserve(R, l->vertex_count, l->triangle_count, err);
+    int rc = mr_reserve(R, l->vertex_count, l->triangle_count, err);
     if (rc)
         return rc;
     memcpy(r->positions, l->positions, 12 * l->vertex_count);
@@ -460,22 +376,22 @@ static int start(refine *R, sl_error *err)
     uint8_t *count = malloc(l->vertex_count + 1);
     if (!small || !count) {
         free(small), free(count);
-        return nomem(err);
+        return mr_nomem(err);
     }
 #pragma omp parallel for schedule(dynamic, 1024)
     for (int64_t i = 0; i < (int64_t)l->vertex_count; i++) {
         uint32_t m[MEMBERS_MAX];
         double p[3] = {r->targets[3 * i], r->targets[3 * i + 1], r->targets[3 * i + 2]};
-        int n = members_of(R, p, R->hint[i], m);
+        int n = mr_members_of(R, p, R->hint[i], m);
         count[i] = (uint8_t)n;
         memcpy(small + SMALL * i, m, (size_t)(n < SMALL ? n : SMALL) * sizeof *m);
     }
     for (uint64_t i = 0; rc == 0 && i < l->vertex_count; i++) {
         uint32_t m[MEMBERS_MAX];
         double p[3] = {r->targets[3 * i], r->targets[3 * i + 1], r->targets[3 * i + 2]};
-        int n = count[i] <= SMALL ? count[i] : members_of(R, p, R->hint[i], m);
-        if (members_keep(R, (uint32_t)i, count[i] <= SMALL ? small + SMALL * i : m, n))
-            rc = nomem(err);
+        int n = count[i] <= SMALL ? count[i] : mr_members_of(R, p, R->hint[i], m);
+        if (mr_members_keep(R, (uint32_t)i, count[i] <= SMALL ? small + SMALL * i : m, n))
+            rc = mr_nomem(err);
     }
     free(small), free(count);
     return rc;
@@ -504,7 +420,9 @@ int sl_morph_refine(const sl_mesh *coarser, const sl_mesh *level, sl_morph_refin
         idle = changed ? 0 : idle + 1;
     }
     if (rc == 0)
-        rc = tear(&R, err);
+        rc = mr_retarget(&R, err);
+    if (rc == 0)
+        rc = mr_tear(&R, err);
     uint64_t unresolved = 0;
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : unresolved)
     for (int64_t t = 0; t < (rc == 0 ? (int64_t)out->triangle_count : 0); t++) {

@@ -21,16 +21,20 @@
  *  2. a triangle whose targets share no coarser triangle but reach over a coarser vertex
  *     gets a vertex targeting it (weight-0 position: the barycentric place of the coarser
  *     vertex in the triangle's targets) and becomes a fan of three. Rounds alternate 2, 1;
- *  3. what is left is torn: a corner whose target is not in the coarser triangle holding
- *     most of its triangle's targets gets a copy (same bytes at weight 0) targeting the
- *     closest point of that coarser triangle; at weight 1 the surface lies on the coarser
- *     level, in between the tear opens a crack (`tear_max` at weight 1).
+ *  3. where the rounds stop with triangles still failing (a fold of the closest-point
+ *     map), retargeting: a corner whose target is not in the coarser triangle holding
+ *     most of its triangle's targets takes the closest point of that triangle as its
+ *     target, for all its triangles, when fewer of those then fail (serial passes, in
+ *     triangle order);
+ *  4. what is left is torn: such a corner gets a copy (same bytes at weight 0) targeting
+ *     the closest point of that coarser triangle; at weight 1 the surface lies on the
+ *     coarser level, in between the tear opens a crack (`tear_max` at weight 1).
  * Every added vertex lies on the finer level's triangle it was made in: its weight-0
  * position is a convex combination of that triangle's corners (kept as up to three
  * source vertices and weights, so normals, colours and texture coordinates interpolate
  * too), so the weight-0 surface is the level's (to float rounding of the new vertices).
  * The level's own vertices come first, in order, with their exact bytes and their
- * closest-point targets (sl_morph_closest_points).
+ * closest-point targets (sl_morph_closest_points), except those step 3 retargets.
  *
  * "Lies in a coarser triangle" is a distance below SL_MORPH_REFINE_EPS of the coarser
  * bounding-box diagonal. Rounds stop at SL_MORPH_REFINE_ROUNDS, when two in a row change
@@ -68,7 +72,8 @@ typedef struct sl_morph_refined {
     double tear_max;         /* the largest distance between a copy's target and its
                                 vertex's: the widest crack at weight 1, world */
     uint64_t unresolved;     /* triangles whose targets still share no coarser triangle */
-    double max_move;         /* the largest distance a level vertex moves, world */
+    double max_move;         /* the largest distance a level vertex moves, world (its
+                                closest point, or where step 3 put it) */
 } sl_morph_refined;
 
 /* Refines `level` against `coarser` (both need finite positions; `coarser` at least one

@@ -75,6 +75,25 @@ int mr_flat_share(const refine *R, const double (*p)[3], int count, const uint32
  * (room reserved by the caller); returns its index. */
 uint32_t mr_add_vertex(refine *R, int count, const uint32_t *v, const double *f,
                        const double t[3], uint32_t hint);
+/* Helpers of morph_refine.c the other files share: v's members (out: MEMBERS_MAX) for
+ * target p near coarser triangle h; keeping them for mr_members (0, or -1 out of
+ * memory); room for the counts given; the out-of-memory error; a uint64_t comparator. */
+int mr_members_of(const refine *R, const double p[3], uint32_t h, uint32_t *out);
+int mr_members_keep(refine *R, uint32_t v, const uint32_t *m, int n);
+int mr_reserve(refine *R, uint64_t vertices, uint64_t triangles, sl_error *err);
+int mr_nomem(sl_error *err);
+int mr_cmp_u64(const void *a, const void *b);
+/* The coarser triangle holding the most of the targets of triangle v[0..2] (the first
+ * such), *held a bit per corner whose target it holds (morph_refine_tear.c). */
+uint32_t mr_best_face(const refine *R, const uint32_t *v, int *held);
+/* Retargeting (morph_refine.h, step 3): a corner of a failing triangle whose target is
+ * not in mr_best_face's triangle takes its closest point there, for every triangle
+ * around it, when fewer of them then fail; in passes over the triangles (at most
+ * MR_RETARGET_PASSES) until none moves. Updates max_move. 0 or SL_E_NOMEM. */
+#define MR_RETARGET_PASSES 8
+int mr_retarget(refine *R, sl_error *err);
+/* Tears (step 4): what still fails gets copies of its corners (morph_refine.h). */
+int mr_tear(refine *R, sl_error *err);
 /* The vertex splitting failing edge (u, w), or NONE (morph_refine_step.c). */
 uint32_t mr_split_edge(refine *R, uint32_t u, uint32_t w);
 /* A vertex inside triangle (a, b, c) targeting the coarser vertex it spans, or NONE. */
