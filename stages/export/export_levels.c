@@ -292,9 +292,9 @@ static int names_files_before(const sl_export_config *c, int a, int b)
     return a < b;
 }
 
-/* First pass: every level's k, counts and mesh digest; then which levels share a mesh and
- * whose name their files take (rows[i].file). Generation is O(m), so cutting a level twice
- * costs little next to writing and measuring it. */
+/* With morph targets (each level needs to know its coarser published level before it is
+ * written): every level's k, counts and mesh digest first; then which levels share a mesh
+ * and whose name their files take (rows[i].file). Each level is then cut twice. */
 static int plan_levels(const sl_export_config *c, sl_lod_model *model, const sl_stage_io *io,
                        sl_export_result *rows, uint64_t *cracks, sl_error *err)
 {
@@ -419,6 +419,52 @@ void sl_export_report_result(const sl_export_config *c, const sl_export_frame *f
                    row->measured);
 }
 
+/* The levels in the order their files are named by (names_files_before): the first of
+ * a set of levels with one mesh is the one whose name the files take. */
+static void preference_order(const sl_export_config *c, int *order)
+{
+    for (int i = 0; i < c->level_count; i++) {
+        int at = i;
+        while (at > 0 && names_files_before(c, i, order[at - 1]))
+            order[at] = order[at - 1], at--;
+        order[at] = i;
+    }
+}
+
+/* Without morph targets, in preference order, each distinct cut generated once (the cut
+ * is the costliest part of exporting a large level): a level with the k of one already
+ * seen shares its mesh; else its mesh is cut, and shares the files of an earlier one with
+ * the same digest (equal meshes from different k), or is this level's own. The same
+ * rows[i].file as plan_levels gives. Returns 1 with *mesh the level's own mesh to write,
+ * 0 when it shares another's or has no triangles (nothing held), -1 out of memory. */
+static int cut_once(sl_lod_model *model, const int *order, int at, sl_export_result *rows,
+                    uint64_t *cracks, sl_export_digest *digests, sl_lod_mesh *mesh)
+{
+    int i = order[at];
+    for (int b = 0; b < at; b++)
+        if (rows[order[b]].k == rows[i].k) {
+            rows[i].file = rows[order[b]].file, cracks[i] = cracks[order[b]];
+            return 0;
+        }
+    if (sl_lod_generate(model, rows[i].k, mesh, &cracks[i]))
+        return -1;
+    rows[i].triangles = mesh->triangle_count;
+    rows[i].vertices = mesh->vertex_count;
+    rows[i].file = mesh->triangle_count ? i : -1;
+    if (mesh->triangle_count) {
+        digests[i] = sl_export_digest_mesh(mesh);
+        for (int b = 0; b < at && rows[i].file == i; b++) {
+            int j = order[b];
+            if (rows[j].file == j && !memcmp(&digests[j], &digests[i], sizeof *digests))
+                rows[i].file = j;
+        }
+    }
+    if (rows[i].file == i)
+        return 1;
+    sl_lod_mesh_release(mesh);
+    return 0;
+}
+
 int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
                           const sl_lod_mesh *mesh, const sl_lod_mesh *morph_to,
                           const char *extras, const sl_mesh *input,
@@ -449,23 +495,37 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
     sl_export_result *rows = calloc((size_t)c->level_count + 1, sizeof *rows);
     uint64_t *cracks = calloc((size_t)c->level_count + 1, sizeof *cracks);
     int rc = rows && cracks ? 0 : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    if (rc == 0)
+    int morph = c->morph && c->write_glb, order[SL_EXPORT_MAX_LEVELS];
+    sl_export_digest *digests = calloc((size_t)c->level_count + 1, sizeof *digests);
+    if (rc == 0 && !digests)
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    if (rc == 0 && morph)
         rc = plan_levels(c, model, io, rows, cracks, err);
+    for (int i = 0; i < c->level_count && rc == 0 && !morph; i++)
+        rows[i].k = c->levels[i].by_percent
+                        ? sl_lod_expansions_for_percent(model, c->levels[i].percent)
+                        : sl_lod_expansions_for_triangles(model, c->levels[i].budget);
+    preference_order(c, order);
     /* Each distinct mesh: its files and its measures, once. */
-    for (int i = 0; i < c->level_count && rc == 0; i++) {
+    for (int at = 0; at < c->level_count && rc == 0; at++) {
+        int i = order[at];
         const sl_export_level *lv = &c->levels[i];
-        if ((rc = sl_stage_step(io, "export", (double)i / c->level_count, err)))
+        if ((rc = sl_stage_step(io, "export", (double)at / c->level_count, err)))
             break;
         rows[i].morph_to = -1;
-        if (rows[i].file != i)
-            continue;
         sl_lod_mesh mesh, coarser;
         memset(&coarser, 0, sizeof coarser);
-        int to = sl_export_morph_coarser(c, rows, i);
-        if (sl_lod_generate(model, rows[i].k, &mesh, NULL)) {
+        /* 1: this level's own mesh, to write; 0: it shares one or has none; -1: no memory */
+        int own = !morph ? cut_once(model, order, at, rows, cracks, digests, &mesh)
+                  : rows[i].file != i ? 0
+                  : sl_lod_generate(model, rows[i].k, &mesh, NULL) ? -1 : 1;
+        if (own < 0) {
             rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
             break;
         }
+        if (!own)
+            continue;
+        int to = sl_export_morph_coarser(c, rows, i);
         if (to >= 0 && sl_lod_generate(model, rows[to].k, &coarser, NULL)) {
             sl_lod_mesh_release(&mesh);
             rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
@@ -482,6 +542,7 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
             sl_lod_mesh_release(&coarser);
         sl_lod_mesh_release(&mesh);
     }
+    free(digests);
     for (int i = 0; i < c->level_count && rc == 0; i++)
         if (rows[i].file >= 0 && rows[i].file != i) {
             sl_export_result own = rows[i];
