@@ -1,4 +1,5 @@
-/* Flat pairs for the morph refinement (morph_refine.h): targets in two coarser triangles
+/* Whether targets share a coarser triangle, for the morph refinement (morph_refine.h):
+ * one coarser triangle, or a flat pair. Flat pairs: targets in two coarser triangles
  * that share an edge and lie in one plane already span the coarser surface, when every
  * chord between them crosses that shared edge. The refinement would otherwise cut the
  * finer level along an edge where the coarser surface does not bend: on a CAD part, or on
@@ -11,7 +12,7 @@
  * lies in q, and a triangle whose three edges lie in the disk q lies in q. */
 #include <math.h>
 
-#include "geometry/morph_refine_internal.h"
+#include "geometry/morph_refine_core.h"
 #include "geometry/vec3.h"
 
 /* The triangle across coarser triangle g's edge k (corners k, k + 1), or NONE. */
@@ -120,4 +121,36 @@ int mr_flat_share(const refine *R, const double (*p)[3], int count, const uint32
                 return 1;
     }
     return 0;
+}
+
+/* Whether the targets of u and w lie in one coarser triangle (and of x too, x != NONE),
+ * or in a flat pair of them (mr_flat_share). */
+static int share(const refine *R, uint32_t u, uint32_t w, uint32_t x, int flat)
+{
+    uint32_t m[MEMBERS_MAX];
+    int n = mr_members(R, u, m);
+    double pw[3], px[3];
+    mr_target_of(R, w, pw);
+    if (x != NONE)
+        mr_target_of(R, x, px);
+    for (int i = 0; i < n; i++)
+        if (mr_lies_in(R, pw, m[i]) && (x == NONE || mr_lies_in(R, px, m[i])))
+            return 1;
+    if (!flat)
+        return 0;
+    double p[3][3];
+    mr_target_of(R, u, p[0]);
+    for (int k = 0; k < 3; k++)
+        p[1][k] = pw[k], p[2][k] = x == NONE ? 0.0 : px[k];
+    return mr_flat_share(R, (const double (*)[3])p, x == NONE ? 2 : 3, m, n);
+}
+
+int mr_share(const refine *R, uint32_t u, uint32_t w, uint32_t x)
+{
+    return share(R, u, w, x, 1);
+}
+
+int mr_share_one(const refine *R, uint32_t u, uint32_t w, uint32_t x)
+{
+    return share(R, u, w, x, 0);
 }

@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry/morph_refine_internal.h"
+#include "geometry/morph_refine_core.h"
 #include "geometry/vec3.h"
 
 static void face_normal(const refine *R, uint32_t g, double n[3])

@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry/morph_refine_internal.h"
+#include "geometry/morph_refine_core.h"
 
 /* The coarser triangle holding the most of v's three targets (the first such), and a
  * bit per corner whose target it holds. */

@@ -1,7 +1,9 @@
-/* Internals of the morph refinement (morph_refine.h): the state its rounds share, and
- * the steps that place new vertices (morph_refine_step.c). */
-#ifndef SCANLOD_GEOMETRY_MORPH_REFINE_INTERNAL_H
-#define SCANLOD_GEOMETRY_MORPH_REFINE_INTERNAL_H
+/* Internals of the morph refinement (morph_refine.h), the floor its files stand on: the
+ * state its rounds share and the helpers on it (morph_refine_core.c), and the steps
+ * above them: the sharing tests (morph_refine_flat.c), the splits (morph_refine_step.c),
+ * retargeting and tears (morph_refine_tear.c); morph_refine.c runs the rounds. */
+#ifndef SCANLOD_GEOMETRY_MORPH_REFINE_CORE_H
+#define SCANLOD_GEOMETRY_MORPH_REFINE_CORE_H
 
 #include <stdint.h>
 
@@ -63,21 +65,24 @@ static inline int mr_members(const refine *R, uint32_t v, uint32_t *out)
         out[i] = R->members_pool[(at >> 8) + i];
     return n;
 }
-/* Whether the targets of u and w lie in one coarser triangle (and of x too, x != NONE). */
+/* Whether the targets of u and w lie in one coarser triangle (and of x too, x != NONE),
+ * or in a flat pair of them (mr_flat_share); mr_share_one: in one coarser triangle only
+ * (morph_refine_flat.c). */
 int mr_share(const refine *R, uint32_t u, uint32_t w, uint32_t x);
+int mr_share_one(const refine *R, uint32_t u, uint32_t w, uint32_t x);
 /* Whether points p[0..count) (count 2 or 3; targets, the first in members[]) lie in a
  * pair of coplanar coarser triangles sharing an edge, one of them in members, with every
  * chord between the two crossing that edge: then the segment or triangle they span lies
  * on the coarser surface (morph_refine_flat.c). */
 int mr_flat_share(const refine *R, const double (*p)[3], int count, const uint32_t *members,
                   int member_count);
-/* Adds the vertex sum_k f[k] * (vertex v[k]) with target t in coarser triangle `hint`
- * (room reserved by the caller); returns its index. */
+/* morph_refine_core.c: adds the vertex sum_k f[k] * (vertex v[k]) with target t in
+ * coarser triangle `hint` (room reserved by the caller); returns its index. */
 uint32_t mr_add_vertex(refine *R, int count, const uint32_t *v, const double *f,
                        const double t[3], uint32_t hint);
-/* Helpers of morph_refine.c the other files share: v's members (out: MEMBERS_MAX) for
- * target p near coarser triangle h; keeping them for mr_members (0, or -1 out of
- * memory); room for the counts given; the out-of-memory error; a uint64_t comparator. */
+/* Also morph_refine_core.c: the members (out: MEMBERS_MAX) of target p near coarser
+ * triangle h; keeping them as v's for mr_members (0, or -1 out of memory); room for the
+ * counts given; the out-of-memory error; a uint64_t comparator. */
 int mr_members_of(const refine *R, const double p[3], uint32_t h, uint32_t *out);
 int mr_members_keep(refine *R, uint32_t v, const uint32_t *m, int n);
 int mr_reserve(refine *R, uint64_t vertices, uint64_t triangles, sl_error *err);
