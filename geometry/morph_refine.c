@@ -154,19 +154,13 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
 static int build_coarse(refine *R, sl_error *err)
 {
     const sl_mesh *c = R->c;
-    R->ring_start = calloc(c->vertex_count + 2, sizeof *R->ring_start);
-    R->ring = malloc((3 * c->triangle_count + 1) * sizeof *R->ring);
     R->dist = malloc((c->vertex_count + 1) * sizeof *R->dist);
     R->prev = malloc((c->vertex_count + 1) * sizeof *R->prev);
     R->stamp = calloc(c->vertex_count + 1, sizeof *R->stamp);
-    if (!R->ring_start || !R->ring || !R->dist || !R->prev || !R->stamp)
+    if (!R->dist || !R->prev || !R->stamp ||
+        mr_vertex_rings(c->triangles, c->triangle_count, c->vertex_count, &R->ring_start,
+                        &R->ring))
         return mr_nomem(err);
-    for (uint64_t i = 0; i < 3 * c->triangle_count; i++)
-        R->ring_start[c->triangles[i] + 2]++;
-    for (uint64_t v = 0; v < c->vertex_count; v++)
-        R->ring_start[v + 2] += R->ring_start[v + 1];
-    for (uint64_t i = 0; i < 3 * c->triangle_count; i++)
-        R->ring[R->ring_start[c->triangles[i] + 1]++] = (uint32_t)(i / 3);
     double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (uint64_t i = 0; i < c->vertex_count; i++)
         for (int k = 0; k < 3; k++)

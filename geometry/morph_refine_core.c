@@ -136,3 +136,20 @@ int mr_cmp_u64(const void *a, const void *b)
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
     return x < y ? -1 : x > y;
 }
+
+int mr_vertex_rings(const uint32_t *triangles, uint64_t triangle_count, uint64_t vertex_count,
+                    uint32_t **start_out, uint32_t **ring_out)
+{
+    uint32_t *start = calloc(vertex_count + 2, sizeof *start);
+    uint32_t *ring = malloc((3 * triangle_count + 1) * sizeof *ring);
+    *start_out = start, *ring_out = ring;
+    if (!start || !ring)
+        return -1;
+    for (uint64_t i = 0; i < 3 * triangle_count; i++)
+        start[triangles[i] + 2]++;
+    for (uint64_t v = 0; v < vertex_count; v++)
+        start[v + 2] += start[v + 1];
+    for (uint64_t i = 0; i < 3 * triangle_count; i++)
+        ring[start[triangles[i] + 1]++] = (uint32_t)(i / 3);
+    return 0;
+}

@@ -88,6 +88,11 @@ int mr_members_keep(refine *R, uint32_t v, const uint32_t *m, int n);
 int mr_reserve(refine *R, uint64_t vertices, uint64_t triangles, sl_error *err);
 int mr_nomem(sl_error *err);
 int mr_cmp_u64(const void *a, const void *b);
+/* Each vertex's triangles: vertex v's are (*ring)[(*start)[v] .. (*start)[v + 1]), in
+ * triangle order (OUT: both arrays, freed by the caller, also on failure). 0, or -1 out
+ * of memory. */
+int mr_vertex_rings(const uint32_t *triangles, uint64_t triangle_count, uint64_t vertex_count,
+                    uint32_t **start, uint32_t **ring);
 /* The coarser triangle holding the most of the targets of triangle v[0..2] (the first
  * such), *held a bit per corner whose target it holds (morph_refine_tear.c). */
 uint32_t mr_best_face(const refine *R, const uint32_t *v, int *held);

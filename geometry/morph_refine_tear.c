@@ -60,23 +60,32 @@ int mr_retarget(refine *R, sl_error *err)
 {
     sl_morph_refined *r = R->r;
     uint64_t vn = r->vertex_count, tn = r->triangle_count;
-    uint32_t *start = calloc(vn + 2, sizeof *start), *ring = malloc((3 * tn + 1) * sizeof *ring);
-    if (!start || !ring) {
-        free(start), free(ring);
+    /* Per triangle: whether it may fail (tested in parallel at each pass's start, and set
+     * again around every vertex that moves, the only way a triangle's test can change), so
+     * the serial pass tests only those, in triangle order, as a test of every one would. */
+    uint8_t *maybe = malloc(tn + 1);
+    uint32_t *start = NULL, *ring = NULL;
+    if (!maybe)
         return mr_nomem(err);
-    }
-    for (uint64_t i = 0; i < 3 * tn; i++)
-        start[r->triangles[i] + 2]++;
-    for (uint64_t v = 0; v < vn; v++)
-        start[v + 2] += start[v + 1];
-    for (uint64_t i = 0; i < 3 * tn; i++)
-        ring[start[r->triangles[i] + 1]++] = (uint32_t)(i / 3);
-    int rc = 0;
+    int rc = 0, any_moved = 0;
     for (int pass = 0, moved = 1; rc == 0 && moved && pass < MR_RETARGET_PASSES; pass++) {
         moved = 0;
+        uint64_t failing = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : failing)
+        for (int64_t t = 0; t < (int64_t)tn; t++) {
+            const uint32_t *v = r->triangles + 3 * t;
+            maybe[t] = (uint8_t)!mr_share(R, v[0], v[1], v[2]);
+            failing += maybe[t];
+        }
+        if (!failing)
+            break;
+        if (!ring && mr_vertex_rings(r->triangles, tn, vn, &start, &ring)) {
+            rc = mr_nomem(err);
+            break;
+        }
         for (uint64_t t = 0; rc == 0 && t < tn; t++) {
             const uint32_t *v = r->triangles + 3 * t;
-            if (mr_share(R, v[0], v[1], v[2]))
+            if (!maybe[t] || mr_share(R, v[0], v[1], v[2]))
                 continue;
             int held;
             uint32_t g = mr_best_face(R, v, &held);
@@ -98,7 +107,9 @@ int mr_retarget(refine *R, sl_error *err)
                     break;
                 }
                 if (failing_around(R, ring + start[x], n) < before) {
-                    moved = 1;
+                    moved = any_moved = 1;
+                    for (uint32_t i = start[x]; i < start[x + 1]; i++)
+                        maybe[ring[i]] = 1;
                 } else { /* back as it was (the members' new entry stays unused) */
                     memcpy(r->targets + 3 * (uint64_t)x, was, sizeof was);
                     R->hint[x] = was_hint, R->members_at[x] = was_members;
@@ -108,7 +119,7 @@ int mr_retarget(refine *R, sl_error *err)
     }
     /* the level's vertices may have moved farther than their closest points */
     double worst2 = r->max_move * r->max_move;
-    for (uint64_t i = 0; i < r->level_vertices; i++) {
+    for (uint64_t i = 0; any_moved && i < r->level_vertices; i++) {
         double d2 = 0;
         for (int k = 0; k < 3; k++) {
             double d = (double)r->targets[3 * i + k] - r->positions[3 * i + k];
@@ -117,7 +128,7 @@ int mr_retarget(refine *R, sl_error *err)
         worst2 = d2 > worst2 ? d2 : worst2;
     }
     r->max_move = sqrt(worst2);
-    free(start), free(ring);
+    free(start), free(ring), free(maybe);
     return rc;
 }
 

@@ -292,6 +292,13 @@ static int names_files_before(const sl_export_config *c, int a, int b)
     return a < b;
 }
 
+/* The LOD-array prefix a level cuts: its percent (paper Table 1) or its budget. */
+static uint32_t level_k(sl_lod_model *model, const sl_export_level *lv)
+{
+    return lv->by_percent ? sl_lod_expansions_for_percent(model, lv->percent)
+                          : sl_lod_expansions_for_triangles(model, lv->budget);
+}
+
 /* With morph targets (each level needs to know its coarser published level before it is
  * written): every level's k, counts and mesh digest first; then which levels share a mesh
  * and whose name their files take (rows[i].file). Each level is then cut twice. */
@@ -308,8 +315,7 @@ static int plan_levels(const sl_export_config *c, sl_lod_model *model, const sl_
             free(digests);
             return rc;
         }
-        rows[i].k = lv->by_percent ? sl_lod_expansions_for_percent(model, lv->percent)
-                                   : sl_lod_expansions_for_triangles(model, lv->budget);
+        rows[i].k = level_k(model, lv);
         sl_lod_mesh mesh;
         if (sl_lod_generate(model, rows[i].k, &mesh, &cracks[i])) {
             free(digests);
@@ -502,9 +508,7 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
     if (rc == 0 && morph)
         rc = plan_levels(c, model, io, rows, cracks, err);
     for (int i = 0; i < c->level_count && rc == 0 && !morph; i++)
-        rows[i].k = c->levels[i].by_percent
-                        ? sl_lod_expansions_for_percent(model, c->levels[i].percent)
-                        : sl_lod_expansions_for_triangles(model, c->levels[i].budget);
+        rows[i].k = level_k(model, &c->levels[i]);
     preference_order(c, order);
     /* Each distinct mesh: its files and its measures, once. */
     for (int at = 0; at < c->level_count && rc == 0; at++) {

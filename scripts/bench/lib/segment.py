@@ -466,23 +466,18 @@ def plot(rows, dest):
 
 
 def replace_between(path, begin, end, text):
+    """The block from `begin` to `end` (markers included) becomes text between the markers,
+    or is appended; with text None it is dropped, if it is there."""
     s = open(path).read() if os.path.exists(path) else ""
-    block = begin + "\n" + text.rstrip() + "\n" + end
-    if begin in s and end in s:
+    if text is None:
+        if begin not in s or end not in s:
+            return
+        s = s[:s.index(begin)].rstrip() + "\n" + s[s.index(end) + len(end):]
+    elif begin in s and end in s:
+        block = begin + "\n" + text.rstrip() + "\n" + end
         s = s[:s.index(begin)] + block + s[s.index(end) + len(end):]
     else:
-        s = s.rstrip() + "\n\n" + block + "\n"
-    with open(path + ".tmp", "w") as f:
-        f.write(s)
-    os.replace(path + ".tmp", path)
-
-
-def remove_between(path, begin, end):
-    """Drops the block from `begin` to `end` (markers included), if it is there."""
-    s = open(path).read() if os.path.exists(path) else ""
-    if begin not in s or end not in s:
-        return
-    s = s[:s.index(begin)].rstrip() + "\n" + s[s.index(end) + len(end):]
+        s = s.rstrip() + "\n\n" + begin + "\n" + text.rstrip() + "\n" + end + "\n"
     with open(path + ".tmp", "w") as f:
         f.write(s)
     os.replace(path + ".tmp", path)
@@ -579,8 +574,8 @@ def cmd_report(args):
     for stale in ("segment-update.md", "segment_rms_update.png"):
         if os.path.exists(os.path.join(docs, "bench", stale)):
             os.remove(os.path.join(docs, "bench", stale))
-    remove_between(os.path.join(docs, "benchmarks.md"), "<!-- segment-update:begin -->",
-                   "<!-- segment-update:end -->")
+    replace_between(os.path.join(docs, "benchmarks.md"), "<!-- segment-update:begin -->",
+                    "<!-- segment-update:end -->", None)
     replace_between(os.path.join(docs, "benchmarks.md"), "<!-- segment:begin -->",
                     "<!-- segment:end -->", "\n".join(sec))
     if "paper" in res:
