@@ -431,7 +431,13 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         e->counts.reused++; /* someone finished it meanwhile */
         sl_hash_hex(key, t->key);
         sl_queue_put(e->work, stage->name, SL_STATE_CLAIMED, name, t, err);
-        return release_done(e, s, name, t, NULL, err);
+        int released = 0;
+        rc = release_done(e, s, name, t, &released, err);
+        /* The owner that committed lost its claim before moving it to done and said
+         * nothing; whoever moves it says the stage is done, once. */
+        if (released)
+            sl_log_event("stage_done", stage->name, t->item, -1, NULL, "\"adopted\":true");
+        return rc;
     }
     /* The claim is fenced by its lease right before the artifact folder is emptied: an
      * owner frozen since it claimed (SIGSTOP, a Slurm suspend, an NFS stall) whose claim

@@ -13,6 +13,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "core/log.h"
+
 void sl_ticket_for(sl_ticket *t, const char *item, const char *source_rel, sl_hash key)
 {
     sl_ticket_init(t);
@@ -73,6 +75,9 @@ int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, 
                 }
                 if (rc)
                     return rc;
+                /* A committed stage whose owner failed before moving its claim to done
+                 * (and so logged it as failed, or not at all): adopted here, once. */
+                sl_log_event("stage_done", stage, item, -1, NULL, "\"adopted\":true");
             }
             e->counts.reused++;
             upstream = sl_chain_hash(upstream, rec.outputs_digest);

@@ -37,9 +37,9 @@ if light; then
   echo "LIGHT: every 4th of the $renames renames and the last; all of them in the Release pass"
 fi
 mapfile -t points < <(seq 1 "$step" "$renames"; [ $(((renames - 1) % step)) -eq 0 ] || echo "$renames")
-hung=0 silent=0 unfinished=0 differ=0 faulted=0 fired=0
+hung=0 silent=0 unfinished=0 differ=0 faulted=0 fired=0 misslogged=0
 for n in "${points[@]}"; do
-  rm -rf "$TMP/work" "$TMP/out" "$TMP/count"
+  rm -rf "$TMP/work" "$TMP/out" "$TMP/count" "$TMP/logs"
   write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out"
   run_timed "$TMP/c.ini" SCANLOD_FAULT=rename:$n:ENOENT SCANLOD_FAULT_SCOPE=parent \
     SCANLOD_FAULT_COUNT="$TMP/count"
@@ -63,6 +63,12 @@ for n in "${points[@]}"; do
   elif [ "$ref" != "$(tree_digest "$TMP/work" "$TMP/out")" ]; then
     differ=$((differ + 1)); echo "rename $n: the rerun differs from a clean run" >&2
   fi
+  # The log tells the same story: over the injected run and its rerun, each of the six
+  # stages is said done once, whether its owner or the run that adopted its commit says so.
+  done_events=$(cat "$TMP"/logs/*.jsonl 2>/dev/null | grep -c '"event":"stage_done"' || true)
+  if [ "$done_events" -ne 6 ]; then
+    misslogged=$((misslogged + 1)); echo "rename $n: $done_events stage_done events, not 6" >&2
+  fi
 done
 echo "${#points[@]} of $renames renames injected: $faulted runs failed with an error, the rest finished" >&2
 check "every injected rename fired ($fired of ${#points[@]})" [ "$fired" -eq "${#points[@]}" ]
@@ -73,4 +79,5 @@ check "no run hangs ($hung did)" [ "$hung" -eq 0 ]
 check "no silent non-zero exit ($silent)" [ "$silent" -eq 0 ]
 check "every rerun exits 0 ($unfinished did not)" [ "$unfinished" -eq 0 ]
 check "every rerun equals a clean run ($differ differ)" [ "$differ" -eq 0 ]
+check "every stage is logged done once ($misslogged runs did not)" [ "$misslogged" -eq 0 ]
 finish
