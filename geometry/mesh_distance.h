@@ -115,4 +115,12 @@ int sl_mesh_check_surface(const sl_mesh *m, const char *file, sl_error *err);
  * NaNs). Fails only with SL_E_NOMEM or SL_E_LIMIT (> 2^32 - 1 vertices). */
 int sl_mesh_topology_compute(const sl_mesh *m, sl_mesh_topology *out /* OUT */, sl_error *err);
 
+/* The connected parts of `m` (through shared welded positions, as `components` above,
+ * degenerate triangles joined to the part they touch): part_of_triangle[t] (the caller's
+ * array of triangle_count entries) numbers them in order of their first triangle;
+ * *part_area (freed by the caller) holds each one's area. Indices must be in range.
+ * Fails only with SL_E_NOMEM or SL_E_LIMIT. */
+int sl_mesh_parts(const sl_mesh *m, uint32_t *part_of_triangle /* OUT */,
+                  double **part_area /* OUT */, uint64_t *part_count /* OUT */, sl_error *err);
+
 #endif

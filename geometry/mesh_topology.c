@@ -257,3 +257,58 @@ int sl_mesh_topology_compute(const sl_mesh *m, sl_mesh_topology *out, sl_error *
                             (unsigned long long)m->triangle_count);
     return SL_OK;
 }
+
+int sl_mesh_parts(const sl_mesh *m, uint32_t *part_of_triangle, double **part_area,
+                  uint64_t *part_count, sl_error *err)
+{
+    *part_area = NULL;
+    *part_count = 0;
+    if (m->vertex_count > (uint64_t)UINT32_MAX)
+        return sl_error_set(err, SL_E_LIMIT, 0, NULL,
+                            "%llu vertices: parts handle at most 2^32 - 1",
+                            (unsigned long long)m->vertex_count);
+    uint64_t n = m->vertex_count ? m->vertex_count : 1;
+    uint32_t *weld = malloc(n * sizeof *weld), *parent = NULL, *dense = NULL;
+    int64_t ids = weld ? weld_positions(m, weld) : -1;
+    if (ids >= 0) {
+        parent = malloc(((uint64_t)ids + 1) * sizeof *parent);
+        dense = malloc(((uint64_t)ids + 1) * sizeof *dense);
+    }
+    if (!parent || !dense) {
+        free(weld);
+        free(parent);
+        free(dense);
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "connected parts of %llu triangles",
+                            (unsigned long long)m->triangle_count);
+    }
+    for (int64_t i = 0; i < ids; i++)
+        parent[i] = (uint32_t)i, dense[i] = NONE;
+    /* Degenerate triangles join their corners too: they touch the part they lie in. */
+    for (uint64_t t = 0; t < m->triangle_count; t++)
+        for (int c = 1; c < 3; c++) {
+            uint32_t a = find_root(parent, weld[m->triangles[3 * t]]);
+            uint32_t b = find_root(parent, weld[m->triangles[3 * t + c]]);
+            if (a != b)
+                parent[a > b ? a : b] = a < b ? a : b;
+        }
+    uint64_t parts = 0;
+    for (uint64_t t = 0; t < m->triangle_count; t++) {
+        uint32_t r = find_root(parent, weld[m->triangles[3 * t]]);
+        if (dense[r] == NONE)
+            dense[r] = (uint32_t)parts++;
+        part_of_triangle[t] = dense[r];
+    }
+    double *area = calloc(parts ? parts : 1, sizeof *area);
+    if (area)
+        for (uint64_t t = 0; t < m->triangle_count; t++)
+            area[part_of_triangle[t]] += triangle_area(m, t);
+    free(weld);
+    free(parent);
+    free(dense);
+    if (!area)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "connected parts of %llu triangles",
+                            (unsigned long long)m->triangle_count);
+    *part_area = area;
+    *part_count = parts;
+    return SL_OK;
+}

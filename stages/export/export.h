@@ -66,6 +66,8 @@ typedef struct sl_export_config {
     char texture_sizes[256];                    /* "name:edge,..." */
     int viewer; /* index.html gets a 3D view per level: viewer bundle + NAME.glb.js copies */
     int morph;  /* each published level's GLB morphs to the next coarser published level */
+    double min_part_area; /* coarser octree levels drop parts below this share of their area */
+    double shard_reach;   /* ... that lie within this many mean edges of the rest */
 } sl_export_config;
 
 /* The section at its option table's defaults (sl_stage_default_config). */

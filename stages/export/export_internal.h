@@ -7,6 +7,7 @@
 #include "core/hash.h"
 #include "core/json.h"
 #include "geometry/mesh.h"
+#include "geometry/mesh_distance.h"
 #include "geometry/triangle_bvh.h"
 #include "pipeline/stage.h"
 #include "shim/oiio_shim.h"
@@ -78,6 +79,24 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
                      const sl_export_frame *frame, const sl_export_texture *texture,
                      const sl_stage_io *io, sl_error *err);
 
+/* Shards ([export] min_part_area, export_parts.c): the finest level is one body when its
+ * largest part holds at least this share of its area. */
+#define SL_EXPORT_ONE_BODY 0.99
+
+/* What sl_export_drop_parts removed from a level. */
+typedef struct sl_export_parts {
+    uint64_t parts, triangles; /* parts and triangles dropped */
+    double area_fraction;      /* their share of the level's area before */
+} sl_export_parts;
+
+/* The largest connected part's share of the mesh's area (1 without triangles). */
+int sl_export_largest_part(const sl_lod_mesh *mesh, double *fraction /* OUT */, sl_error *err);
+
+/* Drops the parts holding less than `min_fraction` of the mesh's area, never its largest;
+ * the kept triangles and vertices stay in their order. 0, or SL_E_NOMEM. */
+int sl_export_drop_parts(sl_lod_mesh *mesh, double min_fraction, double reach,
+                         sl_export_parts *out /* OUT */, sl_error *err);
+
 /* What became of one level: the facts the summaries, the manifest and the pages show. */
 typedef struct sl_export_result {
     uint32_t k;
@@ -89,6 +108,7 @@ typedef struct sl_export_result {
     double rms, hausdorff, mean; /* fractions of the input's diagonal, when measured */
     double diagonal;             /* the input's bounding-box diagonal (world), when measured */
     sl_glb_stats glb;            /* what the GLB writer did (compression, quantisation) */
+    sl_export_parts dropped;     /* shards left out ([export] min_part_area) */
     /* The level's atlas: 1 baked, -1 too many triangles for it, 0 no texture. */
     int texture, texture_size, texture_cell;
     const char *texture_mime;
@@ -101,6 +121,25 @@ typedef struct sl_export_result {
     /* The published level this level's GLB morphs to ([export] morph), or -1. */
     int morph_to;
 } sl_export_result;
+
+/* What cuts an LOD model's levels: the model, and whether its finest level is one body
+ * (one_body: -1 not known yet, 0 several pieces, 1 one body; start at -1). */
+typedef struct sl_export_cutter {
+    const sl_export_config *c;
+    sl_lod_model *model;
+    int one_body;
+} sl_export_cutter;
+
+/* The published mesh after k expansions: the cut, less its shards when the rule applies
+ * (`dropped`, may be NULL, says what went); `cracks` may be NULL. 0 or SL_E_NOMEM (then
+ * nothing is held). */
+int sl_export_cut_level(sl_export_cutter *x, uint32_t k, sl_lod_mesh *mesh, uint64_t *cracks,
+                        sl_export_parts *dropped, sl_error *err);
+
+/* Level lv's published mesh into *mesh, row->k (set to lv's k before; a budget level may
+ * raise it to refill what its shards cost) and row->dropped. 0 or SL_E_NOMEM. */
+int sl_export_cut_row(sl_export_cutter *x, const sl_export_level *lv, sl_export_result *row,
+                      sl_lod_mesh *mesh, uint64_t *cracks, sl_error *err);
 
 /* With [export] morph and GLBs written: the published level (rows[j].file == j) next
  * coarser than published level i, the one with the most triangles below i's; else -1. */

@@ -302,9 +302,10 @@ static uint32_t level_k(sl_lod_model *model, const sl_export_level *lv)
 /* With morph targets (each level needs to know its coarser published level before it is
  * written): every level's k, counts and mesh digest first; then which levels share a mesh
  * and whose name their files take (rows[i].file). Each level is then cut twice. */
-static int plan_levels(const sl_export_config *c, sl_lod_model *model, const sl_stage_io *io,
+static int plan_levels(const sl_export_config *c, sl_export_cutter *cutter, const sl_stage_io *io,
                        sl_export_result *rows, uint64_t *cracks, sl_error *err)
 {
+    sl_lod_model *model = cutter->model;
     sl_export_digest *digests = calloc((size_t)c->level_count + 1, sizeof *digests);
     if (!digests)
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
@@ -317,9 +318,9 @@ static int plan_levels(const sl_export_config *c, sl_lod_model *model, const sl_
         }
         rows[i].k = level_k(model, lv);
         sl_lod_mesh mesh;
-        if (sl_lod_generate(model, rows[i].k, &mesh, &cracks[i])) {
+        if ((rc = sl_export_cut_row(cutter, lv, &rows[i], &mesh, &cracks[i], err))) {
             free(digests);
-            return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+            return rc;
         }
         rows[i].triangles = mesh.triangle_count;
         rows[i].vertices = mesh.vertex_count;
@@ -395,6 +396,13 @@ static void report_level(const sl_export_config *c, const sl_lod_model *model,
     sl_json_u64(r, "vertices", row->vertices);
     sl_json_double(r, "max_error", model->error_after[row->k]);
     sl_json_u64(r, "unpatched_cells", cracks);
+    if (c->min_part_area > 0) { /* shards left out (export_parts.c); the counts are after */
+        sl_json_object_begin(r, "shards_dropped");
+        sl_json_u64(r, "parts", row->dropped.parts);
+        sl_json_u64(r, "triangles", row->dropped.triangles);
+        sl_json_double(r, "area_fraction", row->dropped.area_fraction);
+        sl_json_object_end(r);
+    }
     sl_export_report_result(c, frame, row, row->file >= 0 ? c->levels[row->file].name : NULL,
                             model->error_after[row->k], r);
     if (row->morph_to >= 0)
@@ -442,9 +450,10 @@ static void preference_order(const sl_export_config *c, int *order)
  * seen shares its mesh; else its mesh is cut, and shares the files of an earlier one with
  * the same digest (equal meshes from different k), or is this level's own. The same
  * rows[i].file as plan_levels gives. Returns 1 with *mesh the level's own mesh to write,
- * 0 when it shares another's or has no triangles (nothing held), -1 out of memory. */
-static int cut_once(sl_lod_model *model, const int *order, int at, sl_export_result *rows,
-                    uint64_t *cracks, sl_export_digest *digests, sl_lod_mesh *mesh)
+ * 0 when it shares another's or has no triangles (nothing held), -1 out of memory (err). */
+static int cut_once(sl_export_cutter *cutter, const int *order, int at, sl_export_result *rows,
+                    uint64_t *cracks, sl_export_digest *digests, sl_lod_mesh *mesh,
+                    sl_error *err)
 {
     int i = order[at];
     for (int b = 0; b < at; b++)
@@ -452,7 +461,7 @@ static int cut_once(sl_lod_model *model, const int *order, int at, sl_export_res
             rows[i].file = rows[order[b]].file, cracks[i] = cracks[order[b]];
             return 0;
         }
-    if (sl_lod_generate(model, rows[i].k, mesh, &cracks[i]))
+    if (sl_export_cut_row(cutter, &cutter->c->levels[i], &rows[i], mesh, &cracks[i], err))
         return -1;
     rows[i].triangles = mesh->triangle_count;
     rows[i].vertices = mesh->vertex_count;
@@ -505,8 +514,9 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
     sl_export_digest *digests = calloc((size_t)c->level_count + 1, sizeof *digests);
     if (rc == 0 && !digests)
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+    sl_export_cutter cutter = {c, model, -1};
     if (rc == 0 && morph)
-        rc = plan_levels(c, model, io, rows, cracks, err);
+        rc = plan_levels(c, &cutter, io, rows, cracks, err);
     for (int i = 0; i < c->level_count && rc == 0 && !morph; i++)
         rows[i].k = level_k(model, &c->levels[i]);
     preference_order(c, order);
@@ -520,19 +530,18 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
         sl_lod_mesh mesh, coarser;
         memset(&coarser, 0, sizeof coarser);
         /* 1: this level's own mesh, to write; 0: it shares one or has none; -1: no memory */
-        int own = !morph ? cut_once(model, order, at, rows, cracks, digests, &mesh)
+        int own = !morph ? cut_once(&cutter, order, at, rows, cracks, digests, &mesh, err)
                   : rows[i].file != i ? 0
-                  : sl_lod_generate(model, rows[i].k, &mesh, NULL) ? -1 : 1;
+                  : sl_export_cut_level(&cutter, rows[i].k, &mesh, NULL, NULL, err) ? -1 : 1;
         if (own < 0) {
-            rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+            rc = err->code ? err->code : SL_E_NOMEM;
             break;
         }
         if (!own)
             continue;
         int to = sl_export_morph_coarser(c, rows, i);
-        if (to >= 0 && sl_lod_generate(model, rows[to].k, &coarser, NULL)) {
+        if (to >= 0 && (rc = sl_export_cut_level(&cutter, rows[to].k, &coarser, NULL, NULL, err))) {
             sl_lod_mesh_release(&mesh);
-            rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
             break;
         }
         rows[i].morph_to = to;

@@ -17,8 +17,9 @@
 /* 5: [export] morph (morph targets in the GLBs). 6: report.json gives each level's
  * connected parts and the largest one's share of the area. 7: the pages name the segment
  * method's levels as such (they said "Clustering levels"). 8: a morphing GLB carries the
- * level cut along the coarser level's edges, so its weight-1 surface lies on it. */
-#define EXPORT_STAGE_VERSION 8u
+ * level cut along the coarser level's edges, so its weight-1 surface lies on it. 9: [export]
+ * min_part_area (coarser octree levels leave out shards). */
+#define EXPORT_STAGE_VERSION 9u
 
 static const sl_option export_options[] = {
     {"export", "lod_percents", SL_OPT_LIST, "20,40,60,80,100", 0, 100, NULL,
@@ -97,6 +98,18 @@ static const sl_option export_options[] = {
      "distance). At weight 0 the GLB is the level, at weight 1 it lies on the coarser level. "
      "The coarsest level has none. Works with every compression (Draco: the target is "
      "stored uncompressed beside the Draco stream)."},
+    {"export", "min_part_area", SL_OPT_DOUBLE, "0.01", 0, 0.5, NULL,
+     "Shards (docs/lod.md): when the octree's finest level is one body (its largest part "
+     "holds 99 % of its area), each coarser published level leaves out the connected parts "
+     "holding less than this share of its area (never its largest): pieces of thin parts "
+     "that the coarse cells cut loose, and specks. 0 publishes every part as the octree "
+     "draws it (paper 1). The finest level, and every level of a scan of several pieces, "
+     "keep all their parts; the levels of the cluster and segment methods are never "
+     "changed."},
+    {"export", "shard_reach", SL_OPT_DOUBLE, "2", 0, 1e9, NULL,
+     "A small part (min_part_area) is left out only when each of its vertices lies within "
+     "this many of the level's mean triangle edges of the rest of the level: a speck the "
+     "body covers goes, a part farther out (the only surface there) stays."},
     SL_OPTION_END,
 };
 
@@ -148,6 +161,8 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
     }
     c->viewer = sl_config_bool(cfg, "export", "viewer");
     c->morph = sl_config_bool(cfg, "export", "morph");
+    c->min_part_area = sl_config_double(cfg, "export", "min_part_area");
+    c->shard_reach = sl_config_double(cfg, "export", "shard_reach");
     if (rc) {
         free(c);
         return rc;

@@ -364,8 +364,46 @@ static void test_reference(void)
     sl_mesh_release(&a);
 }
 
+/* Parts: a unit cube (area 6), an unwelded copy of it moved by 2 along x (welding joins
+ * its corners), a small triangle apart (area 0.005), and a degenerate triangle touching
+ * the first cube (it joins that part, adding no area). */
+static void test_parts(void)
+{
+    float pos[8 * 3 + 36 * 3 + 3 * 3];
+    uint32_t tri[12 * 3 + 36 + 3 + 3];
+    memcpy(pos, cube_pos, sizeof cube_pos);
+    memcpy(tri, cube_tri, sizeof cube_tri);
+    for (int i = 0; i < 36; i++) {
+        memcpy(&pos[24 + 3 * i], &cube_pos[3 * cube_tri[i]], 3 * sizeof(float));
+        pos[24 + 3 * i] += 2;
+        tri[36 + i] = 8 + (uint32_t)i;
+    }
+    const float speck[9] = {5, 5, 5, 5.1f, 5, 5, 5, 5.1f, 5};
+    memcpy(&pos[24 + 108], speck, sizeof speck);
+    for (int c = 0; c < 3; c++)
+        tri[72 + c] = 44 + (uint32_t)c;
+    tri[75] = 0, tri[76] = 0, tri[77] = 6; /* degenerate, on the first cube */
+    sl_mesh m;
+    make_mesh(&m, pos, 47, tri, 26);
+    uint32_t part[26];
+    double *area = NULL;
+    uint64_t parts = 0;
+    sl_error err;
+    sl_error_init(&err);
+    CHECK(sl_mesh_parts(&m, part, &area, &parts, &err) == SL_OK);
+    CHECK_EQ_U64(parts, 3);
+    for (int t = 0; t < 26; t++)
+        CHECK_EQ_U64(part[t], t < 12 ? 0 : t < 24 ? 1 : t == 24 ? 2 : 0);
+    CHECK(fabs(area[0] - 6) < 1e-5 && fabs(area[1] - 6) < 1e-5 && fabs(area[2] - 0.005) < 1e-6);
+    free(area);
+    sl_mesh_topology t = topology_of(&m);
+    CHECK_EQ_U64(t.components, 3);
+    sl_mesh_release(&m);
+}
+
 int main(void)
 {
+    test_parts();
     test_reference();
     test_points_as_a();
     test_closest_feature();
