@@ -225,14 +225,16 @@ int sl_export_cut_level(sl_export_cutter *x, uint32_t k, sl_lod_mesh *mesh, uint
 /* Level lv's published mesh into row (k, dropped) and *mesh. A budget level that lost
  * shards gives their triangles to the body: the k of the budget raised by what was lost
  * is tried, then k is bisected below it (at most REFILL_CUTS more cuts in all) for the
- * largest whose mesh without its shards still fits the budget. */
+ * largest whose mesh without its shards still fits the budget; when they were more than
+ * 0.5 % of the budget (a large level's few specks are not worth its cuts). */
 #define REFILL_CUTS 4
+#define REFILL_WORTH 200
 int sl_export_cut_row(sl_export_cutter *x, const sl_export_level *lv, sl_export_result *row,
                    sl_lod_mesh *mesh, uint64_t *cracks, sl_error *err)
 {
     int rc = sl_export_cut_level(x, row->k, mesh, cracks, &row->dropped, err);
-    if (rc || lv->by_percent || row->dropped.triangles == 0)
-        return rc;
+    if (rc || lv->by_percent || row->dropped.triangles * REFILL_WORTH <= lv->budget)
+        return rc; /* a loss under 1 / REFILL_WORTH of the budget is not worth the cuts */
     uint32_t lo = row->k;
     uint32_t hi = sl_lod_expansions_for_triangles(x->model, lv->budget + row->dropped.triangles) + 1;
     for (int step = 0; step < REFILL_CUTS && hi - lo > 1; step++) {
