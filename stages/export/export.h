@@ -68,6 +68,7 @@ typedef struct sl_export_config {
     int morph;  /* each published level's GLB morphs to the next coarser published level */
     double min_part_area; /* coarser octree levels drop parts below this share of their area */
     double shard_reach;   /* ... that lie within this many mean edges of the rest */
+    int cap_at_input;     /* no octree level above the input mesh's triangle count */
 } sl_export_config;
 
 /* The section at its option table's defaults (sl_stage_default_config). */

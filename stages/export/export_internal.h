@@ -74,9 +74,10 @@ void sl_export_baked_release(sl_export_baked *b);
 int sl_export_texture_size(const sl_export_config *c, const char *name);
 
 /* Generates, writes and measures every level; fills io->report. `input` may be NULL (no
- * fidelity). */
+ * fidelity). `cap` > 0 ([export] cap_at_input): no level has more triangles than that, a
+ * level whose cut would is cut within it instead. */
 int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_mesh *input,
-                     const sl_export_frame *frame, const sl_export_texture *texture,
+                     uint64_t cap, const sl_export_frame *frame, const sl_export_texture *texture,
                      const sl_stage_io *io, sl_error *err);
 
 /* Shards ([export] min_part_area, export_parts.c): the finest level is one body when its
@@ -109,6 +110,7 @@ typedef struct sl_export_result {
     double diagonal;             /* the input's bounding-box diagonal (world), when measured */
     sl_glb_stats glb;            /* what the GLB writer did (compression, quantisation) */
     sl_export_parts dropped;     /* shards left out ([export] min_part_area) */
+    int capped;                  /* cut within the input's count ([export] cap_at_input) */
     /* The level's atlas: 1 baked, -1 too many triangles for it, 0 no texture. */
     int texture, texture_size, texture_cell;
     const char *texture_mime;
@@ -122,13 +124,21 @@ typedef struct sl_export_result {
     int morph_to;
 } sl_export_result;
 
-/* What cuts an LOD model's levels: the model, and whether its finest level is one body
- * (one_body: -1 not known yet, 0 several pieces, 1 one body; start at -1). */
+/* What cuts an LOD model's levels: the model, whether its finest level is one body
+ * (one_body: -1 not known yet, 0 several pieces, 1 one body; start at -1), and the most
+ * triangles a level may have (cap, 0 = no cap). */
 typedef struct sl_export_cutter {
     const sl_export_config *c;
     sl_lod_model *model;
     int one_body;
+    uint64_t cap;
 } sl_export_cutter;
+
+/* Level lv's k (paper Table 1's percent or its budget) into row->k; when the cutter has a
+ * cap and that cut is above it, the largest k within the cap instead (row->capped), unless
+ * no non-empty cut fits the cap (then the level stays as it was). */
+void sl_export_level_k(const sl_export_cutter *x, const sl_export_level *lv,
+                       sl_export_result *row);
 
 /* The published mesh after k expansions: the cut, less its shards when the rule applies
  * (`dropped`, may be NULL, says what went); `cracks` may be NULL. 0 or SL_E_NOMEM (then
@@ -136,8 +146,9 @@ typedef struct sl_export_cutter {
 int sl_export_cut_level(sl_export_cutter *x, uint32_t k, sl_lod_mesh *mesh, uint64_t *cracks,
                         sl_export_parts *dropped, sl_error *err);
 
-/* Level lv's published mesh into *mesh, row->k (set to lv's k before; a budget level may
- * raise it to refill what its shards cost) and row->dropped. 0 or SL_E_NOMEM. */
+/* Level lv's published mesh into *mesh, row->k (set by sl_export_level_k before; a budget
+ * or capped level may raise it to refill what its shards cost) and row->dropped. 0 or
+ * SL_E_NOMEM. */
 int sl_export_cut_row(sl_export_cutter *x, const sl_export_level *lv, sl_export_result *row,
                       sl_lod_mesh *mesh, uint64_t *cracks, sl_error *err);
 

@@ -292,20 +292,12 @@ static int names_files_before(const sl_export_config *c, int a, int b)
     return a < b;
 }
 
-/* The LOD-array prefix a level cuts: its percent (paper Table 1) or its budget. */
-static uint32_t level_k(sl_lod_model *model, const sl_export_level *lv)
-{
-    return lv->by_percent ? sl_lod_expansions_for_percent(model, lv->percent)
-                          : sl_lod_expansions_for_triangles(model, lv->budget);
-}
-
 /* With morph targets (each level needs to know its coarser published level before it is
  * written): every level's k, counts and mesh digest first; then which levels share a mesh
  * and whose name their files take (rows[i].file). Each level is then cut twice. */
 static int plan_levels(const sl_export_config *c, sl_export_cutter *cutter, const sl_stage_io *io,
                        sl_export_result *rows, uint64_t *cracks, sl_error *err)
 {
-    sl_lod_model *model = cutter->model;
     sl_export_digest *digests = calloc((size_t)c->level_count + 1, sizeof *digests);
     if (!digests)
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
@@ -316,7 +308,7 @@ static int plan_levels(const sl_export_config *c, sl_export_cutter *cutter, cons
             free(digests);
             return rc;
         }
-        rows[i].k = level_k(model, lv);
+        sl_export_level_k(cutter, lv, &rows[i]);
         sl_lod_mesh mesh;
         if ((rc = sl_export_cut_row(cutter, lv, &rows[i], &mesh, &cracks[i], err))) {
             free(digests);
@@ -392,6 +384,7 @@ static void report_level(const sl_export_config *c, const sl_lod_model *model,
         sl_json_bool(r, "clamped", lv->budget >= model->accumulation[model->expansion_count]);
     }
     sl_json_u64(r, "expansions", row->k);
+    sl_json_bool(r, "capped", row->capped);
     sl_json_u64(r, "triangles", row->triangles);
     sl_json_u64(r, "vertices", row->vertices);
     sl_json_double(r, "max_error", model->error_after[row->k]);
@@ -500,12 +493,14 @@ int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
 }
 
 int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_mesh *input,
-                     const sl_export_frame *frame, const sl_export_texture *texture,
+                     uint64_t cap, const sl_export_frame *frame, const sl_export_texture *texture,
                      const sl_stage_io *io, sl_error *err)
 {
     sl_json *r = io->report;
     sl_json_u64(r, "expansions", model->expansion_count);
     sl_json_u64(r, "triangles_finest", model->accumulation[model->expansion_count]);
+    if (cap)
+        sl_json_u64(r, "triangles_cap", cap);
     sl_json_bool(r, "fidelity_measured", input != NULL);
     sl_export_result *rows = calloc((size_t)c->level_count + 1, sizeof *rows);
     uint64_t *cracks = calloc((size_t)c->level_count + 1, sizeof *cracks);
@@ -514,11 +509,11 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
     sl_export_digest *digests = calloc((size_t)c->level_count + 1, sizeof *digests);
     if (rc == 0 && !digests)
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    sl_export_cutter cutter = {c, model, -1};
+    sl_export_cutter cutter = {c, model, -1, cap};
     if (rc == 0 && morph)
         rc = plan_levels(c, &cutter, io, rows, cracks, err);
     for (int i = 0; i < c->level_count && rc == 0 && !morph; i++)
-        rows[i].k = level_k(model, &c->levels[i]);
+        sl_export_level_k(&cutter, &c->levels[i], &rows[i]);
     preference_order(c, order);
     /* Each distinct mesh: its files and its measures, once. */
     for (int at = 0; at < c->level_count && rc == 0; at++) {

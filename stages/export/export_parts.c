@@ -222,6 +222,22 @@ int sl_export_cut_level(sl_export_cutter *x, uint32_t k, sl_lod_mesh *mesh, uint
     return rc;
 }
 
+void sl_export_level_k(const sl_export_cutter *x, const sl_export_level *lv,
+                       sl_export_result *row)
+{
+    row->capped = 0;
+    row->k = lv->by_percent ? sl_lod_expansions_for_percent(x->model, lv->percent)
+                            : sl_lod_expansions_for_triangles(x->model, lv->budget);
+    if (!x->cap || x->model->accumulation[row->k] <= x->cap)
+        return;
+    /* A model whose every non-empty cut is above the input (a mesh of a few triangles the
+     * cells cannot draw with fewer) is left uncapped rather than published empty. */
+    uint32_t k = sl_lod_expansions_for_triangles(x->model, x->cap);
+    row->capped = x->model->accumulation[k] > 0;
+    if (row->capped)
+        row->k = k;
+}
+
 /* Level lv's published mesh into row (k, dropped) and *mesh. A budget level that lost
  * shards gives their triangles to the body: the k of the budget raised by what was lost
  * is tried, then k is bisected below it (at most REFILL_CUTS more cuts in all) for the
@@ -233,10 +249,11 @@ int sl_export_cut_row(sl_export_cutter *x, const sl_export_level *lv, sl_export_
                    sl_lod_mesh *mesh, uint64_t *cracks, sl_error *err)
 {
     int rc = sl_export_cut_level(x, row->k, mesh, cracks, &row->dropped, err);
-    if (rc || lv->by_percent || row->dropped.triangles * REFILL_WORTH <= lv->budget)
+    uint64_t budget = row->capped ? x->cap : lv->by_percent ? 0 : lv->budget;
+    if (rc || !budget || row->dropped.triangles * REFILL_WORTH <= budget)
         return rc; /* a loss under 1 / REFILL_WORTH of the budget is not worth the cuts */
     uint32_t lo = row->k;
-    uint32_t hi = sl_lod_expansions_for_triangles(x->model, lv->budget + row->dropped.triangles) + 1;
+    uint32_t hi = sl_lod_expansions_for_triangles(x->model, budget + row->dropped.triangles) + 1;
     for (int step = 0; step < REFILL_CUTS && hi - lo > 1; step++) {
         uint32_t k = step == 0 ? hi - 1 : lo + (hi - lo) / 2; /* the raised budget's first */
         sl_lod_mesh refill;
@@ -246,7 +263,7 @@ int sl_export_cut_row(sl_export_cutter *x, const sl_export_level *lv, sl_export_
             sl_lod_mesh_release(mesh);
             return rc;
         }
-        if (refill.triangle_count > lv->budget) {
+        if (refill.triangle_count > budget) {
             hi = k;
             sl_lod_mesh_release(&refill);
             continue;

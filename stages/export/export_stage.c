@@ -18,8 +18,9 @@
  * connected parts and the largest one's share of the area. 7: the pages name the segment
  * method's levels as such (they said "Clustering levels"). 8: a morphing GLB carries the
  * level cut along the coarser level's edges, so its weight-1 surface lies on it. 9: [export]
- * min_part_area (coarser octree levels leave out shards). */
-#define EXPORT_STAGE_VERSION 9u
+ * min_part_area (coarser octree levels leave out shards). 10: [export] cap_at_input (no
+ * octree level above the input's triangle count). */
+#define EXPORT_STAGE_VERSION 10u
 
 static const sl_option export_options[] = {
     {"export", "lod_percents", SL_OPT_LIST, "20,40,60,80,100", 0, 100, NULL,
@@ -110,6 +111,13 @@ static const sl_option export_options[] = {
      "A small part (min_part_area) is left out only when each of its vertices lies within "
      "this many of the level's mean triangle edges of the rest of the level: a speck the "
      "body covers goes, a part farther out (the only surface there) stays."},
+    {"export", "cap_at_input", SL_OPT_BOOL, "true", 0, 0, NULL,
+     "No octree level has more triangles than the input mesh: a level whose cut would "
+     "(lod100 when the finest level outgrows the input, a budget above the input's count) is "
+     "the largest cut within the input's count instead ('capped' in the report). false: "
+     "lod100 is the octree's finest level whatever its count (paper 1). Point clouds have no "
+     "count to keep to, nor a mesh so small that no non-empty cut fits its count; the "
+     "cluster and segment methods never exceed it."},
     SL_OPTION_END,
 };
 
@@ -163,6 +171,7 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
     c->morph = sl_config_bool(cfg, "export", "morph");
     c->min_part_area = sl_config_double(cfg, "export", "min_part_area");
     c->shard_reach = sl_config_double(cfg, "export", "shard_reach");
+    c->cap_at_input = sl_config_bool(cfg, "export", "cap_at_input");
     if (rc) {
         free(c);
         return rc;
@@ -213,7 +222,7 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
     sl_mesh input;
     sl_mesh_init(&input);
     int have_input = 0, measure = 0;
-    if (c->fidelity || !c->units_to_metres || !c->up || c->texture) {
+    if (c->fidelity || !c->units_to_metres || !c->up || c->texture || c->cap_at_input) {
         sl_error ierr;
         sl_error_init(&ierr);
         have_input = sl_ply_read(io->source_path, NULL, &input, NULL, NULL, &ierr) == 0;
@@ -257,7 +266,8 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
     } else {
         rc = sl_link_or_copy(model_path, published, err);
         if (rc == 0)
-            rc = sl_export_levels(c, &model, measure ? &input : NULL, &frame,
+            rc = sl_export_levels(c, &model, measure ? &input : NULL,
+                                  c->cap_at_input && have_input ? input.triangle_count : 0, &frame,
                                   texture.input ? &texture : NULL, io, err);
     }
     sl_export_texture_close(&texture);

@@ -35,9 +35,13 @@ for item in "${closed[@]}"; do
   reported=$(report_value "$item" "[l for l in r['stages']['export']['levels'] if l['name']=='lod100'][0]['boundary_edges']")
   counted=$("$SCANLOD" compare "$TMP/out/$item.ply/lod100.ply" "$TMP/out/$item.ply/lod100.ply" | sed -n 's/.*edges: \([0-9]*\) boundary.*/\1/p')
   check "$item: reported boundary edges ($reported) = compare's count ($counted)" [ "$reported" = "$counted" ]
+  # Each level's files are under its own name, or under the level it shares a mesh with
+  # (lod60 of an input smaller than the finest level is capped at the input: lod100's).
   for name in lod20 lod60 lod100 thumb; do
-    check "$item: $name.ply, .glb and .png published" [ -s "$TMP/out/$item.ply/$name.ply" -a -s "$TMP/out/$item.ply/$name.glb" -a -s "$TMP/out/$item.ply/$name.png" ]
+    file=$(report_value "$item" "[l for l in r['stages']['export']['levels'] if l['name']=='$name'][0]['file']")
+    check "$item: $name.ply, .glb and .png published (as $file)" [ -s "$TMP/out/$item.ply/$file.ply" -a -s "$TMP/out/$item.ply/$file.glb" -a -s "$TMP/out/$item.ply/$file.png" ]
   done
+  check "$item: lod20 has its own files" [ -s "$TMP/out/$item.ply/lod20.ply" ]
   clamped=$(report_value "$item" "[l for l in r['stages']['export']['levels'] if l['name']=='big'][0]['clamped']")
   check "$item: a budget above the finest is clamped" [ "$clamped" = "True" ]
   # ... so it is the finest mesh, published once: under lod100's name (test_duplicate_levels.sh).
