@@ -429,13 +429,16 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
     sl_error_init(&verr);
     if (sl_record_check(record, out_dir, &key, NULL, &verr) == 0) {
         e->counts.reused++; /* someone finished it meanwhile */
+        /* Done already: the run that took this claim over (this one was frozen, say)
+         * finished the stage and said so; nobody is to say it again. */
+        int was_done = sl_queue_find(e->work, stage->name, name) == SL_STATE_DONE;
         sl_hash_hex(key, t->key);
         sl_queue_put(e->work, stage->name, SL_STATE_CLAIMED, name, t, err);
         int released = 0;
         rc = release_done(e, s, name, t, &released, err);
         /* The owner that committed lost its claim before moving it to done and said
          * nothing; whoever moves it says the stage is done, once. */
-        if (released)
+        if (released && !was_done)
             sl_log_event("stage_done", stage->name, t->item, -1, NULL, "\"adopted\":true");
         return rc;
     }
