@@ -142,7 +142,18 @@ save("growth", {"sizes": [{"target": n, "triangles": n, "reps": [timings(n / 1e6
                 "skipped": [{"target": 20000000, "reason": "predicted 9999 s"}]})
 EOF
 md=$tmp/benchmarks.md
+# Hand-kept sections (docs/bench/NAME.md) survive a rerun, in their places.
+mkdir -p "$tmp/bench"
+echo "kept growth note" > "$tmp/bench/growth-notes.md"
+echo "## 7. kept model section" > "$tmp/bench/model-section.md"
 check "report renders" python3 "$lib/report.py" "$res" "$md"
+check "report: hand-kept sections between their markers" python3 - "$md" <<'PY'
+import sys
+t = open(sys.argv[1]).read()
+g = t.index("<!-- growth-notes:begin -->\nkept growth note\n<!-- growth-notes:end -->")
+assert t.index("## 4.") < g < t.index("## Plots"), "growth notes after section 4"
+assert t.rstrip().endswith("## 7. kept model section\n<!-- model-section:end -->")
+PY
 check "report: machine" has "$md" "Test CPU, 2 cores"
 check "report: Table 1 row" has "$md" "| 20 % | 200 | 100 | 0.050 % | 0.200 % | yes | 0 |"
 check "report: merge stage median [min-max] and 1->2 speed-up" has "$md" "| merge | 3 [3–3] | 3 [3–3] | 12 [12–12] | 667 | 6 [5.4–6.6] | 2.00 [1.80–2.20] |"

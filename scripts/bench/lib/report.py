@@ -371,6 +371,18 @@ def main():
     section_machine(out, mach, results)
     section_inputs(out, models)
     section_headline(out, h, mach)
+    # Figures that come from other benchmarks or from measurements by hand live in
+    # docs/bench/NAME.md and are kept in their places between markers: a rerun of this
+    # benchmark rewrites its own tables and never loses them.
+    kept_dir = os.path.join(os.path.dirname(os.path.abspath(dest)), "bench")
+
+    def kept(name, marker=None):
+        path = os.path.join(kept_dir, name + ".md")
+        if os.path.exists(path):
+            with open(path) as f:
+                out.extend(["<!-- %s:begin -->" % (marker or name), f.read().rstrip(),
+                            "<!-- %s:end -->" % (marker or name), ""])
+
     for name, fn in (("stages", lambda: section_stages(out, models, st, h)),
                      ("octree", lambda: section_octree(out, models, st, oc, h)),
                      ("lod", lambda: section_lod(out, lod, h))):
@@ -378,20 +390,16 @@ def main():
             out.append("*Phase %s did not complete in this run.*\n" % name)
         else:
             fn()
+    kept("qef-notes")        # docs/lod.md's quadric vertices, measured with fidelity.py
     section_growth(out, h)
+    kept("growth-notes")     # reruns of the growth inputs by hand
     section_cluster(out, results, dest)
     section_plots(out)
     # The segment method's section comes from its own benchmark (bench_segment.sh), which
-    # keeps it in docs/bench/segment-section.md (and a partial run's in segment-update.md);
-    # a rerun of this one keeps them too.
-    seg = os.path.join(os.path.dirname(os.path.abspath(dest)), "bench", "segment-section.md")
-    if os.path.exists(seg):
-        with open(seg) as f:
-            out += ["<!-- segment:begin -->", f.read().rstrip(), "<!-- segment:end -->"]
-    upd = os.path.join(os.path.dirname(seg), "segment-update.md")  # a partial run's, after it
-    if os.path.exists(upd):
-        with open(upd) as f:
-            out += ["<!-- segment-update:begin -->", f.read().rstrip(), "<!-- segment-update:end -->"]
+    # keeps it in docs/bench/segment-section.md (and a partial run's in segment-update.md).
+    kept("segment-section", "segment")
+    kept("segment-update")   # a partial run's, after it
+    kept("model-section")    # section 7: the model file's size and cost to open
     with open(dest + ".tmp", "w") as f:
         f.write("\n".join(out).rstrip() + "\n")
     os.replace(dest + ".tmp", dest)
