@@ -464,7 +464,7 @@ int sl_cmd_extract(int argc, char **argv)
     sl_error err;
     sl_error_init(&err);
     sl_lod_model model;
-    if (sl_lod_model_read(r.input, &model, &err))
+    if (sl_lod_model_open(r.input, &model, &err))
         return fail(&err, 1);
     uint32_t k = 0;
     int rc = choose_k(&r, &model, &k);

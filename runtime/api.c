@@ -18,7 +18,7 @@ int scanlod_model_open(const char *path, scanlod_model **out, char *error, size_
     scanlod_model *m = calloc(1, sizeof *m);
     sl_error err;
     sl_error_init(&err);
-    int rc = m ? sl_lod_model_read(path, &m->lod, &err)
+    int rc = m ? sl_lod_model_open(path, &m->lod, &err)
                : sl_error_set(&err, SL_E_NOMEM, 0, path, "out of memory");
     if (rc) {
         if (error && error_size)

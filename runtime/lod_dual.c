@@ -292,8 +292,11 @@ void sl_mesh_builder_dual_polygons(sl_mesh_builder *b)
     sl_mesh_scratch *s = b->scratch;
     /* The polygons (size, crossing, then vertices; at most one word per slot and two per
      * crossing), their sides into the edge set, then their triangles. */
+    /* The set holds each polygon side once (a side is two polygons', so slot_count / 2 of
+     * them) and k - 3 diagonals per k-gon: under 1.5 slot_count keys, about 0.75 for
+     * quads. Twice slot_count slots keeps its load under 0.75, typically 0.2-0.4. */
     uint64_t need = 1;
-    while (need < 4 * s->slot_count + 64)
+    while (need < 2 * s->slot_count + 64)
         need *= 2;
     if (sl_mesh_grow((void **)&s->edge_keys, &s->edge_capacity, need, sizeof *s->edge_keys) ||
         sl_mesh_grow((void **)&s->polygons, &s->polygon_capacity,

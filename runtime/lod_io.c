@@ -40,7 +40,7 @@ int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_v
     uint32_t n = m->tree.node_count, e = m->expansion_count;
     sl_put_u32(header, e);
     sl_put_u32(header + 4, n);
-    sl_put_u64(header + 8, m->neighbours.count);
+    sl_put_u64(header + 8, m->neighbours.index ? m->neighbours.count : m->neighbour_links);
     sl_put_u64(header + 16, m->transitions.count);
     /* No neighbour table: reading rebuilds it from the octree (format 3). */
     parts[count++] = (sl_pack_part){header, sizeof header, 0};
@@ -158,35 +158,84 @@ static int parse_lod(sl_lod_model *m, const unsigned char *p, uint64_t size, int
     m->lod_array = take(&at, 4 * e);
     m->accumulation = take(&at, 8 * (e + 1));
     m->error_after = take(&at, 4 * (e + 1));
+    m->neighbours.count = neighbours; /* format 3: what the rebuilt table must have */
     if (stored) {
-        m->neighbours.count = neighbours;
         m->neighbours.mask = take(&at, 4 * n);
         m->neighbours.base = take(&at, 4 * n);
         m->neighbours.index = take(&at, 4 * neighbours);
-    } else if (sl_neighbours_build(&m->tree, &m->neighbours)) {
-        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
-    } else if (m->neighbours.count != neighbours) {
-        return corrupt(err, path, "neighbour count differs from the octree's");
     }
     m->transitions.base = take(&at, 4 * n);
     m->transitions.words = take(&at, 4 * m->transitions.count);
-    if (!m->lod_array || !m->accumulation || !m->error_after || !m->neighbours.mask ||
-        !m->neighbours.base || !m->neighbours.index || !m->transitions.base ||
-        !m->transitions.words)
+    if (!m->lod_array || !m->accumulation || !m->error_after || !m->transitions.base ||
+        !m->transitions.words ||
+        (stored && (!m->neighbours.mask || !m->neighbours.base || !m->neighbours.index)))
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    return 0;
+}
+
+/* After the body is freed: format 3's neighbour table rebuilt from the octree (the count
+ * the header declared must match), then every table checked. */
+static int check_lod(sl_lod_model *m, int stored, const char *path, sl_error *err)
+{
+    uint64_t declared = m->neighbours.count, all = 0;
+    if (!stored) {
+        if (m->cuts_only ? sl_neighbours_build_internal(&m->tree, &m->neighbours, &all)
+                         : sl_neighbours_build(&m->tree, &m->neighbours))
+            return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+        if ((m->cuts_only ? all : m->neighbours.count) != declared)
+            return corrupt(err, path, "neighbour count differs from the octree's");
+    }
+    m->neighbour_links = declared;
     return validate(m, path, err);
 }
 
-/* A plain body: with the neighbour table (format 2) or without (format 3, unpacked). */
-static int parse_plain(const void *body, uint64_t size, int stored, const char *name,
-                       sl_lod_model *out, sl_error *err)
+/* The octree and LOD sections of a plain body: with the neighbour table (format 2) or
+ * without it (format 3, unpacked). Everything is copied out of `body`. */
+static int parse_tables(const void *body, uint64_t size, int stored, const char *name,
+                        sl_lod_model *out, sl_error *err)
 {
     uint64_t used = 0;
     int rc = sl_octree_parse(body, size, name, &out->tree, &used, err);
     if (rc == 0)
         rc = parse_lod(out, (const unsigned char *)body + used, size - used, stored, name, err);
-    if (rc == 0 && (sl_lod_model_localize(out) || sl_lod_model_prepare(out)))
-        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
+    return rc;
+}
+
+/* The checks and what generation derives from the tables (after the body is gone). */
+static int derive(sl_lod_model *out, int stored, const char *name, sl_error *err)
+{
+    int rc = check_lod(out, stored, name, err);
+    if (rc)
+        return rc;
+    if (sl_lod_model_localize(out) || sl_lod_model_prepare(out))
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
+    return 0;
+}
+
+/* Parses `*body` (packed or plain) into `out` and frees it (and the unpacked copy) as
+ * soon as its tables are copied out, before the derived tables are made. */
+static int parse_owned(void **body, uint64_t size, const char *name, sl_lod_model *out,
+                       sl_error *err)
+{
+    int rc, stored = !sl_pack_is_packed(*body, size);
+    if (!stored) {
+        void *plain = NULL;
+        uint64_t plain_size = 0;
+        rc = sl_unpack(*body, size, PLAIN_LIMIT, name, &plain, &plain_size, err);
+        free(*body);
+        *body = NULL;
+        if (rc == 0)
+            rc = parse_tables(plain, plain_size, 0, name, out, err);
+        free(plain);
+    } else {
+        rc = parse_tables(*body, size, 1, name, out, err);
+        free(*body);
+        *body = NULL;
+    }
+    if (rc == 0)
+        rc = derive(out, stored, name, err);
+    if (rc)
+        sl_lod_model_release(out);
     return rc;
 }
 
@@ -194,23 +243,25 @@ int sl_lod_model_parse(const void *body, uint64_t size, const char *name, sl_lod
                        sl_error *err)
 {
     sl_lod_model_init(out);
-    int rc;
-    if (sl_pack_is_packed(body, size)) {
+    int rc, stored = !sl_pack_is_packed(body, size);
+    if (!stored) {
         void *plain = NULL;
         uint64_t plain_size = 0;
         rc = sl_unpack(body, size, PLAIN_LIMIT, name, &plain, &plain_size, err);
         if (rc == 0)
-            rc = parse_plain(plain, plain_size, 0, name, out, err);
+            rc = parse_tables(plain, plain_size, 0, name, out, err);
         free(plain);
     } else {
-        rc = parse_plain(body, size, 1, name, out, err);
+        rc = parse_tables(body, size, 1, name, out, err);
     }
+    if (rc == 0)
+        rc = derive(out, stored, name, err);
     if (rc)
         sl_lod_model_release(out);
     return rc;
 }
 
-int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err)
+static int read_model(const char *path, int cuts_only, sl_lod_model *out, sl_error *err)
 {
     sl_lod_model_init(out);
     void *body = NULL;
@@ -222,8 +273,19 @@ int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err)
     if (rc == 0 && sl_pack_is_packed(body, size) != (version >= 3))
         rc = corrupt(err, path, version >= 3 ? "format 3 without packed parts"
                                              : "packed parts in a format 2 file");
+    out->cuts_only = cuts_only;
     if (rc == 0)
-        rc = sl_lod_model_parse(body, size, path, out, err);
+        return parse_owned(&body, size, path, out, err);
     free(body);
     return rc;
+}
+
+int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err)
+{
+    return read_model(path, 0, out, err);
+}
+
+int sl_lod_model_open(const char *path, sl_lod_model *out, sl_error *err)
+{
+    return read_model(path, 1, out, err);
 }

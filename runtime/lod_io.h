@@ -32,6 +32,12 @@ int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_v
                        sl_error *err);
 /* Loads and validates; derives what generation needs (sl_lod_model_prepare). */
 int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err);
+/* The same for a reader that only cuts levels (the export stage, `scanlod extract`, the
+ * C API): the neighbour table goes once the cells are laid out (its count stays), and
+ * the file's bytes and the unpacked body are freed as soon as they are parsed, so the
+ * model takes about half the memory (docs/benchmarks.md). Every check is the same, and
+ * so is every cut. */
+int sl_lod_model_open(const char *path, sl_lod_model *out, sl_error *err);
 /* The same from a body already out of its envelope (what sl_artifact_read returns; the
  * fuzz target feeds bodies here, past the checksum): packed (format 3) or plain (format 2).
  * `name` is used in messages. On failure `out` holds nothing. */

@@ -337,6 +337,8 @@ int sl_lod_model_prepare(sl_lod_model *m)
     free(m->surface_before);
     m->surface_before = malloc(((size_t)m->expansion_count + 1) * sizeof *m->surface_before);
     m->expansion_index = malloc((n ? n : 1) * sizeof *m->expansion_index);
+    if (!m->neighbours.mask && n) /* an opened model (cuts_only) is laid out once */
+        return -1;
     if (!m->expansion_index || !m->surface_before ||
         sl_mesh_scratch_init(&m->scratch, t) != 0)
         return -1;
@@ -351,7 +353,11 @@ int sl_lod_model_prepare(sl_lod_model *m)
     sl_mc_triangles none;
     memset(&empty, 0, sizeof empty);
     sl_mc_triangulate(&empty, &none);
-    if (lay_out_cells(m) || dual_vertices(m))
+    if (lay_out_cells(m))
+        return -1;
+    if (m->cuts_only) /* generation reads the split lists, never the neighbours */
+        sl_neighbours_release(&m->neighbours);
+    if (dual_vertices(m))
         return -1;
     return sl_lod_draw_states(m);
 }

@@ -31,14 +31,27 @@ int sl_mesh_scratch_init(sl_mesh_scratch *s, const sl_octree *tree)
 
 void sl_mesh_scratch_release(sl_mesh_scratch *s)
 {
+    sl_mesh_scratch_shrink(s);
     free(s->vertex_of_crossing);
+    free(s->vertex_of_dual);
+    memset(s, 0, sizeof *s);
+}
+
+void sl_mesh_scratch_shrink(sl_mesh_scratch *s)
+{
     free(s->used);
     free(s->slots);
     free(s->touched);
-    free(s->vertex_of_dual);
     free(s->edge_keys);
     free(s->polygons);
-    memset(s, 0, sizeof *s);
+    s->used = NULL;
+    s->slots = NULL;
+    s->touched = NULL;
+    s->edge_keys = NULL;
+    s->polygons = NULL;
+    s->used_capacity = s->slot_capacity = s->touched_capacity = 0;
+    s->edge_capacity = s->polygon_capacity = 0;
+    s->slot_count = s->touched_count = 0;
 }
 
 int sl_mesh_builder_init(sl_mesh_builder *b, const sl_octree *tree, sl_mesh_scratch *scratch)

@@ -50,6 +50,10 @@ typedef struct sl_mesh_scratch {
 
 int sl_mesh_scratch_init(sl_mesh_scratch *s, const sl_octree *tree);
 void sl_mesh_scratch_release(sl_mesh_scratch *s);
+/* Frees what the scratch grew to for the largest extraction so far (a few tens of bytes
+ * per triangle of it), keeping what it was made with: the next extraction grows it
+ * again. For a reader that cuts a few large levels and keeps them (the export stage). */
+void sl_mesh_scratch_shrink(sl_mesh_scratch *s);
 
 typedef struct sl_mesh_builder {
     const sl_octree *tree;

@@ -89,9 +89,17 @@ typedef struct sl_lod_model {
     uint32_t *expansion_index;
     uint64_t *accumulation;  /* expansion_count + 1 entries */
     float *error_after;      /* expansion_count + 1 entries */
+    /* Same-level neighbours: the priority and crack stages' and the cells' layout's. A
+     * model opened for cutting (sl_lod_model_open) holds none after loading: generation
+     * never reads them, and they are the largest table in memory (about 20 links a
+     * node, most of them the leaves'). */
     sl_neighbours neighbours;
     sl_transitions transitions;
     sl_mesh_scratch scratch; /* the builder's, kept between extractions */
+    int cuts_only; /* sl_lod_model_open: only the internal nodes' neighbours are built,
+                      and sl_lod_model_prepare drops them once it has laid out the cells */
+    uint64_t neighbour_links; /* the whole table's count (the file header's), what the
+                                 writer stores when the table is not held */
     /* Derived at load (sl_lod_model_prepare, runtime/lod_layout.c), for generation: the
      * nodes in LOD order (the root, then the children of lod_array[0], of lod_array[1],
      * ...), so the frontier after k expansions is the part of cells[0 .. frontier_end[k])
@@ -173,6 +181,10 @@ extern const uint8_t sl_lod_uniform_cells[256][SL_LOD_UNIFORM_ROW];
  * on OOM. The transition records are built by the crack stage (sl_transitions_build:
  * stages/crack/crack.h) and read here. */
 int sl_neighbours_build(const sl_octree *t, sl_neighbours *out);
+/* The same for the internal nodes alone (what the cells' layout reads): the leaves'
+ * links are counted into *all_links (the whole table's count) but not kept, and their
+ * masks are 0. Returns -1 on OOM. */
+int sl_neighbours_build_internal(const sl_octree *t, sl_neighbours *out, uint64_t *all_links);
 void sl_neighbours_release(sl_neighbours *nb);
 void sl_transitions_release(sl_transitions *tr);
 

@@ -119,9 +119,12 @@ static void around(const sl_octree *t, const sl_neighbours *nb, const octant_map
     }
 }
 
-/* Level by level from the root: each level's masks, bases and indices from its parents'. */
-static int build_by_parents(const sl_octree *t, sl_neighbours *out)
+/* Level by level from the root: each level's masks, bases and indices from its parents'.
+ * Below level `lowest` the links are only counted (*all_links) and the masks left 0. */
+static int build_by_parents(const sl_octree *t, int lowest, sl_neighbours *out,
+                            uint64_t *all_links)
 {
+    *all_links = 0;
     memset(out, 0, sizeof *out);
     uint32_t n = t->node_count;
     out->mask = calloc(n ? n : 1, sizeof *out->mask);
@@ -142,14 +145,23 @@ static int build_by_parents(const sl_octree *t, sl_neighbours *out)
                 mask |= (uint32_t)(cells[d] != SL_OCTREE_NONE) << d;
             out->mask[i] = mask;
         }
+        if (l < lowest) { /* counted, not kept */
+            uint64_t links = 0;
+            for (uint32_t i = first; i < end; i++) {
+                links += (uint64_t)__builtin_popcount(out->mask[i]);
+                out->base[i] = (uint32_t)out->count;
+            }
+            *all_links += links;
+            memset(out->mask + first, 0, (size_t)(end - first) * sizeof *out->mask);
+            continue;
+        }
         uint64_t count = out->count;
         for (uint32_t i = first; i < end; i++) {
             out->base[i] = (uint32_t)count;
             count += (uint64_t)__builtin_popcount(out->mask[i]);
         }
-        if (count > capacity) {
-            while (capacity < count)
-                capacity *= 2;
+        if (count > capacity) { /* exactly: the leaves' level is most of the table */
+            capacity = count;
             uint32_t *grown = realloc(out->index, capacity * sizeof *out->index);
             if (!grown)
                 goto nomem;
@@ -163,6 +175,7 @@ static int build_by_parents(const sl_octree *t, sl_neighbours *out)
                 if (cells[d] != SL_OCTREE_NONE)
                     out->index[k++] = cells[d];
         }
+        *all_links += count - out->count;
         out->count = count;
     }
     return 0;
@@ -173,5 +186,16 @@ nomem:
 
 int sl_neighbours_build(const sl_octree *t, sl_neighbours *out)
 {
-    return levels_descending(t) ? build_by_parents(t, out) : build_by_search(t, out);
+    uint64_t all;
+    return levels_descending(t) ? build_by_parents(t, 0, out, &all) : build_by_search(t, out);
+}
+
+int sl_neighbours_build_internal(const sl_octree *t, sl_neighbours *out, uint64_t *all_links)
+{
+    if (!levels_descending(t)) {
+        int rc = build_by_search(t, out);
+        *all_links = out->count;
+        return rc;
+    }
+    return build_by_parents(t, 1, out, all_links);
 }

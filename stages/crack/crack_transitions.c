@@ -107,37 +107,50 @@ int sl_transitions_build(const sl_octree *t, sl_transitions *out, uint64_t *unre
 {
     memset(out, 0, sizeof *out);
     *unresolved = 0;
-    uint32_t n = t->node_count;
-    transition *all = malloc((n ? n : 1) * sizeof *all);
+    uint32_t n = t->node_count, internal = 0;
+    /* Leaves have no record: the gathered records are held for the internal nodes alone
+     * (a sixth of the nodes; each record is 200 bytes), at slot[i]. */
+    uint32_t *slot = malloc((n ? n : 1) * sizeof *slot);
     out->base = malloc((n ? n : 1) * sizeof *out->base);
-    if (!all || !out->base) {
-        free(all);
+    if (!slot || !out->base) {
+        free(slot);
+        sl_transitions_release(out);
+        return -1;
+    }
+    for (uint32_t i = 0; i < n; i++)
+        slot[i] = t->nodes[i].level == 0 ? SL_OCTREE_NONE : internal++;
+    transition *all = malloc((internal ? internal : 1) * sizeof *all);
+    if (!all) {
+        free(slot);
         sl_transitions_release(out);
         return -1;
     }
     uint64_t missing = 0;
 #pragma omp parallel for schedule(dynamic, 64) reduction(+ : missing)
     for (uint32_t i = 0; i < n; i++) {
-        if (t->nodes[i].level == 0)
+        if (slot[i] == SL_OCTREE_NONE)
             continue;
-        gather(t, i, &all[i]);
-        missing += (uint64_t)(12 - __builtin_popcount(all[i].mid_known)) +
-                   (uint64_t)(6 - __builtin_popcount(all[i].centre_known));
+        transition *tr = &all[slot[i]];
+        gather(t, i, tr);
+        missing += (uint64_t)(12 - __builtin_popcount(tr->mid_known)) +
+                   (uint64_t)(6 - __builtin_popcount(tr->centre_known));
     }
     *unresolved = missing;
     for (uint32_t i = 0; i < n; i++) {
-        if (t->nodes[i].level == 0) {
+        if (slot[i] == SL_OCTREE_NONE) {
             out->base[i] = SL_OCTREE_NONE;
             continue;
         }
+        const transition *tr = &all[slot[i]];
         out->base[i] = (uint32_t)out->count;
         out->count += 3;
         for (int k = 0; k < 24; k++)
-            out->count += (all[i].half[k] != SL_OCTREE_NONE) + (all[i].spoke[k] != SL_OCTREE_NONE);
+            out->count += (tr->half[k] != SL_OCTREE_NONE) + (tr->spoke[k] != SL_OCTREE_NONE);
     }
     out->words = malloc((out->count ? out->count : 1) * sizeof *out->words);
     if (!out->words) {
         free(all);
+        free(slot);
         sl_transitions_release(out);
         return -1;
     }
@@ -145,7 +158,7 @@ int sl_transitions_build(const sl_octree *t, sl_transitions *out, uint64_t *unre
     for (uint32_t i = 0; i < n; i++) {
         if (out->base[i] == SL_OCTREE_NONE)
             continue;
-        const transition *tr = &all[i];
+        const transition *tr = &all[slot[i]];
         uint32_t *w = out->words + out->base[i], half_mask = 0, spoke_mask = 0, k = 3;
         for (int j = 0; j < 24; j++) {
             half_mask |= (uint32_t)(tr->half[j] != SL_OCTREE_NONE) << j;
@@ -162,5 +175,6 @@ int sl_transitions_build(const sl_octree *t, sl_transitions *out, uint64_t *unre
                 w[k++] = tr->spoke[j];
     }
     free(all);
+    free(slot);
     return 0;
 }

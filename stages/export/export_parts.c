@@ -195,7 +195,11 @@ int sl_export_cut_level(sl_export_cutter *x, uint32_t k, sl_lod_mesh *mesh, uint
 {
     sl_export_parts none;
     memset(dropped ? dropped : &none, 0, sizeof none);
-    if (sl_lod_generate(x->model, k, mesh, cracks))
+    int failed = sl_lod_generate(x->model, k, mesh, cracks);
+    /* A level is written, measured and maybe cut again for its shards while it is held:
+     * the extraction scratch (over 100 bytes per triangle of the largest cut) goes. */
+    sl_mesh_scratch_shrink(&x->model->scratch);
+    if (failed)
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     int finest = k >= x->model->expansion_count;
     if (!(x->c->min_part_area > 0) || (finest && x->one_body >= 0))
@@ -204,13 +208,15 @@ int sl_export_cut_level(sl_export_cutter *x, uint32_t k, sl_lod_mesh *mesh, uint
     if (x->one_body < 0) { /* once, from the finest level (cut again unless it is this one) */
         sl_lod_mesh whole;
         double share = 1;
-        if (finest)
+        if (finest) {
             rc = sl_export_largest_part(mesh, &share, err);
-        else if (sl_lod_generate(x->model, x->model->expansion_count, &whole, NULL))
-            rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-        else {
-            rc = sl_export_largest_part(&whole, &share, err);
-            sl_lod_mesh_release(&whole);
+        } else {
+            int cut = sl_lod_generate(x->model, x->model->expansion_count, &whole, NULL);
+            sl_mesh_scratch_shrink(&x->model->scratch);
+            rc = cut ? sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory")
+                     : sl_export_largest_part(&whole, &share, err);
+            if (!cut)
+                sl_lod_mesh_release(&whole);
         }
         if (rc == 0)
             x->one_body = share >= SL_EXPORT_ONE_BODY;

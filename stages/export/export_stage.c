@@ -214,7 +214,7 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
     if (rc == 0 && !list_dir)
         rc = sl_stage_path(published, io->out_dir, SL_MODEL_FILE, err);
     if (rc == 0 && !list_dir)
-        rc = sl_lod_model_read(model_path, &model, err);
+        rc = sl_lod_model_open(model_path, &model, err);
     if (rc)
         return rc;
     /* The input: the surface the fidelity is measured against, and its header's unit
