@@ -69,8 +69,8 @@ static int crack_run(const void *config, const sl_stage_io *io, sl_error *err)
     if (rc == 0)
         rc = sl_lod_model_finish(&model, p.node_error, err);
     if (rc == 0) { /* what writing does not read goes before it packs the model */
+        model.neighbour_links = p.neighbour_links;
         sl_priority_release(&p);
-        model.neighbour_links = model.neighbours.count;
         sl_neighbours_release(&model.neighbours);
         rc = sl_lod_model_write(out_path, &model, CRACK_STAGE_VERSION, err);
     }

@@ -50,6 +50,8 @@ static int corrupt(sl_error *err, const char *path, const char *what)
     return sl_error_set(err, SL_E_CORRUPT, 0, path, "invalid priority file: %s", what);
 }
 
+/* Every node's mask and base against the whole table (neighbour_links); the indices held
+ * (neighbours.count of them) against the node count. */
 static int validate(const sl_priority *p, const sl_octree *t, const char *path, sl_error *err)
 {
     for (uint32_t i = 0; i < p->expansion_count; i++)
@@ -58,7 +60,8 @@ static int validate(const sl_priority *p, const sl_octree *t, const char *path, 
     for (uint32_t i = 0; i < p->node_count; i++) {
         uint64_t count = (uint64_t)__builtin_popcount(p->neighbours.mask[i] & 0x7ffffff);
         if ((p->neighbours.mask[i] >> 13 & 1) || p->neighbours.mask[i] >> 27 ||
-            (uint64_t)p->neighbours.base[i] + count > p->neighbours.count)
+            (uint64_t)p->neighbours.base[i] + count > p->neighbour_links ||
+            (t->nodes[i].level > 0 && (uint64_t)p->neighbours.base[i] + count > p->neighbours.count))
             return corrupt(err, path, "neighbour table out of range");
         if (!isfinite(p->area_difference[i]) || !isfinite(p->node_error[i]))
             return corrupt(err, path, "non-finite metric");
@@ -107,6 +110,13 @@ int sl_priority_read(const char *path, const sl_octree *t, sl_priority *out, sl_
     out->node_error = take(&at, n * 4);
     out->neighbours.mask = take(&at, n * 4);
     out->neighbours.base = take(&at, n * 4);
+    /* The links up to the first leaf's (the priority stage writes the table level by
+     * level from the root, so the leaves' come last); all of them in another layout. */
+    out->neighbour_links = out->neighbours.count;
+    uint32_t leaf0 = t->level_first[0];
+    if (out->neighbours.base && t->level_count[0] && leaf0 + t->level_count[0] == n &&
+        out->neighbours.base[leaf0] <= out->neighbours.count)
+        out->neighbours.count = out->neighbours.base[leaf0];
     out->neighbours.index = take(&at, out->neighbours.count * 4);
     free(body);
     if (!out->lod_array || !out->area_difference || !out->node_error || !out->neighbours.mask ||
@@ -115,6 +125,8 @@ int sl_priority_read(const char *path, const sl_octree *t, sl_priority *out, sl_
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
     }
     rc = validate(out, t, path, err);
+    if (rc == 0 && out->neighbours.count < out->neighbour_links)
+        memset(out->neighbours.mask + leaf0, 0, (size_t)t->level_count[0] * 4);
     if (rc)
         sl_priority_release(out);
     return rc;
