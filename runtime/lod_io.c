@@ -212,26 +212,27 @@ static int derive(sl_lod_model *out, int stored, const char *name, sl_error *err
     return 0;
 }
 
-/* Parses `*body` (packed or plain) into `out` and frees it (and the unpacked copy) as
- * soon as its tables are copied out, before the derived tables are made. */
-static int parse_owned(void **body, uint64_t size, const char *name, sl_lod_model *out,
-                       sl_error *err)
+/* Parses a body (packed or plain) into `out`. `owned` (may be NULL) is the caller's copy of
+ * the body to free: it goes, with the unpacked copy, as soon as the tables are copied out,
+ * before the neighbour table and the derived tables are made. On failure `out` holds
+ * nothing. */
+static int parse_body(const void *body, uint64_t size, void *owned, const char *name,
+                      sl_lod_model *out, sl_error *err)
 {
-    int rc, stored = !sl_pack_is_packed(*body, size);
+    int rc, stored = !sl_pack_is_packed(body, size);
     if (!stored) {
         void *plain = NULL;
         uint64_t plain_size = 0;
-        rc = sl_unpack(*body, size, PLAIN_LIMIT, name, &plain, &plain_size, err);
-        free(*body);
-        *body = NULL;
+        rc = sl_unpack(body, size, PLAIN_LIMIT, name, &plain, &plain_size, err);
+        free(owned);
+        owned = NULL;
         if (rc == 0)
             rc = parse_tables(plain, plain_size, 0, name, out, err);
         free(plain);
     } else {
-        rc = parse_tables(*body, size, 1, name, out, err);
-        free(*body);
-        *body = NULL;
+        rc = parse_tables(body, size, 1, name, out, err);
     }
+    free(owned);
     if (rc == 0)
         rc = derive(out, stored, name, err);
     if (rc)
@@ -243,22 +244,7 @@ int sl_lod_model_parse(const void *body, uint64_t size, const char *name, sl_lod
                        sl_error *err)
 {
     sl_lod_model_init(out);
-    int rc, stored = !sl_pack_is_packed(body, size);
-    if (!stored) {
-        void *plain = NULL;
-        uint64_t plain_size = 0;
-        rc = sl_unpack(body, size, PLAIN_LIMIT, name, &plain, &plain_size, err);
-        if (rc == 0)
-            rc = parse_tables(plain, plain_size, 0, name, out, err);
-        free(plain);
-    } else {
-        rc = parse_tables(body, size, 1, name, out, err);
-    }
-    if (rc == 0)
-        rc = derive(out, stored, name, err);
-    if (rc)
-        sl_lod_model_release(out);
-    return rc;
+    return parse_body(body, size, NULL, name, out, err);
 }
 
 static int read_model(const char *path, int cuts_only, sl_lod_model *out, sl_error *err)
@@ -275,7 +261,7 @@ static int read_model(const char *path, int cuts_only, sl_lod_model *out, sl_err
                                              : "packed parts in a format 2 file");
     out->cuts_only = cuts_only;
     if (rc == 0)
-        return parse_owned(&body, size, path, out, err);
+        return parse_body(body, size, body, path, out, err);
     free(body);
     return rc;
 }

@@ -59,9 +59,9 @@ static int validate(const sl_priority *p, const sl_octree *t, const char *path, 
             return corrupt(err, path, "LOD array entry is not an internal node");
     for (uint32_t i = 0; i < p->node_count; i++) {
         uint64_t count = (uint64_t)__builtin_popcount(p->neighbours.mask[i] & 0x7ffffff);
+        uint64_t end = t->nodes[i].level > 0 ? p->neighbours.count : p->neighbour_links;
         if ((p->neighbours.mask[i] >> 13 & 1) || p->neighbours.mask[i] >> 27 ||
-            (uint64_t)p->neighbours.base[i] + count > p->neighbour_links ||
-            (t->nodes[i].level > 0 && (uint64_t)p->neighbours.base[i] + count > p->neighbours.count))
+            (uint64_t)p->neighbours.base[i] + count > end)
             return corrupt(err, path, "neighbour table out of range");
         if (!isfinite(p->area_difference[i]) || !isfinite(p->node_error[i]))
             return corrupt(err, path, "non-finite metric");
