@@ -43,7 +43,11 @@ typedef struct stage_cost {
  * export memory lines were refitted when their peaks fell (docs/benchmarks.md section 7:
  * the transition records of internal nodes only, a model opened for cutting): crack
  * 33.8 / 362 / 1,796 MB and export (without images) 17.4 / 315 / 1,463 MB at rocker_arm,
- * 1 M and 5 M. Refit with scripts/bench/plan_calibrate.py. */
+ * 1 M and 5 M; then again when the export began cutting a level ahead of its writes
+ * (docs/threads.md "The export's two lanes"): 371 / 1,652 MB without images at 1 M and
+ * 5 M, time x 0.8 (5.7-6.3 vs 7.2-7.5 s at 1 M, 30.3 vs 38.9 s at 5 M, the same
+ * machine; with fidelity x 0.95, 15.4 vs 14.6 s at 1 M). Refit with
+ * scripts/bench/plan_calibrate.py. */
 #define IMAGES_MB 110.0
 static const stage_cost mesh_costs[] = {
     {"range", 0.014, 0.403, 1.081, 5, 94, 0.95},
@@ -51,8 +55,8 @@ static const stage_cost mesh_costs[] = {
     {"merge", 0.078, 1.37, 1.100, 27, 228, 0.95},
     {"priority", 0.107, 3.82, 1.052, 7, 224, 0.95},
     {"crack", 0.117, 3.04, 1.049, 27, 330, 1.0},
-    {"export", 0.3, 5.06, 1.062, 8, 307, 0.97},
-    {"export+fidelity", 2.5, 5.8, 1.062, 8, 307, 0.97},
+    {"export", 0.3, 4.05, 1.062, 8, 363, 0.94},
+    {"export+fidelity", 2.5, 5.5, 1.062, 8, 363, 0.94},
     /* The segment and cluster methods: plan_calibrate.py at 30k, 100k and 200k triangles on
      * a loaded machine, memory as measured, time from CPU seconds / 1.3 (what the wall
      * time is on a quiet one); their export writes levels from a level list, not a model,

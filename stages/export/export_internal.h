@@ -2,6 +2,7 @@
 #ifndef SCANLOD_STAGES_EXPORT_INTERNAL_H
 #define SCANLOD_STAGES_EXPORT_INTERNAL_H
 
+#include <pthread.h>
 #include <stdint.h>
 
 #include "core/hash.h"
@@ -165,6 +166,33 @@ typedef struct sl_export_digest {
 } sl_export_digest;
 
 sl_export_digest sl_export_digest_mesh(const sl_lod_mesh *m);
+
+/* One level's cut for the export loop (export_cuts.c), made one level ahead of the
+ * writes: with more than one thread on a thread of its own while the previous level is
+ * written, else when it is finished. The caller fills cutter .. threads once; start sets
+ * `at` (a position in `order`), finish waits for it. Then `own` is 1 when `mesh` is level
+ * order[at]'s own mesh to write (and `coarser` its morph target's when
+ * rows[order[at]].morph_to >= 0), 0 when it shares another level's files or has no
+ * triangles (nothing held). */
+typedef struct sl_export_cut_job {
+    sl_export_cutter *cutter;
+    const int *order;          /* the levels in preference order */
+    sl_export_result *rows;    /* k set; with morph, file, triangles and morph_to too */
+    uint64_t *cracks;
+    sl_export_digest *digests; /* per level, filled as levels are cut */
+    int morph;                 /* the morph plan made every row's file beforehand */
+    int threads;               /* omp_get_max_threads() */
+    int at, own;
+    sl_lod_mesh mesh, coarser;
+    sl_error err;
+    pthread_t thread;
+    int threaded, pending;
+} sl_export_cut_job;
+
+void sl_export_cut_job_start(sl_export_cut_job *j, int at);
+/* 0, or the cut's error (SL_E_NOMEM) merged into err; nothing is then held. */
+int sl_export_cut_job_finish(sl_export_cut_job *j, sl_error *err);
+void sl_export_cut_job_release(sl_export_cut_job *j);
 
 /* One distinct mesh's work, what the LOD model's levels and a level list share: its atlas
  * baked (with `texture`), its files written as [export] asks under lv->name, its topology

@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <omp.h>
+
 #include "core/atomicfile.h"
 #include "core/hash.h"
 #include "core/markdown.h"
@@ -438,41 +440,6 @@ static void preference_order(const sl_export_config *c, int *order)
     }
 }
 
-/* Without morph targets, in preference order, each distinct cut generated once (the cut
- * is the costliest part of exporting a large level): a level with the k of one already
- * seen shares its mesh; else its mesh is cut, and shares the files of an earlier one with
- * the same digest (equal meshes from different k), or is this level's own. The same
- * rows[i].file as plan_levels gives. Returns 1 with *mesh the level's own mesh to write,
- * 0 when it shares another's or has no triangles (nothing held), -1 out of memory (err). */
-static int cut_once(sl_export_cutter *cutter, const int *order, int at, sl_export_result *rows,
-                    uint64_t *cracks, sl_export_digest *digests, sl_lod_mesh *mesh,
-                    sl_error *err)
-{
-    int i = order[at];
-    for (int b = 0; b < at; b++)
-        if (rows[order[b]].k == rows[i].k) {
-            rows[i].file = rows[order[b]].file, cracks[i] = cracks[order[b]];
-            return 0;
-        }
-    if (sl_export_cut_row(cutter, &cutter->c->levels[i], &rows[i], mesh, &cracks[i], err))
-        return -1;
-    rows[i].triangles = mesh->triangle_count;
-    rows[i].vertices = mesh->vertex_count;
-    rows[i].file = mesh->triangle_count ? i : -1;
-    if (mesh->triangle_count) {
-        digests[i] = sl_export_digest_mesh(mesh);
-        for (int b = 0; b < at && rows[i].file == i; b++) {
-            int j = order[b];
-            if (rows[j].file == j && !memcmp(&digests[j], &digests[i], sizeof *digests))
-                rows[i].file = j;
-        }
-    }
-    if (rows[i].file == i)
-        return 1;
-    sl_lod_mesh_release(mesh);
-    return 0;
-}
-
 int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
                           const sl_lod_mesh *mesh, const sl_lod_mesh *morph_to,
                           const char *extras, const sl_mesh *input,
@@ -515,40 +482,54 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
     for (int i = 0; i < c->level_count && rc == 0 && !morph; i++)
         sl_export_level_k(&cutter, &c->levels[i], &rows[i]);
     preference_order(c, order);
-    /* Each distinct mesh: its files and its measures, once. */
+    for (int i = 0; i < c->level_count; i++) /* -1 unless the morph plan made the files */
+        rows[i].morph_to = sl_export_morph_coarser(c, rows, i);
+    /* Each distinct mesh: its files and its measures, once; the next one is cut while
+     * this one is written (export_cuts.c). */
+    sl_export_cut_job jobs[2];
+    memset(jobs, 0, sizeof jobs);
+    for (int j = 0; j < 2; j++) {
+        jobs[j].cutter = &cutter, jobs[j].order = order, jobs[j].rows = rows;
+        jobs[j].cracks = cracks, jobs[j].digests = digests, jobs[j].morph = morph;
+        jobs[j].threads = omp_get_max_threads();
+    }
+    if (rc == 0 && c->level_count > 0)
+        sl_export_cut_job_start(&jobs[0], 0);
+    int cutting = rc == 0 && c->level_count > 0; /* jobs[at & 1] is under way */
     for (int at = 0; at < c->level_count && rc == 0; at++) {
-        int i = order[at];
-        const sl_export_level *lv = &c->levels[i];
-        if ((rc = sl_stage_step(io, "export", (double)at / c->level_count, err)))
+        sl_export_cut_job *job = &jobs[at & 1];
+        cutting = 0;
+        if ((rc = sl_export_cut_job_finish(job, err)))
             break;
-        rows[i].morph_to = -1;
-        sl_lod_mesh mesh, coarser;
-        memset(&coarser, 0, sizeof coarser);
-        /* 1: this level's own mesh, to write; 0: it shares one or has none; -1: no memory */
-        int own = !morph ? cut_once(&cutter, order, at, rows, cracks, digests, &mesh, err)
-                  : rows[i].file != i ? 0
-                  : sl_export_cut_level(&cutter, rows[i].k, &mesh, NULL, NULL, err) ? -1 : 1;
-        if (own < 0) {
-            rc = err->code ? err->code : SL_E_NOMEM;
+        if ((rc = sl_stage_step(io, "export", (double)at / c->level_count, err))) {
+            sl_export_cut_job_release(job);
             break;
         }
-        if (!own)
+        if (at + 1 < c->level_count) {
+            sl_export_cut_job_start(&jobs[(at + 1) & 1], at + 1);
+            cutting = 1;
+        }
+        if (!job->own)
             continue;
-        int to = sl_export_morph_coarser(c, rows, i);
-        if (to >= 0 && (rc = sl_export_cut_level(&cutter, rows[to].k, &coarser, NULL, NULL, err))) {
-            sl_lod_mesh_release(&mesh);
-            break;
-        }
-        rows[i].morph_to = to;
+        int i = order[at];
         char extras[256];
         snprintf(extras, sizeof extras,
-                 "{\"scanlod\":{\"level\":\"%s\",\"expansions\":%u,\"of\":%u}}", lv->name,
-                 rows[i].k, model->expansion_count);
-        rc = sl_export_write_level(c, lv, &mesh, to >= 0 ? &coarser : NULL, extras, input,
+                 "{\"scanlod\":{\"level\":\"%s\",\"expansions\":%u,\"of\":%u}}",
+                 c->levels[i].name, rows[i].k, model->expansion_count);
+        rc = sl_export_write_level(c, &c->levels[i], &job->mesh,
+                                   rows[i].morph_to >= 0 ? &job->coarser : NULL, extras, input,
                                    frame, texture, io, &rows[i], err);
-        if (to >= 0)
-            sl_lod_mesh_release(&coarser);
-        sl_lod_mesh_release(&mesh);
+        sl_export_cut_job_release(job);
+    }
+    if (cutting) { /* a write failed or was interrupted: the cut ahead is dropped */
+        for (int j = 0; j < 2; j++)
+            if (jobs[j].threaded || jobs[j].pending) {
+                jobs[j].pending = 0; /* not made if it was not begun */
+                sl_error ignored;
+                sl_error_init(&ignored);
+                sl_export_cut_job_finish(&jobs[j], &ignored);
+                sl_export_cut_job_release(&jobs[j]);
+            }
     }
     free(digests);
     for (int i = 0; i < c->level_count && rc == 0; i++)
