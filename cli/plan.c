@@ -46,14 +46,15 @@ typedef struct stage_cost {
  * 1 M and 5 M; then again when the export began cutting a level ahead of its writes
  * (docs/threads.md "The export's two lanes"): 371 / 1,652 MB without images at 1 M and
  * 5 M, time x 0.8 (5.7-6.3 vs 7.2-7.5 s at 1 M, 30.3 vs 38.9 s at 5 M, the same
- * machine; with fidelity x 0.95, 15.4 vs 14.6 s at 1 M). Refit with
- * scripts/bench/plan_calibrate.py. */
+ * machine; with fidelity x 0.95, 15.4 vs 14.6 s at 1 M). The priority line was refitted
+ * when it stopped building the leaves' neighbours (0.76 / 4.2 s, 171 / 838 MB at 1 and
+ * 5 M). Refit with scripts/bench/plan_calibrate.py. */
 #define IMAGES_MB 110.0
 static const stage_cost mesh_costs[] = {
     {"range", 0.014, 0.403, 1.081, 5, 94, 0.95},
     {"samples", 0.105, 2.42, 1.047, 15, 133, 0.95},
     {"merge", 0.078, 1.37, 1.100, 27, 228, 0.95},
-    {"priority", 0.107, 3.82, 1.052, 7, 224, 0.95},
+    {"priority", 0.107, 0.65, 1.14, 7, 164, 1.0},
     {"crack", 0.117, 3.04, 1.049, 27, 330, 1.0},
     {"export", 0.3, 4.05, 1.062, 8, 363, 0.94},
     {"export+fidelity", 2.5, 5.5, 1.062, 8, 363, 0.94},
@@ -101,8 +102,9 @@ static double thread_factor(int threads)
 /* Disk per item, MB = a + b * N (work folder; published folder): b from the growth
  * benchmark's 1/5/20 M surfaces on model format 3 (work 378-407, published 106-134 MB per
  * million triangles, default ladder, fidelity off; docs/benchmarks.md section 4), a from
- * the bundled scans (thumbnails, pages). */
-static const double work_mb[2] = {1, 380}, published_mb[2] = {1.4, 110};
+ * the bundled scans (thumbnails, pages); the work's b again when priority.slpri lost the
+ * leaves' neighbour links (format 2): 276 and 1,280 MB at 1 and 5 M. */
+static const double work_mb[2] = {1, 265}, published_mb[2] = {1.4, 110};
 
 typedef struct plan_state {
     FILE *out;

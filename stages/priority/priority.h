@@ -37,8 +37,8 @@ typedef struct sl_priority {
     uint32_t *lod_array;
     float *area_difference; /* per node (0 for leaves) */
     float *node_error;      /* per node, world units (0 for leaves) */
-    /* Read back (sl_priority_read): the internal nodes' links alone, the leaves' masks 0
-     * (a leaf's cell never meets a finer one, so nothing asks for its neighbours); the
+    /* The internal nodes' links alone, the leaves' masks 0 (a leaf's cell never meets a
+     * finer one, so nothing asks for its neighbours; sl_neighbours_build_internal); the
      * whole table's count in neighbour_links. */
     sl_neighbours neighbours;
     uint64_t neighbour_links;

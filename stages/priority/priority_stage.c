@@ -10,10 +10,12 @@
 #include "stages/merge/merge.h"
 #include "stages/priority/priority.h"
 
-#define PRIORITY_STAGE_VERSION 3u /* 2: error-driven order by default; 3: metric auto (qef
-                                      on octrees with dual vertices) by default */
+#define PRIORITY_STAGE_VERSION 4u /* 2: error-driven order by default; 3: metric auto (qef
+                                      on octrees with dual vertices) by default; 4: format 2 */
 #define PRIORITY_MAGIC "SLPRIORI"
-#define PRIORITY_FORMAT_VERSION 1u
+#define PRIORITY_FORMAT_VERSION 2u /* 2: the internal nodes' neighbour links alone, and the
+                                      whole table's count */
+#define PRIORITY_HEADER 24
 
 void sl_priority_release(sl_priority *p)
 {
@@ -27,10 +29,11 @@ void sl_priority_release(sl_priority *p)
 int sl_priority_write(const char *path, const sl_priority *p, uint32_t stage_version,
                       sl_error *err)
 {
-    unsigned char header[16];
+    unsigned char header[PRIORITY_HEADER];
     sl_put_u32(header, p->node_count);
     sl_put_u32(header + 4, p->expansion_count);
     sl_put_u64(header + 8, p->neighbours.count);
+    sl_put_u64(header + 16, p->neighbour_links);
     size_t n = p->node_count;
     sl_artifact_part parts[] = {
         {header, sizeof header},
@@ -50,8 +53,8 @@ static int corrupt(sl_error *err, const char *path, const char *what)
     return sl_error_set(err, SL_E_CORRUPT, 0, path, "invalid priority file: %s", what);
 }
 
-/* Every node's mask and base against the whole table (neighbour_links); the indices held
- * (neighbours.count of them) against the node count. */
+/* Every node's mask and base against the links held (the leaves' masks are 0), the
+ * indices against the node count. */
 static int validate(const sl_priority *p, const sl_octree *t, const char *path, sl_error *err)
 {
     for (uint32_t i = 0; i < p->expansion_count; i++)
@@ -59,9 +62,8 @@ static int validate(const sl_priority *p, const sl_octree *t, const char *path, 
             return corrupt(err, path, "LOD array entry is not an internal node");
     for (uint32_t i = 0; i < p->node_count; i++) {
         uint64_t count = (uint64_t)__builtin_popcount(p->neighbours.mask[i] & 0x7ffffff);
-        uint64_t end = t->nodes[i].level > 0 ? p->neighbours.count : p->neighbour_links;
         if ((p->neighbours.mask[i] >> 13 & 1) || p->neighbours.mask[i] >> 27 ||
-            (uint64_t)p->neighbours.base[i] + count > end)
+            (uint64_t)p->neighbours.base[i] + count > p->neighbours.count)
             return corrupt(err, path, "neighbour table out of range");
         if (!isfinite(p->area_difference[i]) || !isfinite(p->node_error[i]))
             return corrupt(err, path, "non-finite metric");
@@ -91,32 +93,28 @@ int sl_priority_read(const char *path, const sl_octree *t, sl_priority *out, sl_
     if (rc)
         return rc;
     const unsigned char *p = body;
-    if (size < 16) {
+    if (size < PRIORITY_HEADER) {
         free(body);
         return corrupt(err, path, "truncated header");
     }
     out->node_count = sl_get_u32(p);
     out->expansion_count = sl_get_u32(p + 4);
     out->neighbours.count = sl_get_u64(p + 8);
+    out->neighbour_links = sl_get_u64(p + 16);
     uint64_t n = out->node_count;
-    if (n != t->node_count || out->expansion_count > n || out->neighbours.count > 26 * n ||
-        size != 16 + 4 * ((uint64_t)out->expansion_count + 4 * n + out->neighbours.count)) {
+    if (n != t->node_count || out->expansion_count > n || out->neighbour_links > 26 * n ||
+        out->neighbours.count > out->neighbour_links ||
+        size != PRIORITY_HEADER +
+                    4 * ((uint64_t)out->expansion_count + 4 * n + out->neighbours.count)) {
         free(body);
         return corrupt(err, path, "counts do not match the octree or the file size");
     }
-    const unsigned char *at = p + 16;
+    const unsigned char *at = p + PRIORITY_HEADER;
     out->lod_array = take(&at, (uint64_t)out->expansion_count * 4);
     out->area_difference = take(&at, n * 4);
     out->node_error = take(&at, n * 4);
     out->neighbours.mask = take(&at, n * 4);
     out->neighbours.base = take(&at, n * 4);
-    /* The links up to the first leaf's (the priority stage writes the table level by
-     * level from the root, so the leaves' come last); all of them in another layout. */
-    out->neighbour_links = out->neighbours.count;
-    uint32_t leaf0 = t->level_first[0];
-    if (out->neighbours.base && t->level_count[0] && leaf0 + t->level_count[0] == n &&
-        out->neighbours.base[leaf0] <= out->neighbours.count)
-        out->neighbours.count = out->neighbours.base[leaf0];
     out->neighbours.index = take(&at, out->neighbours.count * 4);
     free(body);
     if (!out->lod_array || !out->area_difference || !out->node_error || !out->neighbours.mask ||
@@ -125,8 +123,6 @@ int sl_priority_read(const char *path, const sl_octree *t, sl_priority *out, sl_
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
     }
     rc = validate(out, t, path, err);
-    if (rc == 0 && out->neighbours.count < out->neighbour_links)
-        memset(out->neighbours.mask + leaf0, 0, (size_t)t->level_count[0] * 4);
     if (rc)
         sl_priority_release(out);
     return rc;
@@ -203,7 +199,10 @@ static int priority_run(const void *config, const sl_stage_io *io, sl_error *err
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     if (rc == 0)
         rc = sl_stage_step(io, "priority: neighbours", 0.3, err);
-    if (rc == 0 && sl_neighbours_build(&tree, &p.neighbours))
+    /* The order asks for the neighbours of parents only, and the crack stage for those of
+     * internal nodes: a leaf's are counted (the model's header keeps the whole table's
+     * count, which a reader that rebuilds the table checks), not kept. */
+    if (rc == 0 && sl_neighbours_build_internal(&tree, &p.neighbours, &p.neighbour_links))
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     if (rc == 0)
         rc = sl_stage_step(io, "priority: keys", 0.4, err);

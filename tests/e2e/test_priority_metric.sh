@@ -21,6 +21,28 @@ for item in cow rocker_arm; do
   b=$(sha256sum <"$TMP/work1/artifacts/priority/$item.ply/priority.slpri")
   check "$item: priority.slpri identical on 1 and 2 threads" [ "$a" = "$b" ]
 done
+# priority.slpri version 2 (docs/formats.md) holds the internal nodes' neighbour links
+# alone: fewer than the whole table's count it carries for the model's header, every leaf
+# mask 0 (the leaves come last), and the size the counts give.
+for item in cow rocker_arm; do
+  set +e
+  python3 - "$TMP/work/artifacts/priority/$item.ply/priority.slpri" <<'PY'
+import struct, sys
+data = open(sys.argv[1], "rb").read()
+body = data[32:]
+n, e, held, whole = struct.unpack_from("<IIQQ", body, 0)
+assert len(body) == 24 + 4 * (e + 4 * n + held), "size %d vs the counts" % len(body)
+masks = struct.unpack_from("<%dI" % n, body, 24 + 4 * (e + 2 * n))
+leaves = n - e  # every internal node is expanded once
+assert all(m == 0 for m in masks[n - leaves:]), "a leaf's neighbours are held"
+assert any(masks[:n - leaves]), "no internal node has neighbours"
+assert 0 < held < whole / 2, "links held %d of %d" % (held, whole)
+print("%s: %d of %d links held" % (sys.argv[1], held, whole), file=sys.stderr)
+PY
+  held=$?
+  set -e
+  check "$item: priority.slpri holds the internal nodes' links alone" [ "$held" -eq 0 ]
+done
 # The area order reuses the upstream artifacts (and replaces the priority ones).
 run_scanlod run "$TMP/c.ini" -q -s priority.metric=area -s run.output="$TMP/out-area"
 check "area run exits 0 ($err)" [ "$rc" -eq 0 ]
