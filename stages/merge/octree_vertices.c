@@ -28,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/alloc.h"
 #include "geometry/qef.h"
 #include "geometry/triangle_bvh.h"
 #include "runtime/lod_dual.h"
@@ -107,8 +108,8 @@ static int slots_init(const sl_octree *t, uint32_t level, level_slots *ls)
         k += (uint32_t)(loops ? loops : 1);
     }
     ls->first[ls->nodes] = k;
-    ls->qef = calloc(k ? k : 1, sizeof *ls->qef);
-    ls->x = calloc(3 * (size_t)(k ? k : 1), sizeof *ls->x);
+    ls->qef = sl_alloc_zeroed(k ? k : 1, sizeof *ls->qef);
+    ls->x = sl_alloc_zeroed(3 * (size_t)(k ? k : 1), sizeof *ls->x);
     return ls->qef && ls->x ? 0 : -1;
 }
 
