@@ -6,8 +6,8 @@
  *   accumulation   (expansion_count + 1) x u64
  *   error_after    (expansion_count + 1) x f32
  *   neighbours     node_count x u32 mask, node_count x u32 base, neighbour_count x u32
- *                  (format 2 only: format 3 rebuilds the table from the octree on reading
- *                  and checks its count against the header's)
+ *                  (format 2 only: formats 3 and 4 rebuild the table from the octree on reading
+ *                  and check its count against the header's)
  *   transitions    node_count x u32 base, transition_words x u32
  *
  * Format 3 stores the plain body in packed parts (lod_pack.h: zstd frames of filtered
@@ -24,8 +24,9 @@
 
 #define SL_LOD_MAGIC "SLODMODL"
 /* 2: the octree section of format 2 (optional dual vertices). 3: the body in packed parts
- * (lod_pack.h), without the neighbour table. */
-#define SL_LOD_FORMAT_VERSION 3u
+ * (lod_pack.h), without the neighbour table. 4: the octree without the per-node errors
+ * and areas (a flag in its header; read from 3 and 4 alike). */
+#define SL_LOD_FORMAT_VERSION 4u
 #define SL_LOD_OLDEST_VERSION 2u
 
 int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_version,
@@ -39,7 +40,7 @@ int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err);
  * so is every cut. */
 int sl_lod_model_open(const char *path, sl_lod_model *out, sl_error *err);
 /* The same from a body already out of its envelope (what sl_artifact_read returns; the
- * fuzz target feeds bodies here, past the checksum): packed (format 3) or plain (format 2).
+ * fuzz target feeds bodies here, past the checksum): packed (formats 3 and 4) or plain (format 2).
  * `name` is used in messages. On failure `out` holds nothing. */
 int sl_lod_model_parse(const void *body, uint64_t size, const char *name, sl_lod_model *out,
                        sl_error *err);

@@ -1,4 +1,5 @@
-/* Packed parts: how a model of format 3 stores its plain body (docs/formats.md, "model.slod").
+/* Packed parts: how a model of format 3 or 4 stores its plain body (docs/formats.md,
+ * "model.slod").
  * The plain body is cut into pieces of at most SL_PACK_PIECE bytes, each stored as one zstd
  * frame of its bytes after an optional reversible filter (byte planes of fixed-size
  * records, or per-column differences of u32 words then byte planes), whichever is smallest.
@@ -25,7 +26,10 @@
 
 #define SL_PACK_MAGIC 0x4b504c53u /* "SLPK" little-endian */
 #define SL_PACK_PIECE ((size_t)8 << 20)
-#define SL_PACK_LEVEL 9
+/* zstd's level for the stored pieces: 6 rather than 9 since level 9 cost the crack stage
+ * 18 % of its time and 40-260 MB of its peak (1 and 5 M triangles) for a model 1.1-1.4 %
+ * smaller (docs/benchmarks.md section 7). */
+#define SL_PACK_LEVEL 6
 #define SL_PACK_TABLE_ENTRY 24
 /* The largest plain/stored ratio a zstd frame reaches (an RLE block: 3 + 1 bytes for 128
  * KiB), plus a frame's fixed bytes: a piece declaring more is refused unread. */

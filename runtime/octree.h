@@ -76,6 +76,8 @@ typedef struct sl_octree {
                                   (cell edge / 2)^2 per unit of area of surface it draws no
                                   loop for (world units^4: area x squared distance) */
     float *node_area;          /* per node: area of input surface in its cell (world^2) */
+                               /* Both NULL in an LOD model's octree (model format 4):
+                                  only the priority stage reads them, from octree.slot. */
 } sl_octree;
 
 #define SL_OCTREE_MAX_NODE_VERTICES 4 /* loops of a uniform configuration, at most */

@@ -17,6 +17,9 @@ _Static_assert(sizeof(sl_octree_node) == 32, "sl_octree_node is stored as 32 byt
 
 #define HEADER_SIZE (4 * 4 + 8 + 8 * 4 + 4 * 2 * SL_OCTREE_MAX_LEVELS + 8 * 6 + 16)
 #define HAS_VERTICES 1u
+/* With vertices: the per-node errors and areas are left out (the LOD model's octree since
+ * model format 4: only the priority stage reads them, from octree.slot). */
+#define NO_NODE_METRICS 2u
 
 static void put_f64(unsigned char *p, double v)
 {
@@ -55,7 +58,8 @@ int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_p
     for (int i = 0; i < 6; i++, p += 8)
         sl_put_u64(p, stats[i]);
     sl_put_u32(p, t->vertex_count);
-    sl_put_u32(p + 4, sl_octree_dual(t) ? HAS_VERTICES : 0);
+    int metrics = sl_octree_dual(t) && t->node_error && t->node_area;
+    sl_put_u32(p + 4, !sl_octree_dual(t) ? 0 : metrics ? HAS_VERTICES : HAS_VERTICES | NO_NODE_METRICS);
     sl_put_u64(p + 8, 0);
     int n = 0;
     parts[n++] = (sl_artifact_part){header, HEADER_SIZE};
@@ -70,8 +74,10 @@ int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_p
         parts[n++] = (sl_artifact_part){t->vertex_position, (size_t)t->vertex_count * 12};
         if (t->crossing_color)
             parts[n++] = (sl_artifact_part){t->vertex_color, (size_t)t->vertex_count * 4};
-        parts[n++] = (sl_artifact_part){t->node_error, (size_t)t->node_count * 4};
-        parts[n++] = (sl_artifact_part){t->node_area, (size_t)t->node_count * 4};
+        if (metrics) {
+            parts[n++] = (sl_artifact_part){t->node_error, (size_t)t->node_count * 4};
+            parts[n++] = (sl_artifact_part){t->node_area, (size_t)t->node_count * 4};
+        }
     }
     return n;
 }
@@ -217,8 +223,8 @@ static int validate_vertices(const sl_octree *t, const char *name, sl_error *err
         uint32_t count = next - first, loops = table[n->inside].loops;
         if (count != 0 && count != (loops ? loops : 1))
             return bad(err, name, "vertex count does not match the node's loops");
-        if (!isfinite(t->node_error[i]) || !(t->node_error[i] >= 0) ||
-            !isfinite(t->node_area[i]) || !(t->node_area[i] >= 0))
+        if (t->node_error && (!isfinite(t->node_error[i]) || !(t->node_error[i] >= 0) ||
+                              !isfinite(t->node_area[i]) || !(t->node_area[i] >= 0)))
             return bad(err, name, "node error or area not finite and positive");
         double lo[3], hi[3];
         sl_octree_corner_world(t, n, 0, lo);
@@ -270,8 +276,8 @@ int sl_octree_parse(const unsigned char *body, uint64_t size, const char *name, 
         *stats[i] = sl_get_u64(p);
     uint32_t vertex_count = sl_get_u32(p), flags = sl_get_u32(p + 4);
     if (has_color > 1 || out->node_count == 0 || out->node_crossing_count > (uint64_t)1 << 40 ||
-        (flags & ~HAS_VERTICES) || sl_get_u64(p + 8) != 0 ||
-        (!(flags & HAS_VERTICES) && vertex_count) ||
+        (flags & ~(HAS_VERTICES | NO_NODE_METRICS)) || sl_get_u64(p + 8) != 0 ||
+        (!(flags & HAS_VERTICES) && (vertex_count || (flags & NO_NODE_METRICS))) ||
         (uint64_t)vertex_count > (uint64_t)SL_OCTREE_MAX_NODE_VERTICES * out->node_count)
         return bad(err, name, "header counts out of range");
     /* 64-bit sizes: no overflow for 32-bit counts. */
@@ -282,7 +288,8 @@ int sl_octree_parse(const unsigned char *body, uint64_t size, const char *name, 
     int dual = (flags & HAS_VERTICES) != 0;
     uint64_t vfirst = dual ? ((uint64_t)out->node_count + 1) * 4 : 0;
     uint64_t vpos = (uint64_t)vertex_count * 12, vcol = has_color ? (uint64_t)vertex_count * 4 : 0;
-    uint64_t per_node = dual ? (uint64_t)out->node_count * 4 : 0;
+    int metrics = dual && !(flags & NO_NODE_METRICS);
+    uint64_t per_node = metrics ? (uint64_t)out->node_count * 4 : 0;
     uint64_t need = HEADER_SIZE + nodes + ids + pos + col;
     uint64_t need_dual = dual ? vfirst + vpos + vcol + 2 * per_node : 0;
     if (need > size || need_dual > size - need)
@@ -300,10 +307,13 @@ int sl_octree_parse(const unsigned char *body, uint64_t size, const char *name, 
         out->vertex_first = copy_out(q, vfirst);
         out->vertex_position = copy_out(q + vfirst, vpos);
         out->vertex_color = has_color ? copy_out(q + vfirst + vpos, vcol) : NULL;
-        out->node_error = copy_out(q + vfirst + vpos + vcol, per_node);
-        out->node_area = copy_out(q + vfirst + vpos + vcol + per_node, per_node);
+        if (metrics) {
+            out->node_error = copy_out(q + vfirst + vpos + vcol, per_node);
+            out->node_area = copy_out(q + vfirst + vpos + vcol + per_node, per_node);
+        }
         failed = !out->vertex_first || !out->vertex_position ||
-                 (has_color && !out->vertex_color) || !out->node_error || !out->node_area;
+                 (has_color && !out->vertex_color) ||
+                 (metrics && (!out->node_error || !out->node_area));
         need += need_dual;
     }
     if (failed) {

@@ -3,8 +3,9 @@
 
     scripts/bench/slod_sections.py MODEL.slod [--ply INPUT.ply] [--markdown]
 
-Reads format 2 (plain body) and format 3 (the body in packed pieces: each section's plain
-and stored bytes; needs the zstd command for the two header pieces). --ply adds the
+Reads format 2 (plain body) and formats 3 and 4 (the body in packed pieces: each section's
+plain and stored bytes; needs the zstd command for the two header pieces; 4 is 3 without the
+node errors and areas). --ply adds the
 model/PLY ratio."""
 import argparse
 import os
@@ -39,8 +40,9 @@ def sections(body):
         add("qef vertex positions", 12 * vc)
         if col:
             add("qef vertex colours", 4 * vc)
-        add("node errors", 4 * n)
-        add("node areas", 4 * n)
+        if not flags & 2:  # model format 4 leaves them out (flag 2)
+            add("node errors", 4 * n)
+            add("node areas", 4 * n)
     e, n2, nbc, tc = struct.unpack_from("<IIQQ", body, at)
     add("LOD header", LOD_HEADER)
     add("LOD array", 4 * e)
@@ -89,7 +91,8 @@ def packed_sections(body):
         names += [("vertex ranges", 4 * (n + 1)), ("qef vertex positions", 12 * vc)]
         if col:
             names.append(("qef vertex colours", 4 * vc))
-        names += [("node errors", 4 * n), ("node areas", 4 * n)]
+        if not flags & 2:  # model format 4 leaves them out (flag 2)
+            names += [("node errors", 4 * n), ("node areas", 4 * n)]
     rows, k = [], 0
 
     def take(name, size):
@@ -126,12 +129,12 @@ def main():
         sys.exit(f"{a.model}: not a model.slod")
     version = struct.unpack_from("<I", data, 8)[0]
     body = data[32:]
-    if version == 3:
+    if version in (3, 4):
         rows = packed_sections(body)
     elif version == 2:
         rows = [(name, size, size) for name, _, size in sections(body)[0]]
     else:
-        sys.exit(f"{a.model}: format version {version} (this script reads 2 and 3)")
+        sys.exit(f"{a.model}: format version {version} (this script reads 2 to 4)")
     plain = sum(r[1] for r in rows)
     ply = os.path.getsize(a.ply) if a.ply else None
     if a.markdown:

@@ -177,6 +177,11 @@ static int priority_run(const void *config, const sl_stage_io *io, sl_error *err
         rc = sl_octree_read(in_path, &tree, err);
     if (rc)
         return rc;
+    if (sl_octree_dual(&tree) && !tree.node_error) { /* an LOD model's octree, not the merge's */
+        sl_octree_release(&tree);
+        return sl_error_set(err, SL_E_CORRUPT, 0, in_path,
+                            "invalid octree: quadric vertices without node errors and areas");
+    }
     sl_priority_metric metric = c->metric;
     if (metric == SL_PRIORITY_AUTO)
         metric = sl_octree_dual(&tree) ? SL_PRIORITY_QEF : SL_PRIORITY_ERROR;

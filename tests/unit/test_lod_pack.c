@@ -259,9 +259,10 @@ static void test_real_model(void)
     CHECK(sl_lod_model_write(v3, &old, 1, &err) == 0);
     size_t v2_size = 0, v3_size = 0;
     unsigned char *file2 = slurp(v2, &v2_size), *file3 = slurp(v3, &v3_size);
-    CHECK(file2 && file3 && sl_get_u32(file3 + 8) == 3);
+    CHECK(file2 && file3 && sl_get_u32(file3 + 8) == SL_LOD_FORMAT_VERSION);
     CHECK_MSG(v3_size * 8 < v2_size, "format 3: %zu bytes, format 2: %zu", v3_size, v2_size);
-    printf("bun_zipper_res4: format 2 %zu bytes, format 3 %zu bytes\n", v2_size, v3_size);
+    printf("bun_zipper_res4: format 2 %zu bytes, written again as format %u %zu bytes\n", v2_size,
+           SL_LOD_FORMAT_VERSION, v3_size);
     rc = sl_lod_model_read(v3, &now, &err);
     CHECK_MSG(rc == 0, "format 3 model: %s", err.message);
     if (rc == 0) {
@@ -287,7 +288,7 @@ static void test_real_model(void)
         struct { uint32_t version; const unsigned char *body; size_t size; const char *cause; }
         cases[] = {{2, file3 + 32, v3_size - 32, "packed parts in a format 2 file"},
                    {3, file2 + 32, v2_size - 32, "format 3 without packed parts"},
-                   {4, file3 + 32, v3_size - 32, "reads versions 2 to 3"}};
+                   {5, file3 + 32, v3_size - 32, "reads versions 2 to 4"}};
         for (int i = 0; i < 3 && file2; i++) {
             sl_artifact_part part = {cases[i].body, cases[i].size};
             CHECK(sl_artifact_write(v3, SL_LOD_MAGIC, cases[i].version, 1, &part, 1, &err) == 0);
@@ -332,6 +333,45 @@ static void write_packed_seed(const char *dir)
     sl_lod_model_release(&m);
 }
 
+/* A format 3 model with quadric vertices (its octree with the node errors and areas; made
+ * by the crack stage version 4, tests/data/models/README.md) is read, without those
+ * arrays, and cuts the same as that model written again as format 4, which leaves them
+ * out (docs/formats.md): a smaller file. */
+static void test_format3_quadric_model(void)
+{
+    const char *src = getenv("SCANLOD_SOURCE_DIR");
+    char v3[4096], v4[] = "/tmp/scanlod-test-pack-v4-XXXXXX";
+    snprintf(v3, sizeof v3, "%s/tests/data/models/bun_zipper_res4-v3.slod", src ? src : ".");
+    sl_error err;
+    sl_error_init(&err);
+    sl_lod_model old, now;
+    int rc = sl_lod_model_read(v3, &old, &err);
+    CHECK_MSG(rc == 0, "format 3 quadric model: %s", err.message);
+    if (rc)
+        return;
+    CHECK(sl_octree_dual(&old.tree) && !old.tree.node_error && !old.tree.node_area);
+    int fd = mkstemp(v4);
+    close(fd);
+    CHECK(sl_lod_model_write(v4, &old, 1, &err) == 0);
+    size_t size3 = 0, size4 = 0;
+    unsigned char *file3 = slurp(v3, &size3), *file4 = slurp(v4, &size4);
+    CHECK(file3 && file4 && sl_get_u32(file3 + 8) == 3 && sl_get_u32(file4 + 8) == 4);
+    CHECK_MSG(size4 * 10 < size3 * 9, "format 4: %zu bytes, format 3: %zu", size4, size3);
+    printf("bun_zipper_res4 (quadric vertices): format 3 %zu bytes, format 4 %zu bytes\n", size3,
+           size4);
+    free(file3);
+    free(file4);
+    rc = sl_lod_model_read(v4, &now, &err);
+    CHECK_MSG(rc == 0, "format 4 model: %s", err.message);
+    if (rc == 0) {
+        for (uint32_t k = 0; k <= old.expansion_count; k++)
+            check_same_cut(&old, &now, k);
+        sl_lod_model_release(&now);
+    }
+    unlink(v4);
+    sl_lod_model_release(&old);
+}
+
 int main(void)
 {
     const char *seed_dir = getenv("SCANLOD_SLOD_SEED_DIR");
@@ -341,5 +381,6 @@ int main(void)
     }
     test_round_trip();
     test_real_model();
+    test_format3_quadric_model();
     return check_report();
 }
