@@ -50,13 +50,14 @@ typedef struct stage_cost {
  * when it stopped building the leaves' neighbours (0.76 / 4.2 s, 171 / 838 MB at 1 and
  * 5 M), and the merge line when its quadric slots were zeroed before the sums (3.0 / 18.0
  * s, 379 / 1,736 MB at 1 and 5 M; the line before predicted 1.4 s and 255 MB at 1 M, from
- * before quadric vertices were the default), and the crack line at zstd level 6 (3.8 / 19.9
+ * before quadric vertices were the default; its memory again when the colour sums left the
+ * quadrics: 329 / 1,530 MB), and the crack line at zstd level 6 (3.8 / 19.9
  * s, 310 / 1,313 MB at 1 and 5 M). Refit with scripts/bench/plan_calibrate.py. */
 #define IMAGES_MB 110.0
 static const stage_cost mesh_costs[] = {
     {"range", 0.014, 0.403, 1.081, 5, 94, 0.95},
     {"samples", 0.105, 2.42, 1.047, 15, 133, 0.95},
-    {"merge", 0.078, 2.92, 1.13, 27, 352, 0.98},
+    {"merge", 0.078, 2.92, 1.13, 27, 302, 0.97},
     {"priority", 0.107, 0.65, 1.14, 7, 164, 1.0},
     {"crack", 0.117, 3.7, 1.04, 27, 283, 0.94},
     {"export", 0.3, 4.05, 1.062, 8, 363, 0.94},

@@ -4,8 +4,7 @@
 #include <math.h>
 #include <string.h>
 
-void sl_qef_add_plane(sl_qef *q, const double n[3], const double point[3], double w,
-                      const double rgba[4])
+void sl_qef_add_plane(sl_qef *q, const double n[3], const double point[3], double w)
 {
     double d = n[0] * point[0] + n[1] * point[1] + n[2] * point[2];
     q->a[0] += w * n[0] * n[0];
@@ -20,9 +19,6 @@ void sl_qef_add_plane(sl_qef *q, const double n[3], const double point[3], doubl
     }
     q->c += w * d * d;
     q->area += w;
-    if (rgba)
-        for (int i = 0; i < 4; i++)
-            q->color[i] += w * rgba[i];
 }
 
 void sl_qef_add(sl_qef *q, const sl_qef *r)
@@ -33,8 +29,6 @@ void sl_qef_add(sl_qef *q, const sl_qef *r)
         q->b[i] += r->b[i];
         q->mass[i] += r->mass[i];
     }
-    for (int i = 0; i < 4; i++)
-        q->color[i] += r->color[i];
     q->c += r->c;
     q->area += r->area;
 }

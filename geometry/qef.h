@@ -24,13 +24,11 @@ typedef struct sl_qef {
     double c;
     double area;     /* sum of w */
     double mass[3];  /* sum of w * point */
-    double color[4]; /* sum of w * RGBA (0..255), when the caller has colours */
-} sl_qef;
+} sl_qef;           /* (a caller with colours keeps their sums beside it: 32 bytes more per
+                       quadric, which an uncoloured scan's merge would carry for nothing) */
 
-/* Adds the plane through `point` with unit normal `n`, carrying area `w`, with colour
- * `rgba` (may be NULL). */
-void sl_qef_add_plane(sl_qef *q, const double n[3], const double point[3], double w,
-                      const double rgba[4]);
+/* Adds the plane through `point` with unit normal `n`, carrying area `w`. */
+void sl_qef_add_plane(sl_qef *q, const double n[3], const double point[3], double w);
 /* q += r (same frame). */
 void sl_qef_add(sl_qef *q, const sl_qef *r);
 /* Re-expresses q (relative to origin o_from) relative to o_to = o_from + t. */

@@ -288,9 +288,12 @@ int sl_vertices_leaf_quadrics(const sl_octree *t, const sl_surface *s, level_slo
         }
         for (uint64_t k = 0; k < n; k++) {
             const piece *p = &pieces[k];
-            if (p->slot != UINT32_MAX)
-                sl_qef_add_plane(&leaves->qef[p->slot], p->n, p->point, p->w,
-                                 coloured ? p->rgba : NULL);
+            if (p->slot == UINT32_MAX)
+                continue;
+            sl_qef_add_plane(&leaves->qef[p->slot], p->n, p->point, p->w);
+            if (coloured)
+                for (int i = 0; i < 4; i++)
+                    leaves->color[4 * (size_t)p->slot + (size_t)i] += p->w * p->rgba[i];
         }
     }
     free(pieces);

@@ -110,13 +110,16 @@ static int slots_init(const sl_octree *t, uint32_t level, level_slots *ls)
     ls->first[ls->nodes] = k;
     ls->qef = sl_alloc_zeroed(k ? k : 1, sizeof *ls->qef);
     ls->x = sl_alloc_zeroed(3 * (size_t)(k ? k : 1), sizeof *ls->x);
-    return ls->qef && ls->x ? 0 : -1;
+    ls->color = t->crossing_color ? sl_alloc_zeroed(4 * (size_t)(k ? k : 1), sizeof *ls->color)
+                                  : NULL;
+    return ls->qef && ls->x && (ls->color || !t->crossing_color) ? 0 : -1;
 }
 
 static void slots_release(level_slots *ls)
 {
     free(ls->first);
     free(ls->qef);
+    free(ls->color);
     free(ls->x);
     memset(ls, 0, sizeof *ls);
 }
@@ -128,7 +131,7 @@ static void gather_children(const sl_octree *t, const level_slots *child, level_
     const sl_octree_node *n = &t->nodes[p];
     double pc[3];
     sl_vertices_node_corner(n, pc);
-    sl_qef *slots = &ls->qef[ls->first[p - ls->node0]];
+    uint32_t first = ls->first[p - ls->node0];
     for (int j = 0; j < __builtin_popcount(n->child_mask); j++) {
         uint32_t c = n->first_child + (uint32_t)j, ci = c - child->node0;
         double cc[3], t_shift[3];
@@ -143,7 +146,11 @@ static void gather_children(const sl_octree *t, const level_slots *child, level_
             double x[3];
             for (int a = 0; a < 3; a++)
                 x[a] = child->x[3 * (size_t)v + (size_t)a] - t_shift[a];
-            sl_qef_add(&slots[sl_vertices_nearest_loop(t, n, x)], &q);
+            uint32_t to = first + (uint32_t)sl_vertices_nearest_loop(t, n, x);
+            sl_qef_add(&ls->qef[to], &q);
+            if (ls->color)
+                for (size_t i = 0; i < 4; i++)
+                    ls->color[4 * (size_t)to + i] += child->color[4 * (size_t)v + i];
         }
     }
 }
@@ -204,11 +211,12 @@ static void store_level(const sl_octree *t, const level_slots *ls, all_slots *al
                     (float)(t->origin[a] + (corner[a] + x[a]) * leaf);
             all->area[g] = (float)(q->area * leaf2);
             all->error[g] = q->area > 0 ? (float)(fmax(0, sl_qef_eval(q, x)) * leaf2 * leaf2) : 0;
-            if (all->color)
+            if (all->color) {
+                const double *sum = ls->color + 4 * (size_t)v;
                 for (int j = 0; j < 4; j++)
                     all->color[4 * (size_t)g + (size_t)j] =
-                        q->area > 0 ? (uint8_t)lround(fmin(255, fmax(0, q->color[j] / q->area)))
-                                    : 160;
+                        q->area > 0 ? (uint8_t)lround(fmin(255, fmax(0, sum[j] / q->area))) : 160;
+            }
         }
     }
 }

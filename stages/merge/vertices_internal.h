@@ -14,6 +14,7 @@ typedef struct level_slots {
     uint32_t node0, nodes;  /* the level's nodes in the octree */
     uint32_t *first;        /* nodes + 1 */
     sl_qef *qef;
+    double *color;          /* 4 per slot: sum of w * RGBA (0..255), or NULL (no colours) */
     double *x;              /* 3 per slot: the solved vertex, grid units from the corner */
 } level_slots;
 
