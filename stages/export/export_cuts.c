@@ -10,6 +10,7 @@
  * depend on the threads and at most two levels' meshes and one cut's scratch are held.
  */
 #include <errno.h>
+#include <omp.h>
 #include <pthread.h>
 #include <string.h>
 
@@ -75,6 +76,9 @@ static void cut_job_run(sl_export_cut_job *j)
 
 static void *cut_job_thread(void *arg)
 {
+    /* A new thread starts from the process's default OpenMP thread count, not the one the
+     * engine set for the item ([run] threads): any parallel loop a cut reaches keeps to it. */
+    omp_set_num_threads(((sl_export_cut_job *)arg)->threads);
     cut_job_run(arg);
     return NULL;
 }
