@@ -14,7 +14,22 @@
 #include <pthread.h>
 #include <string.h>
 
+#include "core/hash.h"
 #include "stages/export/export_internal.h"
+
+sl_export_digest sl_export_digest_mesh(const sl_lod_mesh *m)
+{
+    sl_export_digest d;
+    memset(&d, 0, sizeof d); /* no padding bytes left undefined: digests are compared whole */
+    d.vertices = m->vertex_count;
+    d.triangles = m->triangle_count;
+    size_t v = (size_t)m->vertex_count, t = (size_t)m->triangle_count;
+    d.positions = sl_hash_bytes(m->positions, v * 3 * sizeof *m->positions);
+    d.normals = m->normals ? sl_hash_bytes(m->normals, v * 3 * sizeof *m->normals) : d.normals;
+    d.colors = m->colors ? sl_hash_bytes(m->colors, v * 4) : d.colors;
+    d.indices = sl_hash_bytes(m->indices, t * 3 * sizeof *m->indices);
+    return d;
+}
 
 /* Without morph targets, in preference order, each distinct cut generated once (the cut
  * is the costliest part of exporting a large level): a level with the k of one already

@@ -9,7 +9,6 @@
 #include <omp.h>
 
 #include "core/atomicfile.h"
-#include "core/hash.h"
 #include "core/markdown.h"
 #include "geometry/mesh_distance.h"
 #include "stages/export/export_internal.h"
@@ -192,20 +191,6 @@ static int measure_level(const sl_export_config *c, const sl_mesh *input, const 
         row->diagonal = d.diagonal;
     }
     return 0;
-}
-
-sl_export_digest sl_export_digest_mesh(const sl_lod_mesh *m)
-{
-    sl_export_digest d;
-    memset(&d, 0, sizeof d); /* no padding bytes left undefined: digests are compared whole */
-    d.vertices = m->vertex_count;
-    d.triangles = m->triangle_count;
-    size_t v = (size_t)m->vertex_count, t = (size_t)m->triangle_count;
-    d.positions = sl_hash_bytes(m->positions, v * 3 * sizeof *m->positions);
-    d.normals = m->normals ? sl_hash_bytes(m->normals, v * 3 * sizeof *m->normals) : d.normals;
-    d.colors = m->colors ? sl_hash_bytes(m->colors, v * 4) : d.colors;
-    d.indices = sl_hash_bytes(m->indices, t * 3 * sizeof *m->indices);
-    return d;
 }
 
 /* The item's section of OUTPUT/summary.md: paper Table 1 for this item (a row per level)
