@@ -196,10 +196,8 @@ static int parse_tables(const void *body, uint64_t size, int stored, const char 
 {
     uint64_t used = 0;
     int rc = sl_octree_parse(body, size, name, &out->tree, &used, err);
-    if (rc == 0) { /* a format 2 or 3 model's node errors and areas: nothing reads them */
-        free(out->tree.node_error);
-        free(out->tree.node_area);
-        out->tree.node_error = out->tree.node_area = NULL;
+    if (rc == 0) {
+        sl_octree_drop_node_metrics(&out->tree); /* a format 2 or 3 model's: unread */
         rc = parse_lod(out, (const unsigned char *)body + used, size - used, stored, name, err);
     }
     return rc;

@@ -24,6 +24,13 @@ void sl_octree_release(sl_octree *t)
     sl_octree_init(t);
 }
 
+void sl_octree_drop_node_metrics(sl_octree *t)
+{
+    free(t->node_error);
+    free(t->node_area);
+    t->node_error = t->node_area = NULL;
+}
+
 static uint64_t spread_bits(uint32_t v)
 {
     uint64_t x = v & 0xfffffu; /* 20 bits */

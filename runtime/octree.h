@@ -90,6 +90,9 @@ static inline int sl_octree_dual(const sl_octree *t)
 
 void sl_octree_init(sl_octree *t);
 void sl_octree_release(sl_octree *t);
+/* Frees the per-node errors and areas (NULL after): what an LOD model's octree goes without
+ * (model format 4); the priority stage, which orders by them, reads octree.slot. */
+void sl_octree_drop_node_metrics(sl_octree *t);
 
 /* Crossing id of edge e of node n (edge_mask must have bit e). */
 static inline uint32_t sl_octree_crossing(const sl_octree *t, const sl_octree_node *n, int e)

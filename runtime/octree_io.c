@@ -59,7 +59,7 @@ int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_p
         sl_put_u64(p, stats[i]);
     sl_put_u32(p, t->vertex_count);
     int metrics = sl_octree_dual(t) && t->node_error && t->node_area;
-    sl_put_u32(p + 4, !sl_octree_dual(t) ? 0 : metrics ? HAS_VERTICES : HAS_VERTICES | NO_NODE_METRICS);
+    sl_put_u32(p + 4, sl_octree_dual(t) ? HAS_VERTICES | (metrics ? 0 : NO_NODE_METRICS) : 0);
     sl_put_u64(p + 8, 0);
     int n = 0;
     parts[n++] = (sl_artifact_part){header, HEADER_SIZE};

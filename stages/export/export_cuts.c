@@ -130,3 +130,11 @@ void sl_export_cut_job_release(sl_export_cut_job *j)
     sl_lod_mesh_release(&j->mesh);
     sl_lod_mesh_release(&j->coarser);
 }
+
+void sl_export_cut_job_cancel(sl_export_cut_job *j)
+{
+    if (j->threaded)
+        pthread_join(j->thread, NULL);
+    j->threaded = j->pending = 0; /* a cut not begun is not made */
+    sl_export_cut_job_release(j);
+}

@@ -193,6 +193,10 @@ void sl_export_cut_job_start(sl_export_cut_job *j, int at);
 /* 0, or the cut's error (SL_E_NOMEM) merged into err; nothing is then held. */
 int sl_export_cut_job_finish(sl_export_cut_job *j, sl_error *err);
 void sl_export_cut_job_release(sl_export_cut_job *j);
+/* Waits for a cut under way and drops what it made; a pending one is not made. Nothing
+ * is held after it, whatever state the job was in (a finished or released job: nothing
+ * to do). */
+void sl_export_cut_job_cancel(sl_export_cut_job *j);
 
 /* One distinct mesh's work, what the LOD model's levels and a level list share: its atlas
  * baked (with `texture`), its files written as [export] asks under lv->name, its topology

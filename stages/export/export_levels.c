@@ -471,29 +471,22 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
         rows[i].morph_to = sl_export_morph_coarser(c, rows, i);
     /* Each distinct mesh: its files and its measures, once; the next one is cut while
      * this one is written (export_cuts.c). */
-    sl_export_cut_job jobs[2];
-    memset(jobs, 0, sizeof jobs);
-    for (int j = 0; j < 2; j++) {
-        jobs[j].cutter = &cutter, jobs[j].order = order, jobs[j].rows = rows;
-        jobs[j].cracks = cracks, jobs[j].digests = digests, jobs[j].morph = morph;
-        jobs[j].threads = omp_get_max_threads();
-    }
+    sl_export_cut_job jobs[2] = {{.cutter = &cutter, .order = order, .rows = rows,
+                                  .cracks = cracks, .digests = digests, .morph = morph,
+                                  .threads = omp_get_max_threads()}};
+    jobs[1] = jobs[0];
     if (rc == 0 && c->level_count > 0)
         sl_export_cut_job_start(&jobs[0], 0);
-    int cutting = rc == 0 && c->level_count > 0; /* jobs[at & 1] is under way */
     for (int at = 0; at < c->level_count && rc == 0; at++) {
         sl_export_cut_job *job = &jobs[at & 1];
-        cutting = 0;
         if ((rc = sl_export_cut_job_finish(job, err)))
             break;
         if ((rc = sl_stage_step(io, "export", (double)at / c->level_count, err))) {
             sl_export_cut_job_release(job);
             break;
         }
-        if (at + 1 < c->level_count) {
+        if (at + 1 < c->level_count)
             sl_export_cut_job_start(&jobs[(at + 1) & 1], at + 1);
-            cutting = 1;
-        }
         if (!job->own)
             continue;
         int i = order[at];
@@ -506,16 +499,8 @@ int sl_export_levels(const sl_export_config *c, sl_lod_model *model, const sl_me
                                    frame, texture, io, &rows[i], err);
         sl_export_cut_job_release(job);
     }
-    if (cutting) { /* a write failed or was interrupted: the cut ahead is dropped */
-        for (int j = 0; j < 2; j++)
-            if (jobs[j].threaded || jobs[j].pending) {
-                jobs[j].pending = 0; /* not made if it was not begun */
-                sl_error ignored;
-                sl_error_init(&ignored);
-                sl_export_cut_job_finish(&jobs[j], &ignored);
-                sl_export_cut_job_release(&jobs[j]);
-            }
-    }
+    for (int j = 0; j < 2; j++) /* after a failed write: the cut ahead is dropped */
+        sl_export_cut_job_cancel(&jobs[j]);
     free(digests);
     for (int i = 0; i < c->level_count && rc == 0; i++)
         if (rows[i].file >= 0 && rows[i].file != i) {

@@ -193,6 +193,24 @@ static int same_bytes(const void *a, const void *b, size_t n)
 }
 
 /* The same meshes from both models at k. */
+/* `m` written to a fresh temporary file named from `path` (a mkstemp template). */
+static int write_again(char *path, const sl_lod_model *m, sl_error *err)
+{
+    int fd = mkstemp(path);
+    if (fd >= 0)
+        close(fd);
+    return fd >= 0 ? sl_lod_model_write(path, m, 1, err) : -1;
+}
+
+/* tests/data/models/NAME read into *m; 0, or the reader's code. */
+static int read_bundled(const char *name, char *path, size_t size, sl_lod_model *m,
+                        sl_error *err)
+{
+    const char *src = getenv("SCANLOD_SOURCE_DIR");
+    snprintf(path, size, "%s/tests/data/models/%s", src ? src : ".", name);
+    return sl_lod_model_read(path, m, err);
+}
+
 static void check_same_cut(sl_lod_model *a, sl_lod_model *b, uint32_t k)
 {
     sl_lod_mesh x, y;
@@ -226,9 +244,7 @@ static void test_opened(const char *v2, const char *v3, sl_lod_model *full)
         for (uint32_t k = 0; k <= full->expansion_count; k++)
             check_same_cut(full, &opened, k);
         char again[] = "/tmp/scanlod-test-pack-open-XXXXXX";
-        int fd = mkstemp(again);
-        close(fd);
-        CHECK(sl_lod_model_write(again, &opened, 1, &err) == 0);
+        CHECK(write_again(again, &opened, &err) == 0);
         sl_lod_model back;
         rc = sl_lod_model_read(again, &back, &err);
         CHECK_MSG(rc == 0, "an opened model written again: %s", err.message);
@@ -244,19 +260,15 @@ static void test_opened(const char *v2, const char *v3, sl_lod_model *full)
 
 static void test_real_model(void)
 {
-    const char *src = getenv("SCANLOD_SOURCE_DIR");
     char v2[4096], v3[] = "/tmp/scanlod-test-pack-XXXXXX";
-    snprintf(v2, sizeof v2, "%s/tests/data/models/bun_zipper_res4-v2.slod", src ? src : ".");
     sl_error err;
     sl_error_init(&err);
     sl_lod_model old, now;
-    int rc = sl_lod_model_read(v2, &old, &err);
+    int rc = read_bundled("bun_zipper_res4-v2.slod", v2, sizeof v2, &old, &err);
     CHECK_MSG(rc == 0, "format 2 model: %s", err.message);
     if (rc)
         return;
-    int fd = mkstemp(v3);
-    close(fd);
-    CHECK(sl_lod_model_write(v3, &old, 1, &err) == 0);
+    CHECK(write_again(v3, &old, &err) == 0);
     size_t v2_size = 0, v3_size = 0;
     unsigned char *file2 = slurp(v2, &v2_size), *file3 = slurp(v3, &v3_size);
     CHECK(file2 && file3 && sl_get_u32(file3 + 8) == SL_LOD_FORMAT_VERSION);
@@ -319,9 +331,7 @@ static void write_packed_seed(const char *dir)
     sl_error err;
     sl_error_init(&err);
     CHECK(body && sl_lod_model_parse(body, size, in, &m, &err) == 0);
-    int fd = mkstemp(tmp);
-    close(fd);
-    CHECK(sl_lod_model_write(tmp, &m, 1, &err) == 0);
+    CHECK(write_again(tmp, &m, &err) == 0);
     unsigned char *file = slurp(tmp, &file_size);
     FILE *f = fopen(out, "wb");
     CHECK(file && f && fwrite(file + 32, 1, file_size - 32, f) == file_size - 32);
@@ -339,20 +349,16 @@ static void write_packed_seed(const char *dir)
  * out (docs/formats.md): a smaller file. */
 static void test_format3_quadric_model(void)
 {
-    const char *src = getenv("SCANLOD_SOURCE_DIR");
     char v3[4096], v4[] = "/tmp/scanlod-test-pack-v4-XXXXXX";
-    snprintf(v3, sizeof v3, "%s/tests/data/models/bun_zipper_res4-v3.slod", src ? src : ".");
     sl_error err;
     sl_error_init(&err);
     sl_lod_model old, now;
-    int rc = sl_lod_model_read(v3, &old, &err);
+    int rc = read_bundled("bun_zipper_res4-v3.slod", v3, sizeof v3, &old, &err);
     CHECK_MSG(rc == 0, "format 3 quadric model: %s", err.message);
     if (rc)
         return;
     CHECK(sl_octree_dual(&old.tree) && !old.tree.node_error && !old.tree.node_area);
-    int fd = mkstemp(v4);
-    close(fd);
-    CHECK(sl_lod_model_write(v4, &old, 1, &err) == 0);
+    CHECK(write_again(v4, &old, &err) == 0);
     size_t size3 = 0, size4 = 0;
     unsigned char *file3 = slurp(v3, &size3), *file4 = slurp(v4, &size4);
     CHECK(file3 && file4 && sl_get_u32(file3 + 8) == 3 && sl_get_u32(file4 + 8) == 4);
