@@ -19,6 +19,7 @@
 #include "cli/commands.h"
 #include "core/error.h"
 #include "runtime/lod_io.h"
+#include "runtime/lod_prefix.h"
 #include "runtime/octree_io.h"
 #include "geometry/morph_refine.h"
 #include "geometry/morph_target.h"
@@ -463,31 +464,38 @@ int sl_cmd_extract(int argc, char **argv)
         return extract_level(&r);
     sl_error err;
     sl_error_init(&err);
-    sl_lod_model model;
-    if (sl_lod_model_open(r.input, &model, &err))
+    /* A model of format 5 is read only as far as the level needs (lod_prefix.h). */
+    sl_lod_file *file = NULL;
+    if (sl_lod_file_open(r.input, &file, &err))
         return fail(&err, 1);
+    const sl_lod_model *levels = sl_lod_file_levels(file);
     uint32_t k = 0;
-    int rc = choose_k(&r, &model, &k);
+    int rc = choose_k(&r, levels, &k);
+    sl_lod_model *cut = NULL;
+    if (rc == 0 && sl_lod_file_reach(file, k, &cut, &err)) {
+        sl_lod_file_close(file);
+        return fail(&err, 1);
+    }
     if (rc) {
-        sl_lod_model_release(&model);
+        sl_lod_file_close(file);
         return rc;
     }
     struct timespec t0;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     sl_lod_mesh mesh;
     uint64_t cracks = 0;
-    if (sl_lod_generate(&model, k, &mesh, &cracks)) {
-        sl_lod_model_release(&model);
+    if (sl_lod_generate(cut, k, &mesh, &cracks)) {
+        sl_lod_file_close(file);
         sl_error_set(&err, SL_E_NOMEM, ENOMEM, r.input, "out of memory");
         return fail(&err, 0);
     }
     double generate_s = seconds_since(&t0);
     char extras[256];
     snprintf(extras, sizeof extras, "{\"expansions\":%u,\"of\":%u,\"max_error\":%.9g}", k,
-             model.expansion_count, (double)model.error_after[k]);
+             levels->expansion_count, (double)levels->error_after[k]);
     char warm[128] = "";
     double median = 0, min = 0;
-    if (r.repeat && time_warm(&model, k, r.repeat, r.hot, &median, &min) != 0)
+    if (r.repeat && time_warm(cut, k, r.repeat, r.hot, &median, &min) != 0)
         sl_error_set(&err, SL_E_NOMEM, ENOMEM, r.input, "out of memory");
     else if (r.repeat)
         snprintf(warm, sizeof warm, ", then %ld more in median %.7f s (min %.7f s, %s)",
@@ -495,16 +503,16 @@ int sl_cmd_extract(int argc, char **argv)
     char note[160] = "";
     int written = err.code == SL_OK ? 0 : -1;
     if (written == 0)
-        written = r.morph ? write_morph(&r, &model, &mesh, extras, note, sizeof note, &err)
+        written = r.morph ? write_morph(&r, cut, &mesh, extras, note, sizeof note, &err)
                           : sl_export_write_mesh(r.output, &mesh, extras, NULL, NULL, &err);
     if (written == 0)
         printf("expansions %u of %u: %llu triangles, %llu vertices, max error %.6g, "
                "generated in %.7f s%s%s -> %s\n",
-               k, model.expansion_count, (unsigned long long)mesh.triangle_count,
-               (unsigned long long)mesh.vertex_count, (double)model.error_after[k], generate_s,
+               k, levels->expansion_count, (unsigned long long)mesh.triangle_count,
+               (unsigned long long)mesh.vertex_count, (double)levels->error_after[k], generate_s,
                warm, note, r.output);
     sl_lod_mesh_release(&mesh);
-    sl_lod_model_release(&model);
+    sl_lod_file_close(file);
     if (written > 0)
         return written;
     return err.code ? fail(&err, 0) : SL_EXIT_OK;

@@ -74,30 +74,24 @@ int sl_artifact_read(const char *path, const char magic[8], uint32_t format_vers
                                      body, body_size, stage_version, &version, err);
 }
 
-int sl_artifact_read_versions(const char *path, const char magic[8], uint32_t oldest,
-                              uint32_t newest, uint64_t max_body_size, void **body,
-                              uint64_t *body_size, uint32_t *stage_version,
-                              uint32_t *version_out, sl_error *err)
+int sl_artifact_open(const char *path, const char magic[8], uint32_t oldest, uint32_t newest,
+                     int *fd_out, uint64_t *body_size, uint32_t *version_out,
+                     uint64_t *checksum, sl_error *err)
 {
-    *body = NULL;
-    *body_size = 0;
+    *fd_out = -1;
     struct stat st;
     int fd = sl_io_open_regular(path, &st, err);
     if (fd < 0)
         return fd;
     int rc = 0;
     unsigned char header[SL_ARTIFACT_HEADER_SIZE];
-    void *data = NULL;
+    uint32_t version = 0;
+    uint64_t size = 0;
     if ((uint64_t)st.st_size < SL_ARTIFACT_HEADER_SIZE || read_all(fd, header, sizeof header)) {
         rc = sl_error_set(err, SL_E_CORRUPT, 0, path, "truncated artifact header");
-        goto done;
-    }
-    if (memcmp(header, magic, 8) != 0) {
+    } else if (memcmp(header, magic, 8) != 0) {
         rc = sl_error_set(err, SL_E_CORRUPT, 0, path, "not a %.8s file (wrong magic)", magic);
-        goto done;
-    }
-    uint32_t version = sl_get_u32(header + 8);
-    if (version < oldest || version > newest) {
+    } else if ((version = sl_get_u32(header + 8)) < oldest || version > newest) {
         if (oldest == newest)
             rc = sl_error_set(err, SL_E_CORRUPT, 0, path,
                               "format version %u, this scanlod reads version %u", version,
@@ -106,15 +100,62 @@ int sl_artifact_read_versions(const char *path, const char magic[8], uint32_t ol
             rc = sl_error_set(err, SL_E_CORRUPT, 0, path,
                               "format version %u, this scanlod reads versions %u to %u",
                               version, oldest, newest);
-        goto done;
-    }
-    *version_out = version;
-    uint64_t size = sl_get_u64(header + 16);
-    if (size != (uint64_t)st.st_size - SL_ARTIFACT_HEADER_SIZE) {
+    } else if ((size = sl_get_u64(header + 16)) !=
+               (uint64_t)st.st_size - SL_ARTIFACT_HEADER_SIZE) {
         rc = sl_error_set(err, SL_E_CORRUPT, 0, path,
                           "header declares %llu body bytes, file holds %llu",
                           (unsigned long long)size,
                           (unsigned long long)st.st_size - SL_ARTIFACT_HEADER_SIZE);
+    }
+    if (rc) {
+        close(fd);
+        return rc;
+    }
+    *fd_out = fd;
+    *body_size = size;
+    *version_out = version;
+    if (checksum)
+        *checksum = sl_get_u64(header + 24);
+    return 0;
+}
+
+int sl_artifact_pread(int fd, const char *path, void *dest, uint64_t size, uint64_t at,
+                      sl_error *err)
+{
+    unsigned char *p = dest;
+    off_t offset = (off_t)(SL_ARTIFACT_HEADER_SIZE + at);
+    while (size > 0) {
+        ssize_t r = pread(fd, p, size, offset);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r < 0)
+            return sl_error_set(err, SL_E_IO, errno, path, "cannot read: %s", strerror(errno));
+        if (r == 0)
+            return sl_error_set(err, SL_E_CORRUPT, 0, path, "file shrank while reading");
+        p += r;
+        size -= (uint64_t)r;
+        offset += r;
+    }
+    return 0;
+}
+
+int sl_artifact_read_versions(const char *path, const char magic[8], uint32_t oldest,
+                              uint32_t newest, uint64_t max_body_size, void **body,
+                              uint64_t *body_size, uint32_t *stage_version,
+                              uint32_t *version_out, sl_error *err)
+{
+    *body = NULL;
+    *body_size = 0;
+    int fd = -1;
+    uint64_t size = 0, checksum = 0;
+    int rc = sl_artifact_open(path, magic, oldest, newest, &fd, &size, version_out, &checksum,
+                              err);
+    if (rc)
+        return rc;
+    unsigned char header[SL_ARTIFACT_HEADER_SIZE];
+    void *data = NULL;
+    if (pread(fd, header, sizeof header, 0) != (ssize_t)sizeof header) {
+        rc = sl_error_set(err, SL_E_CORRUPT, 0, path, "truncated artifact header");
         goto done;
     }
     if (size > max_body_size) {

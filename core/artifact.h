@@ -44,6 +44,18 @@ int sl_artifact_read_versions(const char *path, const char magic[8], uint32_t ol
                               uint64_t *body_size, uint32_t *stage_version, uint32_t *version,
                               sl_error *err);
 
+/* For a reader that takes only parts of a body (lod_prefix.h): the header checked as
+ * above (magic, version, size against the file), the file left open in *fd (the caller
+ * closes it), the body's size, version and envelope checksum out. The body is not read,
+ * so its checksum is not checked: such a reader checks what it reads by other means. */
+int sl_artifact_open(const char *path, const char magic[8], uint32_t oldest, uint32_t newest,
+                     int *fd, uint64_t *body_size, uint32_t *version, uint64_t *checksum,
+                     sl_error *err);
+/* `size` bytes of the body from offset `at` (SL_E_IO naming `path`, or SL_E_CORRUPT when
+ * the file ends first). */
+int sl_artifact_pread(int fd, const char *path, void *dest, uint64_t size, uint64_t at,
+                      sl_error *err);
+
 /* Little-endian helpers for bodies (the format is LE on every host). */
 static inline void sl_put_u32(unsigned char *p, uint32_t v)
 {

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "core/artifact.h"
+#include "runtime/lod_order.h"
 #include "runtime/lod_pack.h"
 #include "runtime/octree_io.h"
 
@@ -14,44 +15,12 @@
 /* The largest plain body a packed one may declare (the envelope's own limit). */
 #define PLAIN_LIMIT ((uint64_t)1 << 40)
 
-/* The record size of an octree part (the packing filters' unit). */
-static uint16_t octree_record(const sl_octree *t, const sl_artifact_part *part, int index)
-{
-    if (index == 0)
-        return 0; /* the header */
-    if (part->data == (const void *)t->nodes)
-        return sizeof *t->nodes;
-    if (part->data == (const void *)t->crossing_position ||
-        part->data == (const void *)t->vertex_position)
-        return 12;
-    return 4;
-}
-
 int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_version,
                        sl_error *err)
 {
-    unsigned char octree_header[512], header[LOD_HEADER_SIZE];
-    sl_artifact_part octree[SL_OCTREE_PARTS];
-    sl_pack_part parts[SL_OCTREE_PARTS + 6];
-    int count = sl_octree_parts(&m->tree, octree_header, octree);
-    for (int i = 0; i < count; i++)
-        parts[i] = (sl_pack_part){octree[i].data, octree[i].size,
-                                  octree_record(&m->tree, &octree[i], i)};
-    uint32_t n = m->tree.node_count, e = m->expansion_count;
-    sl_put_u32(header, e);
-    sl_put_u32(header + 4, n);
-    sl_put_u64(header + 8, m->neighbours.index ? m->neighbours.count : m->neighbour_links);
-    sl_put_u64(header + 16, m->transitions.count);
-    /* No neighbour table: reading rebuilds it from the octree (format 3). */
-    parts[count++] = (sl_pack_part){header, sizeof header, 0};
-    parts[count++] = (sl_pack_part){m->lod_array, (size_t)e * 4, 4};
-    parts[count++] = (sl_pack_part){m->accumulation, ((size_t)e + 1) * 8, 8};
-    parts[count++] = (sl_pack_part){m->error_after, ((size_t)e + 1) * 4, 4};
-    parts[count++] = (sl_pack_part){m->transitions.base, (size_t)n * 4, 4};
-    parts[count++] = (sl_pack_part){m->transitions.words, (size_t)m->transitions.count * 4, 4};
     void *packed = NULL;
     size_t packed_size = 0;
-    if (sl_pack(parts, count, &packed, &packed_size))
+    if (sl_lod_order_pack(m, SL_LOD_ORDER_PIECE, &packed, &packed_size))
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory packing the model");
     sl_artifact_part body = {packed, packed_size};
     int rc = sl_artifact_write(path, SL_LOD_MAGIC, SL_LOD_FORMAT_VERSION, stage_version, &body,
@@ -175,15 +144,22 @@ static int parse_lod(sl_lod_model *m, const unsigned char *p, uint64_t size, int
 
 /* After the body is freed: format 3's neighbour table rebuilt from the octree (the count
  * the header declared must match), then every table checked. */
-static int check_lod(sl_lod_model *m, int stored, const char *path, sl_error *err)
+static int check_lod(sl_lod_model *m, int stored, uint64_t declared, const char *path,
+                     sl_error *err)
 {
-    uint64_t declared = m->neighbours.count, all = 0;
-    if (!stored) {
+    uint64_t all = 0;
+    if (stored) {
+        declared = m->neighbours.count;
+    } else {
         if (m->cuts_only ? sl_neighbours_build_internal(&m->tree, &m->neighbours, &all)
                          : sl_neighbours_build(&m->tree, &m->neighbours))
             return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
-        if ((m->cuts_only ? all : m->neighbours.count) != declared)
+        if (!m->cuts_only)
+            all = m->neighbours.count;
+        if (declared != UINT64_MAX && all != declared)
             return corrupt(err, path, "neighbour count differs from the octree's");
+        if (declared == UINT64_MAX)
+            declared = all;
     }
     m->neighbour_links = declared;
     return validate(m, path, err);
@@ -204,14 +180,20 @@ static int parse_tables(const void *body, uint64_t size, int stored, const char 
 }
 
 /* The checks and what generation derives from the tables (after the body is gone). */
-static int derive(sl_lod_model *out, int stored, const char *name, sl_error *err)
+static int derive(sl_lod_model *out, int stored, uint64_t declared, const char *name,
+                  sl_error *err)
 {
-    int rc = check_lod(out, stored, name, err);
+    int rc = check_lod(out, stored, declared, name, err);
     if (rc)
         return rc;
     if (sl_lod_model_localize(out) || sl_lod_model_prepare(out))
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
     return 0;
+}
+
+int sl_lod_model_derive(sl_lod_model *m, uint64_t links, const char *name, sl_error *err)
+{
+    return derive(m, 0, links, name, err);
 }
 
 /* Parses a body (packed or plain) into `out`. `owned` (may be NULL) is the caller's copy of
@@ -222,21 +204,26 @@ static int parse_body(const void *body, uint64_t size, void *owned, const char *
                       sl_lod_model *out, sl_error *err)
 {
     int rc, stored = !sl_pack_is_packed(body, size);
+    int ordered = !stored && sl_get_u32(body) == SL_PACK_MAGIC_CHECKED; /* format 5 */
     if (!stored) {
         void *plain = NULL;
         uint64_t plain_size = 0;
         rc = sl_unpack(body, size, PLAIN_LIMIT, name, &plain, &plain_size, err);
         free(owned);
         owned = NULL;
-        if (rc == 0)
+        if (rc == 0 && ordered)
+            rc = sl_lod_order_parse(plain, plain_size, out->cuts_only, name, out, err);
+        else if (rc == 0)
             rc = parse_tables(plain, plain_size, 0, name, out, err);
         free(plain);
+        if (ordered)
+            return rc; /* built and checked, or released */
     } else {
         rc = parse_tables(body, size, 1, name, out, err);
     }
     free(owned);
     if (rc == 0)
-        rc = derive(out, stored, name, err);
+        rc = derive(out, stored, out->neighbours.count, name, err);
     if (rc)
         sl_lod_model_release(out);
     return rc;
@@ -258,9 +245,13 @@ static int read_model(const char *path, int cuts_only, sl_lod_model *out, sl_err
     int rc = sl_artifact_read_versions(path, SL_LOD_MAGIC, SL_LOD_OLDEST_VERSION,
                                        SL_LOD_FORMAT_VERSION, PLAIN_LIMIT, &body, &size, NULL,
                                        &version, err);
-    if (rc == 0 && sl_pack_is_packed(body, size) != (version >= 3))
+    int packed = rc == 0 && sl_pack_is_packed(body, size);
+    if (rc == 0 && packed != (version >= 3))
         rc = corrupt(err, path, version >= 3 ? "format 3 without packed parts"
                                              : "packed parts in a format 2 file");
+    else if (rc == 0 && packed && (sl_get_u32(body) == SL_PACK_MAGIC_CHECKED) != (version >= 5))
+        rc = corrupt(err, path, version >= 5 ? "format 5 without checked pieces"
+                                             : "checked pieces in a format 3 or 4 file");
     out->cuts_only = cuts_only;
     if (rc == 0)
         return parse_body(body, size, body, path, out, err);

@@ -25,8 +25,10 @@
 #define SL_LOD_MAGIC "SLODMODL"
 /* 2: the octree section of format 2 (optional dual vertices). 3: the body in packed parts
  * (lod_pack.h), without the neighbour table. 4: the octree without the per-node errors
- * and areas (a flag in its header; read from 3 and 4 alike). */
-#define SL_LOD_FORMAT_VERSION 4u
+ * and areas (a flag in its header; read from 3 and 4 alike). 5: every section in LOD
+ * order, in checked pieces of 1 MiB, with the bounds and surface counts stored
+ * (lod_order.h), so a cut reads a prefix (lod_prefix.h). */
+#define SL_LOD_FORMAT_VERSION 5u
 #define SL_LOD_OLDEST_VERSION 2u
 
 int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_version,
@@ -39,6 +41,10 @@ int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err);
  * model takes about half the memory (docs/benchmarks.md). Every check is the same, and
  * so is every cut. */
 int sl_lod_model_open(const char *path, sl_lod_model *out, sl_error *err);
+/* The checks and derived tables of a model whose tables are loaded (formats 3 on: the
+ * neighbour table is rebuilt; `links` is the count the file declares, UINT64_MAX for a
+ * prefix, which has no count to check). Returns 0 or an error naming `name`. */
+int sl_lod_model_derive(sl_lod_model *m, uint64_t links, const char *name, sl_error *err);
 /* The same from a body already out of its envelope (what sl_artifact_read returns; the
  * fuzz target feeds bodies here, past the checksum): packed (formats 3 and 4) or plain (format 2).
  * `name` is used in messages. On failure `out` holds nothing. */

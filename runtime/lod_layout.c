@@ -2,7 +2,7 @@
  * "Memory layout for extraction").
  *
  * LOD order: the root, then the children of lod_array[0], then those of lod_array[1], and
- * so on (then any node no expansion reaches). The frontier after k expansions is the part
+ * so on (then the children of nodes never expanded). The frontier after k expansions is the part
  * of the first frontier_end[k] positions that is not itself expanded before k, in this
  * very order. So generation reads one prefix of the cell records, and, once the pools are
  * laid out in the same order (sl_lod_model_localize), a prefix of the crossing ids and of
@@ -15,8 +15,7 @@
 #include "runtime/lod_model.h"
 #include "runtime/lod_splits.h"
 
-/* order[pos] = node in LOD order; all nodes. Returns NULL when out of memory. */
-static uint32_t *lod_order(const sl_lod_model *m)
+uint32_t *sl_lod_order(const sl_lod_model *m)
 {
     const sl_octree *t = &m->tree;
     uint32_t n = t->node_count, pos = 0;
@@ -34,11 +33,28 @@ static uint32_t *lod_order(const sl_lod_model *m)
     for (uint32_t i = 0; i < m->expansion_count; i++) {
         const sl_octree_node *p = &t->nodes[m->lod_array[i]];
         for (uint32_t c = 0; c < (uint32_t)__builtin_popcount(p->child_mask); c++) {
-            order[pos++] = p->first_child + c;
-            placed[p->first_child + c] = 1;
+            uint32_t child = p->first_child + c;
+            if (child >= n || placed[child])
+                continue; /* only a model the readers refuse (shared children) gets here */
+            order[pos++] = child;
+            placed[child] = 1;
         }
     }
-    for (uint32_t i = 0; i < n; i++)
+    /* Then the children of the nodes never expanded, breadth first in this order (their
+     * places follow from the tree alone: model format 5 stores no links, lod_order.h). */
+    for (uint32_t at = 0; at < pos; at++) {
+        const sl_octree_node *p = &t->nodes[order[at]];
+        if (!p->child_mask || placed[p->first_child])
+            continue;
+        for (uint32_t c = 0; c < (uint32_t)__builtin_popcount(p->child_mask); c++) {
+            uint32_t child = p->first_child + c;
+            if (child >= n || placed[child])
+                continue;
+            order[pos++] = child;
+            placed[child] = 1;
+        }
+    }
+    for (uint32_t i = 0; i < n; i++) /* only a model the readers refuse leaves any */
         if (!placed[i])
             order[pos++] = i;
     free(placed);
@@ -65,9 +81,7 @@ static void number_crossings(const sl_lod_model *m, uint32_t n, uint32_t *new_id
 
 static uint32_t record_words(const sl_transitions *tr, uint32_t n)
 {
-    const uint32_t *w = tr->words + tr->base[n];
-    return 3u + (uint32_t)__builtin_popcount(w[1] & 0xffffff) +
-           (uint32_t)__builtin_popcount(w[2] & 0xffffff);
+    return sl_transition_record_words(tr->words + tr->base[n]);
 }
 
 /* Rewrites the pools of per-node crossing ids and of transition records in LOD order
@@ -117,12 +131,30 @@ static int order_pools(sl_lod_model *m, const uint32_t *order)
     return 0;
 }
 
+uint32_t *sl_lod_crossing_numbers(const sl_lod_model *m, const uint32_t *order)
+{
+    const sl_octree *t = &m->tree;
+    uint32_t c = t->crossing_count, next = 0;
+    uint32_t *new_id = malloc((c ? c : 1) * sizeof *new_id);
+    if (!new_id)
+        return NULL;
+    memset(new_id, 0xff, (size_t)c * sizeof *new_id);
+    /* The crossings in the order the nodes in LOD order name them, then those no node
+     * names. */
+    for (uint32_t pos = 0; pos < t->node_count; pos++)
+        number_crossings(m, order[pos], new_id, &next);
+    for (uint32_t i = 0; i < c; i++)
+        if (new_id[i] == SL_OCTREE_NONE)
+            new_id[i] = next++;
+    return new_id;
+}
+
 int sl_lod_model_localize(sl_lod_model *m)
 {
     sl_octree *t = &m->tree;
-    uint32_t c = t->crossing_count, next = 0;
-    uint32_t *order = lod_order(m);
-    uint32_t *new_id = malloc((c ? c : 1) * sizeof *new_id);
+    uint32_t c = t->crossing_count;
+    uint32_t *order = sl_lod_order(m);
+    uint32_t *new_id = order ? sl_lod_crossing_numbers(m, order) : NULL;
     float *position = malloc((c ? c : 1) * 3 * sizeof *position);
     uint8_t *color = t->crossing_color ? malloc((c ? c : 1) * 4) : NULL;
     if (!order || !new_id || !position || (t->crossing_color && !color)) {
@@ -132,14 +164,6 @@ int sl_lod_model_localize(sl_lod_model *m)
         free(color);
         return -1;
     }
-    memset(new_id, 0xff, (size_t)c * sizeof *new_id);
-    /* The crossings in the order the nodes in LOD order name them, then those no node
-     * names. */
-    for (uint32_t pos = 0; pos < t->node_count; pos++)
-        number_crossings(m, order[pos], new_id, &next);
-    for (uint32_t i = 0; i < c; i++)
-        if (new_id[i] == SL_OCTREE_NONE)
-            new_id[i] = next++;
     for (uint32_t i = 0; i < c; i++) {
         memcpy(position + 3 * (size_t)new_id[i], t->crossing_position + 3 * (size_t)i,
                3 * sizeof *position);
@@ -236,7 +260,7 @@ static int lay_out_cells(sl_lod_model *m)
     const sl_octree *t = &m->tree;
     const sl_lod_split_table *st = sl_lod_split_table_get();
     uint32_t e = m->expansion_count;
-    uint32_t *order = lod_order(m);
+    uint32_t *order = sl_lod_order(m);
     free(m->frontier_end);
     free(m->cells);
     free(m->split_words);

@@ -50,6 +50,13 @@ typedef struct sl_transitions {
     uint32_t *words;
 } sl_transitions;
 
+/* Words of the transition record starting at w: the three heads and one id per mask bit. */
+static inline uint32_t sl_transition_record_words(const uint32_t *w)
+{
+    return 3u + (uint32_t)__builtin_popcount(w[1] & 0xffffff) +
+           (uint32_t)__builtin_popcount(w[2] & 0xffffff);
+}
+
 /* A node as generation reads it, in LOD order. */
 typedef struct sl_lod_cell_ref {
     uint32_t expansion;     /* its expansion_index (SL_OCTREE_NONE: never expanded) */
@@ -136,6 +143,15 @@ int sl_lod_model_prepare(sl_lod_model *m);
  * use, not by crossing id). Call before sl_lod_model_prepare. Returns -1 when out of
  * memory. */
 int sl_lod_model_localize(sl_lod_model *m);
+/* The nodes in LOD order (lod_layout.c): order[pos] = node, the root, then the children of
+ * lod_array[0], of lod_array[1], ..., then the children of the nodes never expanded,
+ * breadth first in this order (model format 5's node order, lod_order.h). Returns NULL
+ * when out of memory. */
+uint32_t *sl_lod_order(const sl_lod_model *m);
+/* new_id[crossing]: the crossings numbered in the order the nodes in `order` first name
+ * them (their own, then their transition record's), then those no node names. NULL when
+ * out of memory. */
+uint32_t *sl_lod_crossing_numbers(const sl_lod_model *m, const uint32_t *order);
 /* Fills surface_before (allocated by the caller, expansion_count + 1 entries) from the
  * tree and the LOD array; part of sl_lod_model_prepare. Returns -1 when out of memory. */
 int sl_lod_surface_counts(sl_lod_model *m);

@@ -1,6 +1,7 @@
 /* Octree basics: lifetime, lookup, Morton codes (see octree.h). */
 #include "runtime/octree.h"
 
+#include <float.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -87,4 +88,18 @@ uint32_t sl_octree_find(const sl_octree *t, uint32_t level, int64_t x, int64_t y
             hi = mid;
     }
     return SL_OCTREE_NONE;
+}
+
+void sl_octree_crossing_bounds(const sl_octree *t, float lo[3], float hi[3])
+{
+    for (int a = 0; a < 3; a++) {
+        lo[a] = FLT_MAX;
+        hi[a] = -FLT_MAX;
+    }
+    for (uint32_t i = 0; i < t->crossing_count; i++)
+        for (int a = 0; a < 3; a++) {
+            float v = t->crossing_position[3 * (size_t)i + a];
+            lo[a] = v < lo[a] ? v : lo[a];
+            hi[a] = v > hi[a] ? v : hi[a];
+        }
 }

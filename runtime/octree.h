@@ -94,6 +94,9 @@ void sl_octree_release(sl_octree *t);
  * (model format 4); the priority stage, which orders by them, reads octree.slot. */
 void sl_octree_drop_node_metrics(sl_octree *t);
 
+/* The box of every crossing: lo[3], hi[3] (FLT_MAX and -FLT_MAX when there are none). */
+void sl_octree_crossing_bounds(const sl_octree *t, float lo[3], float hi[3]);
+
 /* Crossing id of edge e of node n (edge_mask must have bit e). */
 static inline uint32_t sl_octree_crossing(const sl_octree *t, const sl_octree_node *n, int e)
 {

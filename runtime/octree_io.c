@@ -20,6 +20,7 @@ _Static_assert(sizeof(sl_octree_node) == 32, "sl_octree_node is stored as 32 byt
 /* With vertices: the per-node errors and areas are left out (the LOD model's octree since
  * model format 4: only the priority stage reads them, from octree.slot). */
 #define NO_NODE_METRICS 2u
+#define LOD_ORDER SL_OCTREE_FLAG_LOD_ORDER
 
 static void put_f64(unsigned char *p, double v)
 {
@@ -36,7 +37,8 @@ static double get_f64(const unsigned char *p)
     return v;
 }
 
-int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_part *parts)
+int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_part *parts,
+                    uint32_t extra_flags)
 {
     unsigned char *p = header;
     sl_put_u32(p, t->depth);
@@ -59,7 +61,8 @@ int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_p
         sl_put_u64(p, stats[i]);
     sl_put_u32(p, t->vertex_count);
     int metrics = sl_octree_dual(t) && t->node_error && t->node_area;
-    sl_put_u32(p + 4, sl_octree_dual(t) ? HAS_VERTICES | (metrics ? 0 : NO_NODE_METRICS) : 0);
+    sl_put_u32(p + 4,
+               (sl_octree_dual(t) ? HAS_VERTICES | (metrics ? 0 : NO_NODE_METRICS) : 0) | extra_flags);
     sl_put_u64(p + 8, 0);
     int n = 0;
     parts[n++] = (sl_artifact_part){header, HEADER_SIZE};
@@ -92,8 +95,7 @@ static uint64_t morton_of(const sl_octree_node *n)
     return sl_morton3((uint32_t)n->x, (uint32_t)n->y, (uint32_t)n->z);
 }
 
-/* The edges of a cube with corner signs `inside` whose two ends differ. */
-static uint16_t sign_change_edges(uint8_t inside)
+uint16_t sl_octree_edge_mask(uint8_t inside)
 {
     uint16_t mask = 0;
     for (int e = 0; e < 12; e++)
@@ -178,7 +180,7 @@ static int validate(const sl_octree *t, const char *name, sl_error *err)
         /* The crossings are exactly the edges whose corners differ in sign: generation
          * looks up a crossing for every such edge and for no other. */
         if ((uint64_t)n->crossing_base + (uint64_t)__builtin_popcount(n->edge_mask) >
-                t->node_crossing_count || n->edge_mask != sign_change_edges(n->inside))
+                t->node_crossing_count || n->edge_mask != sl_octree_edge_mask(n->inside))
             return bad(err, name, "bad crossing range");
     }
     if (children != (uint64_t)t->node_count - 1)
@@ -249,10 +251,11 @@ static void *copy_out(const unsigned char *src, uint64_t size)
     return p;
 }
 
-int sl_octree_parse(const unsigned char *body, uint64_t size, const char *name, sl_octree *out,
-                    uint64_t *used, sl_error *err)
+int sl_octree_parse_header(const unsigned char *body, uint64_t size, const char *name,
+                           sl_octree *out, sl_octree_layout *lay, sl_error *err)
 {
     sl_octree_init(out);
+    memset(lay, 0, sizeof *lay);
     if (size < HEADER_SIZE)
         return bad(err, name, "truncated header");
     const unsigned char *p = body;
@@ -276,60 +279,86 @@ int sl_octree_parse(const unsigned char *body, uint64_t size, const char *name, 
         *stats[i] = sl_get_u64(p);
     uint32_t vertex_count = sl_get_u32(p), flags = sl_get_u32(p + 4);
     if (has_color > 1 || out->node_count == 0 || out->node_crossing_count > (uint64_t)1 << 40 ||
-        (flags & ~(HAS_VERTICES | NO_NODE_METRICS)) || sl_get_u64(p + 8) != 0 ||
+        (flags & ~(HAS_VERTICES | NO_NODE_METRICS | LOD_ORDER)) || sl_get_u64(p + 8) != 0 ||
         (!(flags & HAS_VERTICES) && (vertex_count || (flags & NO_NODE_METRICS))) ||
         (uint64_t)vertex_count > (uint64_t)SL_OCTREE_MAX_NODE_VERTICES * out->node_count)
         return bad(err, name, "header counts out of range");
     /* 64-bit sizes: no overflow for 32-bit counts. */
-    uint64_t nodes = (uint64_t)out->node_count * sizeof(sl_octree_node);
-    uint64_t ids = out->node_crossing_count * 4;
-    uint64_t pos = (uint64_t)out->crossing_count * 12;
-    uint64_t col = has_color ? (uint64_t)out->crossing_count * 4 : 0;
-    int dual = (flags & HAS_VERTICES) != 0;
-    uint64_t vfirst = dual ? ((uint64_t)out->node_count + 1) * 4 : 0;
-    uint64_t vpos = (uint64_t)vertex_count * 12, vcol = has_color ? (uint64_t)vertex_count * 4 : 0;
-    int metrics = dual && !(flags & NO_NODE_METRICS);
-    uint64_t per_node = metrics ? (uint64_t)out->node_count * 4 : 0;
-    uint64_t need = HEADER_SIZE + nodes + ids + pos + col;
-    uint64_t need_dual = dual ? vfirst + vpos + vcol + 2 * per_node : 0;
-    if (need > size || need_dual > size - need)
+    int dual = (flags & HAS_VERTICES) != 0, metrics = dual && !(flags & NO_NODE_METRICS);
+    lay->flags = flags;
+    lay->has_color = (int)has_color;
+    lay->vertex_count = vertex_count;
+    lay->nodes = (uint64_t)out->node_count * sizeof(sl_octree_node);
+    lay->ids = out->node_crossing_count * 4;
+    lay->positions = (uint64_t)out->crossing_count * 12;
+    lay->colors = has_color ? (uint64_t)out->crossing_count * 4 : 0;
+    lay->vertex_first = dual ? ((uint64_t)out->node_count + 1) * 4 : 0;
+    lay->vertices = (uint64_t)vertex_count * 12;
+    lay->vertex_colors = has_color ? (uint64_t)vertex_count * 4 : 0;
+    lay->metrics = metrics ? (uint64_t)out->node_count * 4 : 0;
+    lay->total = HEADER_SIZE + lay->nodes + lay->ids + lay->positions + lay->colors +
+                 lay->vertex_first + lay->vertices + lay->vertex_colors + 2 * lay->metrics;
+    return 0;
+}
+
+int sl_octree_check(sl_octree *t, const char *name, sl_error *err)
+{
+    int rc = validate(t, name, err);
+    if (rc == 0 && sl_octree_dual(t))
+        rc = validate_vertices(t, name, err);
+    if (rc == 0 && sl_octree_index(t))
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
+    return rc;
+}
+
+int sl_octree_parse(const unsigned char *body, uint64_t size, const char *name, sl_octree *out,
+                    uint64_t *used, sl_error *err)
+{
+    sl_octree_layout lay;
+    int rc = sl_octree_parse_header(body, size, name, out, &lay, err);
+    if (rc)
+        return rc;
+    if (lay.flags & LOD_ORDER)
+        return bad(err, name, "nodes in LOD order where levels are expected");
+    if (lay.total > size)
         return bad(err, name, "counts exceed the bytes present");
-    p = body + HEADER_SIZE;
-    out->nodes = copy_out(p, nodes);
-    out->node_crossings = copy_out(p + nodes, ids);
-    out->crossing_position = copy_out(p + nodes + ids, pos);
-    out->crossing_color = has_color ? copy_out(p + nodes + ids + pos, col) : NULL;
+    const unsigned char *p = body + HEADER_SIZE;
+    out->nodes = copy_out(p, lay.nodes);
+    p += lay.nodes;
+    out->node_crossings = copy_out(p, lay.ids);
+    p += lay.ids;
+    out->crossing_position = copy_out(p, lay.positions);
+    p += lay.positions;
+    out->crossing_color = lay.has_color ? copy_out(p, lay.colors) : NULL;
+    p += lay.colors;
     int failed = !out->nodes || !out->node_crossings || !out->crossing_position ||
-                 (has_color && !out->crossing_color);
-    if (dual && !failed) {
-        const unsigned char *q = body + need;
-        out->vertex_count = vertex_count;
-        out->vertex_first = copy_out(q, vfirst);
-        out->vertex_position = copy_out(q + vfirst, vpos);
-        out->vertex_color = has_color ? copy_out(q + vfirst + vpos, vcol) : NULL;
-        if (metrics) {
-            out->node_error = copy_out(q + vfirst + vpos + vcol, per_node);
-            out->node_area = copy_out(q + vfirst + vpos + vcol + per_node, per_node);
+                 (lay.has_color && !out->crossing_color);
+    if ((lay.flags & HAS_VERTICES) && !failed) {
+        out->vertex_count = lay.vertex_count;
+        out->vertex_first = copy_out(p, lay.vertex_first);
+        p += lay.vertex_first;
+        out->vertex_position = copy_out(p, lay.vertices);
+        p += lay.vertices;
+        out->vertex_color = lay.has_color ? copy_out(p, lay.vertex_colors) : NULL;
+        p += lay.vertex_colors;
+        if (lay.metrics) {
+            out->node_error = copy_out(p, lay.metrics);
+            out->node_area = copy_out(p + lay.metrics, lay.metrics);
         }
         failed = !out->vertex_first || !out->vertex_position ||
-                 (has_color && !out->vertex_color) ||
-                 (metrics && (!out->node_error || !out->node_area));
-        need += need_dual;
+                 (lay.has_color && !out->vertex_color) ||
+                 (lay.metrics && (!out->node_error || !out->node_area));
     }
     if (failed) {
         sl_octree_release(out);
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
     }
-    int rc = validate(out, name, err);
-    if (rc == 0 && dual)
-        rc = validate_vertices(out, name, err);
-    if (rc == 0 && sl_octree_index(out))
-        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
+    rc = sl_octree_check(out, name, err);
     if (rc) {
         sl_octree_release(out);
         return rc;
     }
-    *used = need;
+    *used = lay.total;
     return 0;
 }
 
@@ -337,7 +366,7 @@ int sl_octree_write(const char *path, const sl_octree *t, uint32_t stage_version
 {
     unsigned char header[512];
     sl_artifact_part parts[SL_OCTREE_PARTS];
-    int n = sl_octree_parts(t, header, parts);
+    int n = sl_octree_parts(t, header, parts, 0);
     return sl_artifact_write(path, SL_OCTREE_MAGIC, SL_OCTREE_FORMAT_VERSION, stage_version,
                              parts, n, err);
 }

@@ -39,9 +39,35 @@
  * before writing one. Needs the root node (nodes[0]). */
 int sl_octree_grid_ok(const sl_octree *t);
 
+/* Header flag bit 2: the nodes (and every per-node table) are in LOD order rather than
+ * by level (model format 5, lod_io.h): sl_octree_parse refuses such a section, and the
+ * header's level ranges mean nothing there (the reader derives them). */
+#define SL_OCTREE_FLAG_LOD_ORDER 4u
+#define SL_OCTREE_HEADER_SIZE 288u
+
 /* Describes the octree as artifact parts (pointing into `t` and `header`, which must
- * outlive the write). Returns the number of parts used. */
-int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_part *parts);
+ * outlive the write), with extra_flags (SL_OCTREE_FLAG_LOD_ORDER or 0) in the header.
+ * Returns the number of parts used. */
+int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_part *parts,
+                    uint32_t extra_flags);
+
+/* The section's header alone: `out` gets its scalars (no arrays), `lay` the flags and the
+ * byte size of every part (`total`: the whole section). */
+typedef struct sl_octree_layout {
+    uint32_t flags;
+    int has_color;
+    uint32_t vertex_count;
+    uint64_t nodes, ids, positions, colors, vertex_first, vertices, vertex_colors, metrics;
+    uint64_t total;
+} sl_octree_layout;
+int sl_octree_parse_header(const unsigned char *body, uint64_t size, const char *name,
+                           sl_octree *out, sl_octree_layout *lay, sl_error *err);
+/* The edges of a cube with corner signs `inside` whose two ends differ: a node's edge
+ * mask must be this. */
+uint16_t sl_octree_edge_mask(uint8_t inside);
+/* Every check sl_octree_parse makes on a tree in memory (levels, links, Morton order,
+ * crossings, vertices), then the Morton index. */
+int sl_octree_check(sl_octree *t, const char *name, sl_error *err);
 
 /* Parses an octree section starting at `body`; *used gets its byte length. The octree
  * gets its own copies of the arrays. `name` is used in messages. */

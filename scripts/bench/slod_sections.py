@@ -3,9 +3,10 @@
 
     scripts/bench/slod_sections.py MODEL.slod [--ply INPUT.ply] [--markdown]
 
-Reads format 2 (plain body) and formats 3 and 4 (the body in packed pieces: each section's
+Reads format 2 (plain body) and formats 3 to 5 (the body in packed pieces: each section's
 plain and stored bytes; needs the zstd command for the two header pieces; 4 is 3 without the
-node errors and areas). --ply adds the
+node errors and areas; 5 stores every section in LOD order, 4 bytes a node, the crossing
+ids coded, with the surface counts and checked pieces). --ply adds the
 model/PLY ratio."""
 import argparse
 import os
@@ -70,8 +71,8 @@ def piece_bytes(body, entry, at):
     return data
 
 
-def packed_sections(body):
-    """(name, plain bytes, stored bytes) per section of a packed (format 3) body: the
+def packed_sections(body, version):
+    """(name, plain bytes, stored bytes) per section of a packed (format 3 to 5) body: the
     pieces are cut per section, in the plain body's order (the neighbour table left out)."""
     count = struct.unpack_from("<I", body, 4)[0]
     entries = [8 + 24 * i for i in range(count)]
@@ -83,7 +84,8 @@ def packed_sections(body):
     depth, n, cc, colour, ncc = struct.unpack_from("<IIIIQ", head, 0)
     vc, flags = struct.unpack_from("<II", head, 272)
     col = 4 if colour else 0
-    names = [("octree header", OCTREE_HEADER), ("nodes", 32 * n), ("node crossings", 4 * ncc),
+    node_bytes = 4 if version >= 5 else 32
+    names = [("octree header", OCTREE_HEADER), ("nodes", node_bytes * n), ("node crossings", 4 * ncc),
              ("crossing positions", 12 * cc)]
     if col:
         names.append(("crossing colours", 4 * cc))
@@ -110,9 +112,12 @@ def packed_sections(body):
         take(name, size)
     lod = piece_bytes(body, entries[k], offsets[k])
     e, _, nbc, tc = struct.unpack_from("<IIQQ", lod, 0)
-    for name, size in [("LOD header", LOD_HEADER), ("LOD array", 4 * e),
-                       ("accumulation", 8 * (e + 1)), ("error after", 4 * (e + 1)),
-                       ("transition bases", 4 * n), ("transition words", 4 * tc)]:
+    lod_sections = [("LOD header", LOD_HEADER if version < 5 else 64), ("LOD array", 4 * e),
+                    ("accumulation", 8 * (e + 1)), ("error after", 4 * (e + 1))]
+    if version >= 5:
+        lod_sections.append(("surface counts", 4 * (e + 1)))
+    for name, size in lod_sections + [("transition bases", 4 * n),
+                                      ("transition words", 4 * tc)]:
         take(name, size)
     rows.append(("neighbour table (rebuilt on reading)", 0, 0))
     return rows
@@ -129,12 +134,12 @@ def main():
         sys.exit(f"{a.model}: not a model.slod")
     version = struct.unpack_from("<I", data, 8)[0]
     body = data[32:]
-    if version in (3, 4):
-        rows = packed_sections(body)
+    if version in (3, 4, 5):
+        rows = packed_sections(body, version)
     elif version == 2:
         rows = [(name, size, size) for name, _, size in sections(body)[0]]
     else:
-        sys.exit(f"{a.model}: format version {version} (this script reads 2 to 4)")
+        sys.exit(f"{a.model}: format version {version} (this script reads 2 to 5)")
     plain = sum(r[1] for r in rows)
     ply = os.path.getsize(a.ply) if a.ply else None
     if a.markdown:

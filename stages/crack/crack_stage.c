@@ -16,8 +16,9 @@
  * 4: a dual model's transition cells split a loop that runs along a split edge and
  * crosses the same face again (sl_mc_split_double_passes): more triangles in those cuts,
  * so an older table no longer equals what is generated.
- * 5: model format 4 (no node errors and areas), pieces packed at zstd level 6 (was 9). */
-#define CRACK_STAGE_VERSION 5u
+ * 5: model format 4 (no node errors and areas), pieces packed at zstd level 6 (was 9).
+ * 6: model format 5 (LOD order, checked pieces: a cut reads a prefix, lod_prefix.h). */
+#define CRACK_STAGE_VERSION 6u
 
 static int crack_configure(const sl_config *cfg, void **out, sl_error *err)
 {

@@ -25,11 +25,11 @@ version = struct.unpack_from("<I", data, 8)[0]
 ratio = os.path.getsize(model) / os.path.getsize(ply)
 print("%s: format %d, %.2fx its PLY" % (os.path.basename(os.path.dirname(model)), version, ratio),
       file=sys.stderr)
-sys.exit(0 if version == 4 and ratio <= 2.0 else 1)
+sys.exit(0 if version == 5 and ratio <= 2.0 else 1)
 PY
   ok=$?
   set -e
-  check "$s: model.slod is format 4 and at most 2x its PLY" [ "$ok" -eq 0 ]
+  check "$s: model.slod is format 5 and at most 2x its PLY" [ "$ok" -eq 0 ]
   run_scanlod extract "$model" --lod-percent 100 -o "$TMP/$s-finest.ply"
   check "$s: the model cuts (rc $rc: $err)" [ "$rc" -eq 0 ]
   check "$s: its finest cut is the published lod100.ply" cmp -s "$TMP/$s-finest.ply" "$TMP/out/$s.ply/lod100.ply"

@@ -11,7 +11,11 @@
  * bits, neighbour masks and indices, crossing ids and positions, corner signs with their
  * edge mask recomputed, the grid's leaf size and origin, the grid collapsed onto one
  * point, and in a model with dual vertices their positions, ranges, errors and areas.
- * They keep the counts the reader checks and change what it trusts.
+ * They keep the counts the reader checks and change what it trusts. A format 5 body
+ * (checked pieces, LOD order: runtime/lod_order.h) is unpacked first, mutated in its own
+ * terms (node records' signs and child masks, coded crossing ids, the LOD array, records,
+ * ranges, surface counts, the root's cube) and packed again in small pieces, so that the
+ * mutations reach past the pieces' checks and the prefix reader's piece boundaries.
  */
 #include <math.h>
 #include <stdint.h>
@@ -20,6 +24,8 @@
 #include <string.h>
 
 #include "core/artifact.h"
+#include "runtime/lod_order.h"
+#include "runtime/lod_pack.h"
 #include "runtime/mc_cube.h"
 #include "tests/fuzz/slod_promises.h"
 
@@ -233,10 +239,130 @@ static void mutate_in_terms(uint8_t *d, const body_layout *l, uint64_t *s)
     }
 }
 
+/* One mutation of a format 5 plain body in its own terms (sections in `sec`). */
+static void mutate_ordered_terms(uint8_t *d, const sl_lod_sections *sec, uint64_t *s)
+{
+    uint64_t n = sec->nodes, e = sec->expansions, words = sec->words;
+    uint64_t ids = sec->size[SL_SEC_IDS] / 4, cc = sec->size[SL_SEC_POSITIONS] / 12;
+    switch (next(s) % 11) {
+    case 0: /* two nearby LOD array entries swapped */
+        if (e >= 2) {
+            uint64_t i = next(s) % (e - 1), j = i + 1 + next(s) % 8;
+            j = j < e ? j : e - 1;
+            size_t at = sec->at[SL_SEC_LOD_ARRAY];
+            uint32_t a = get32(d, at + 4 * i);
+            put32(d, at + 4 * i, get32(d, at + 4 * j));
+            put32(d, at + 4 * j, a);
+        }
+        break;
+    case 1: /* a corner sign (the edge mask follows from it) */
+        d[sec->at[SL_SEC_NODES] + 4 * (next(s) % n)] ^= (uint8_t)(1u << (next(s) % 8));
+        break;
+    case 2: /* a child mask bit: children appear or go, shifting every later position */
+        d[sec->at[SL_SEC_NODES] + 4 * (next(s) % n) + 1] ^= (uint8_t)(1u << (next(s) % 8));
+        break;
+    case 3: /* a coded crossing id: new, a step back, far back */
+        if (ids) {
+            static const uint32_t codes[] = {0, 1, 2, 7, 100, 0x7fffffff};
+            put32(d, sec->at[SL_SEC_IDS] + 4 * (next(s) % ids), codes[next(s) % 6]);
+        }
+        break;
+    case 4: /* a transition word: sign bits, a half-edge bit, or a coded id */
+        if (words) {
+            size_t at = sec->at[SL_SEC_TRANSITION_WORDS] + 4 * (next(s) % words);
+            put32(d, at, get32(d, at) ^ (uint32_t)(1u << (next(s) % 30)));
+        }
+        break;
+    case 5: /* a transition base: another record's, none, past the end */
+        if (n) {
+            size_t at = sec->at[SL_SEC_TRANSITION_BASE] + 4 * (next(s) % n);
+            uint32_t v = next(s) % 3 == 0 ? SL_OCTREE_NONE
+                         : next(s) % 2 ? (uint32_t)(next(s) % (words + 1))
+                                       : (uint32_t)words + 1;
+            put32(d, at, v);
+        }
+        break;
+    case 6: { /* a crossing coordinate: extreme, tiny or another crossing's */
+        static const float values[] = {0.0f, 1e30f, -1e30f, 3.4e38f, 1e-40f, -1e-7f};
+        if (cc) {
+            float v = values[next(s) % 6];
+            memcpy(d + sec->at[SL_SEC_POSITIONS] + 4 * (next(s) % (3 * cc)), &v, 4);
+        }
+        break;
+    }
+    case 7: /* a vertex range end moved by one */
+        if (sec->size[SL_SEC_VERTEX_FIRST]) {
+            size_t at = sec->at[SL_SEC_VERTEX_FIRST] + 4 * (1 + next(s) % n);
+            put32(d, at, get32(d, at) + (next(s) & 1 ? 1u : UINT32_MAX));
+        }
+        break;
+    case 8: { /* a surface count one off */
+        size_t at = sec->at[SL_SEC_SURFACE] + 4 * (next(s) % (e + 1));
+        put32(d, at, get32(d, at) + (next(s) & 1 ? 1u : UINT32_MAX));
+        break;
+    }
+    case 9: { /* the root's cube moved, the bounds changed */
+        size_t at = sec->at[SL_SEC_LOD_HEADER] + 24 + 4 * (next(s) % 9);
+        put32(d, at, next(s) % 2 ? get32(d, at) + 1u : (uint32_t)next(s));
+        break;
+    }
+    default: { /* an accumulation entry anywhere within the reader's bound */
+        uint64_t i = next(s) % (e + 1);
+        sl_put_u64(d + sec->at[SL_SEC_ACCUMULATION] + 8 * i, next(s) % (64 * (1 + 7 * i) + 1));
+        break;
+    }
+    }
+}
+
+/* A format 5 body unpacked, mutated, packed again section by section in 512-byte pieces;
+ * 0 when it is not one or does not fit (the caller mutates bytes then). */
+static size_t mutate_ordered(uint8_t *data, size_t size, size_t max_size, uint64_t *s)
+{
+    void *plain = NULL, *packed = NULL;
+    uint64_t plain_size = 0;
+    size_t packed_size = 0, out = 0;
+    sl_error err;
+    sl_error_init(&err);
+    sl_octree head;
+    sl_octree_layout lay;
+    sl_lod_sections sec;
+    if (sl_unpack(data, size, (uint64_t)1 << 26, "fuzz", &plain, &plain_size, &err) ||
+        sl_octree_parse_header(plain, plain_size, "fuzz", &head, &lay, &err) ||
+        plain_size < sl_lod_order_octree_size(&lay, head.node_count) + SL_LOD_ORDER_HEADER ||
+        sl_lod_order_sections(&head, &lay,
+                              (uint8_t *)plain + sl_lod_order_octree_size(&lay, head.node_count),
+                              plain_size, "fuzz", &sec, &err) ||
+        !sec.nodes) {
+        free(plain);
+        return 0;
+    }
+    for (uint64_t i = 0, count = 1 + next(s) % 3; i < count; i++)
+        mutate_ordered_terms(plain, &sec, s);
+    sl_packer *pk = sl_packer_new(1, 512);
+    int ok = pk != NULL;
+    for (int k = 0; ok && k < SL_SEC_COUNT; k++)
+        ok = sl_packer_add(pk, (uint8_t *)plain + sec.at[k], sec.size[k],
+                           k == SL_SEC_OCTREE_HEADER || k == SL_SEC_LOD_HEADER ? 0 : 4) == 0;
+    if (ok && sl_packer_finish(pk, &packed, &packed_size) == 0 && packed_size <= max_size) {
+        memcpy(data, packed, packed_size);
+        out = packed_size;
+    } else if (!ok) {
+        sl_packer_free(pk);
+    }
+    free(packed);
+    free(plain);
+    return out;
+}
+
 size_t LLVMFuzzerCustomMutator(uint8_t *data, size_t size, size_t max_size, unsigned int seed)
 {
     uint64_t s = (uint64_t)seed * 0x9e3779b97f4a7c15ull + 1;
     body_layout l;
+    if (size >= 4 && sl_get_u32(data) == SL_PACK_MAGIC_CHECKED && next(&s) % 3 != 0) {
+        size_t mutated = mutate_ordered(data, size, max_size, &s);
+        if (mutated)
+            return mutated;
+    }
     if (next(&s) % 3 == 0 || layout_of(data, size, &l) != 0)
         return LLVMFuzzerMutate(data, size, max_size);
     for (uint64_t i = 0, count = 1 + next(&s) % 3; i < count; i++)

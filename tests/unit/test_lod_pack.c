@@ -14,9 +14,11 @@
 
 #include "core/artifact.h"
 #include "runtime/lod_io.h"
+#include "runtime/lod_order.h"
 #include "runtime/lod_pack.h"
 #include "runtime/octree_io.h"
 #include "tests/check.h"
+#include "tests/unit/lod_format4.h"
 
 #define ENTRY(body, i) ((unsigned char *)(body) + 8 + SL_PACK_TABLE_ENTRY * (i))
 
@@ -121,7 +123,9 @@ static uint32_t largest_frame(const unsigned char *body, size_t *at)
     return best;
 }
 
-static void test_hostile_bodies(const unsigned char *good, size_t size)
+/* `damaged`: the cause for stored bytes that are not what was packed (format 5 checks
+ * each piece before its frame is read; format 4 finds the frame's sizes wrong). */
+static void test_hostile_bodies(const unsigned char *good, size_t size, const char *damaged)
 {
     unsigned char *b = malloc(size + 1);
     if (!b)
@@ -133,7 +137,7 @@ static void test_hostile_bodies(const unsigned char *good, size_t size)
     memcpy(b, good, size);
     sl_put_u64(ENTRY(b, i) + 8, stored - 9);
     memmove(b + at + stored - 9, good + at + stored, size - at - stored);
-    expect_refused(b, size - 9, "truncated frame", "frame sizes disagree with the table");
+    expect_refused(b, size - 9, "truncated frame", damaged);
     /* Plain sizes that are not the frame's: one byte more, one less, far more. */
     memcpy(b, good, size);
     sl_put_u64(ENTRY(b, i), plain + 1);
@@ -146,7 +150,7 @@ static void test_hostile_bodies(const unsigned char *good, size_t size)
     memcpy(b, good, size);
     for (uint64_t j = 0; j < stored; j++)
         b[at + j] = (unsigned char)(j * 2654435761u >> 13);
-    expect_refused(b, size, "garbage frame", "frame sizes disagree with the table");
+    expect_refused(b, size, "garbage frame", damaged);
     memcpy(b, good, size);
     for (uint64_t j = 12; j + 4 < stored; j++)
         b[at + j] = (unsigned char)(j * 2654435761u >> 11);
@@ -163,24 +167,28 @@ static void test_hostile_bodies(const unsigned char *good, size_t size)
     free(b);
 }
 
-/* Unpacked, the neighbour count in the LOD header raised by one, packed again. */
+/* Unpacked, the neighbour count in the LOD header raised by one, packed again (as the
+ * format was: checked pieces for format 5). */
 static void test_neighbour_count_lie(const unsigned char *good, size_t size)
 {
     sl_error err;
     sl_error_init(&err);
     void *plain = NULL, *packed = NULL;
-    uint64_t plain_size = 0, used = 0;
+    uint64_t plain_size = 0;
     size_t packed_size = 0;
     CHECK(sl_unpack(good, size, (uint64_t)1 << 40, "good", &plain, &plain_size, &err) == 0);
     sl_octree t;
-    CHECK(plain && sl_octree_parse(plain, plain_size, "good", &t, &used, &err) == 0);
-    if (!plain || !used)
+    sl_octree_layout lay;
+    CHECK(plain && sl_octree_parse_header(plain, plain_size, "good", &t, &lay, &err) == 0);
+    if (!plain || !lay.total)
         return;
-    sl_octree_release(&t);
-    unsigned char *lod = (unsigned char *)plain + used;
+    int checked = sl_get_u32(good) == SL_PACK_MAGIC_CHECKED; /* format 5: compact nodes */
+    unsigned char *lod = (unsigned char *)plain +
+                         (checked ? sl_lod_order_octree_size(&lay, t.node_count) : lay.total);
     sl_put_u64(lod + 8, sl_get_u64(lod + 8) + 1);
-    sl_pack_part part = {plain, plain_size, 4};
-    CHECK(sl_pack(&part, 1, &packed, &packed_size) == 0);
+    sl_packer *pk = sl_packer_new(checked, 0);
+    CHECK(pk && sl_packer_add(pk, plain, plain_size, 4) == 0 &&
+          sl_packer_finish(pk, &packed, &packed_size) == 0);
     expect_refused(packed, packed_size, "neighbour count", "neighbour count differs");
     free(plain);
     free(packed);
@@ -291,17 +299,32 @@ static void test_real_model(void)
         test_opened(v2, v3, &now);
         sl_lod_model_release(&now);
     }
-    if (file3) {
-        test_hostile_bodies(file3 + SL_ARTIFACT_HEADER_SIZE, v3_size - SL_ARTIFACT_HEADER_SIZE);
+    char v4[] = "/tmp/scanlod-test-pack-v4-XXXXXX";
+    int fd4 = mkstemp(v4);
+    if (fd4 >= 0)
+        close(fd4);
+    size_t v4_size = 0;
+    unsigned char *file4 = NULL;
+    CHECK(fd4 >= 0 && write_format4(v4, &old, &err) == 0 && (file4 = slurp(v4, &v4_size)));
+    if (file3 && file4) {
+        test_hostile_bodies(file3 + SL_ARTIFACT_HEADER_SIZE, v3_size - SL_ARTIFACT_HEADER_SIZE,
+                            "checksum mismatch");
+        test_hostile_bodies(file4 + SL_ARTIFACT_HEADER_SIZE, v4_size - SL_ARTIFACT_HEADER_SIZE,
+                            "frame sizes disagree with the table");
         test_neighbour_count_lie(file3 + SL_ARTIFACT_HEADER_SIZE,
                                  v3_size - SL_ARTIFACT_HEADER_SIZE);
+        test_neighbour_count_lie(file4 + SL_ARTIFACT_HEADER_SIZE,
+                                 v4_size - SL_ARTIFACT_HEADER_SIZE);
         /* Envelopes of the other version: a packed body called format 2, a plain one
-         * called format 3, and a format from the future. */
+         * called format 3, format 5's body called 4 and format 4's called 5, and a format
+         * from the future. */
         struct { uint32_t version; const unsigned char *body; size_t size; const char *cause; }
         cases[] = {{2, file3 + 32, v3_size - 32, "packed parts in a format 2 file"},
                    {3, file2 + 32, v2_size - 32, "format 3 without packed parts"},
-                   {5, file3 + 32, v3_size - 32, "reads versions 2 to 4"}};
-        for (int i = 0; i < 3 && file2; i++) {
+                   {4, file3 + 32, v3_size - 32, "checked pieces in a format 3 or 4 file"},
+                   {5, file4 + 32, v4_size - 32, "format 5 without checked pieces"},
+                   {6, file3 + 32, v3_size - 32, "reads versions 2 to 5"}};
+        for (int i = 0; i < 5 && file2; i++) {
             sl_artifact_part part = {cases[i].body, cases[i].size};
             CHECK(sl_artifact_write(v3, SL_LOD_MAGIC, cases[i].version, 1, &part, 1, &err) == 0);
             sl_error_init(&err);
@@ -314,39 +337,53 @@ static void test_real_model(void)
     }
     free(file2);
     free(file3);
+    free(file4);
     unlink(v3);
+    unlink(v4);
     sl_lod_model_release(&old);
 }
 
-/* With SCANLOD_SLOD_SEED_DIR=dir: dir/tiny-packed, the fuzz seed tiny-error (a plain
- * body of format 2) as format 3 writes it (tests/fuzz/README.md). */
+/* With SCANLOD_SLOD_SEED_DIR=dir: the fuzz seed tiny-error (a plain body of format 2)
+ * written again: dir/tiny-packed as format 4 and dir/tiny-ordered as format 5 (the
+ * writer's) write it (tests/fuzz/README.md). */
 static void write_packed_seed(const char *dir)
 {
     char in[1200], out[1200], tmp[] = "/tmp/scanlod-test-pack-seed-XXXXXX";
     snprintf(in, sizeof in, "%s/tiny-error", dir);
-    snprintf(out, sizeof out, "%s/tiny-packed", dir);
-    size_t size = 0, file_size = 0;
+    size_t size = 0;
     unsigned char *body = slurp(in, &size);
     sl_lod_model m;
     sl_error err;
     sl_error_init(&err);
     CHECK(body && sl_lod_model_parse(body, size, in, &m, &err) == 0);
-    CHECK(write_again(tmp, &m, &err) == 0);
-    unsigned char *file = slurp(tmp, &file_size);
-    FILE *f = fopen(out, "wb");
-    CHECK(file && f && fwrite(file + 32, 1, file_size - 32, f) == file_size - 32);
-    if (f)
-        fclose(f);
-    unlink(tmp);
-    free(file);
+    for (int format = 4; format <= 5; format++) {
+        size_t file_size = 0;
+        snprintf(out, sizeof out, "%s/%s", dir, format == 4 ? "tiny-packed" : "tiny-ordered");
+        if (format == 4) {
+            int fd = mkstemp(tmp);
+            if (fd >= 0)
+                close(fd);
+            CHECK(fd >= 0 && write_format4(tmp, &m, &err) == 0);
+        } else {
+            CHECK(write_again(tmp, &m, &err) == 0);
+        }
+        unsigned char *file = slurp(tmp, &file_size);
+        FILE *f = fopen(out, "wb");
+        CHECK(file && f && fwrite(file + 32, 1, file_size - 32, f) == file_size - 32);
+        if (f)
+            fclose(f);
+        unlink(tmp);
+        memcpy(tmp + strlen(tmp) - 6, "XXXXXX", 6);
+        free(file);
+    }
     free(body);
     sl_lod_model_release(&m);
 }
 
 /* A format 3 model with quadric vertices (its octree with the node errors and areas; made
  * by the crack stage version 4, tests/data/models/README.md) is read, without those
- * arrays, and cuts the same as that model written again as format 4, which leaves them
- * out (docs/formats.md): a smaller file. */
+ * arrays, and cuts the same as that model written again as format 4 and as format 5,
+ * which leave them out (docs/formats.md): smaller files. */
 static void test_format3_quadric_model(void)
 {
     char v3[4096], v4[] = "/tmp/scanlod-test-pack-v4-XXXXXX";
@@ -358,23 +395,35 @@ static void test_format3_quadric_model(void)
     if (rc)
         return;
     CHECK(sl_octree_dual(&old.tree) && !old.tree.node_error && !old.tree.node_area);
-    CHECK(write_again(v4, &old, &err) == 0);
-    size_t size3 = 0, size4 = 0;
-    unsigned char *file3 = slurp(v3, &size3), *file4 = slurp(v4, &size4);
-    CHECK(file3 && file4 && sl_get_u32(file3 + 8) == 3 && sl_get_u32(file4 + 8) == 4);
-    CHECK_MSG(size4 * 10 < size3 * 9, "format 4: %zu bytes, format 3: %zu", size4, size3);
-    printf("bun_zipper_res4 (quadric vertices): format 3 %zu bytes, format 4 %zu bytes\n", size3,
-           size4);
+    char v5[] = "/tmp/scanlod-test-pack-v5-XXXXXX";
+    CHECK(write_again(v5, &old, &err) == 0);
+    int fd = mkstemp(v4);
+    if (fd >= 0)
+        close(fd);
+    CHECK(fd >= 0 && write_format4(v4, &old, &err) == 0);
+    size_t size3 = 0, size4 = 0, size5 = 0;
+    unsigned char *file3 = slurp(v3, &size3), *file4 = slurp(v4, &size4), *file5 = slurp(v5, &size5);
+    CHECK(file3 && file4 && file5 && sl_get_u32(file3 + 8) == 3 && sl_get_u32(file4 + 8) == 4 &&
+          sl_get_u32(file5 + 8) == 5);
+    CHECK_MSG(size4 * 10 < size3 * 9 && size5 * 10 < size3 * 9,
+              "format 5: %zu bytes, 4: %zu, 3: %zu", size5, size4, size3);
+    printf("bun_zipper_res4 (quadric vertices): format 3 %zu bytes, format 4 %zu, format 5 %zu\n",
+           size3, size4, size5);
     free(file3);
     free(file4);
-    rc = sl_lod_model_read(v4, &now, &err);
-    CHECK_MSG(rc == 0, "format 4 model: %s", err.message);
-    if (rc == 0) {
-        for (uint32_t k = 0; k <= old.expansion_count; k++)
-            check_same_cut(&old, &now, k);
-        sl_lod_model_release(&now);
+    free(file5);
+    const char *written[2] = {v4, v5};
+    for (int f = 0; f < 2; f++) {
+        rc = sl_lod_model_read(written[f], &now, &err);
+        CHECK_MSG(rc == 0, "format %d model: %s", 4 + f, err.message);
+        if (rc == 0) {
+            for (uint32_t k = 0; k <= old.expansion_count; k++)
+                check_same_cut(&old, &now, k);
+            sl_lod_model_release(&now);
+        }
     }
     unlink(v4);
+    unlink(v5);
     sl_lod_model_release(&old);
 }
 
