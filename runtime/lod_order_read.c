@@ -154,11 +154,17 @@ static int build_tree(const sl_lod_raw *raw, const sl_octree_node *nodes,
     t->vertex_color = raw->vertex_color ? malloc((v ? v : 1) * 4) : NULL;
     if (!t->vertex_first || !t->vertex_position || (raw->vertex_color && !t->vertex_color))
         return -1;
+    /* Every range in order before any is copied: in level order, a range read before a
+     * wrong one was met could run past the table (fuzz corpus ordered-vertex-overrun). */
+    for (uint32_t p = 0; p < f; p++)
+        if (raw->vertex_first[p + 1] < raw->vertex_first[p] ||
+            raw->vertex_first[p + 1] - raw->vertex_first[p] > SL_OCTREE_MAX_NODE_VERTICES)
+            return 1;
+    if (raw->vertex_first[0] != 0)
+        return 1;
     uint32_t at = 0;
     for (uint32_t i = 0; i < f; i++) {
         uint32_t pos = level[i], from = raw->vertex_first[pos], to = raw->vertex_first[pos + 1];
-        if (to < from || to > v || to - from > SL_OCTREE_MAX_NODE_VERTICES)
-            return 1;
         t->vertex_first[i] = at;
         memcpy(t->vertex_position + 3 * (size_t)at, raw->vertex_position + 3 * (size_t)from,
                12 * (size_t)(to - from));
