@@ -52,7 +52,10 @@ typedef struct stage_cost {
  * s, 379 / 1,736 MB at 1 and 5 M; the line before predicted 1.4 s and 255 MB at 1 M, from
  * before quadric vertices were the default; its memory again when the colour sums left the
  * quadrics: 329 / 1,530 MB), and the crack line at zstd level 6 (3.8 / 19.9
- * s, 310 / 1,313 MB at 1 and 5 M). Refit with scripts/bench/plan_calibrate.py. */
+ * s, 310 / 1,313 MB at 1 and 5 M), and the export's memory when a model opened for
+ * cutting let go of its nodes, Morton keys, expansion indices and transition bases after
+ * laying out its cells (400-409 / 1,433 MB with images at 1 and 5 M, 467 / 1,711 before).
+ * Refit with scripts/bench/plan_calibrate.py. */
 #define IMAGES_MB 110.0
 static const stage_cost mesh_costs[] = {
     {"range", 0.014, 0.403, 1.081, 5, 94, 0.95},
@@ -60,8 +63,8 @@ static const stage_cost mesh_costs[] = {
     {"merge", 0.078, 2.92, 1.13, 27, 302, 0.97},
     {"priority", 0.107, 0.65, 1.14, 7, 164, 1.0},
     {"crack", 0.117, 3.7, 1.04, 27, 283, 0.94},
-    {"export", 0.3, 4.05, 1.062, 8, 363, 0.94},
-    {"export+fidelity", 2.5, 5.5, 1.062, 8, 363, 0.94},
+    {"export", 0.3, 4.05, 1.062, 8, 287, 0.95},
+    {"export+fidelity", 2.5, 5.5, 1.062, 8, 287, 0.95},
     /* The segment and cluster methods: plan_calibrate.py at 30k, 100k and 200k triangles on
      * a loaded machine, memory as measured, time from CPU seconds / 1.3 (what the wall
      * time is on a quiet one); their export writes levels from a level list, not a model,

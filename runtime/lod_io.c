@@ -20,6 +20,9 @@ int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_v
 {
     void *packed = NULL;
     size_t packed_size = 0;
+    if (m->cuts_only)
+        return sl_error_set(err, SL_E_INTERNAL, 0, path,
+                            "a model opened for cutting only cannot be written");
     if (sl_lod_order_pack(m, SL_LOD_ORDER_PIECE, &packed, &packed_size))
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory packing the model");
     sl_artifact_part body = {packed, packed_size};

@@ -104,7 +104,11 @@ typedef struct sl_lod_model {
     sl_transitions transitions;
     sl_mesh_scratch scratch; /* the builder's, kept between extractions */
     int cuts_only; /* sl_lod_model_open: only the internal nodes' neighbours are built,
-                      and sl_lod_model_prepare drops them once it has laid out the cells */
+                      and sl_lod_model_prepare drops them once it has laid out the cells,
+                      with what else generation never reads: tree.nodes keeps the root
+                      alone (node_count stays), and tree.morton, expansion_index and
+                      transitions.base go. Such a model is for cutting only: the writer
+                      refuses it, and sl_lod_frontier and sl_lod_cell need a whole one. */
     uint64_t neighbour_links; /* the whole table's count (the file header's), what the
                                  writer stores when the table is not held */
     /* Derived at load (sl_lod_model_prepare, runtime/lod_layout.c), for generation: the

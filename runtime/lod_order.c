@@ -219,6 +219,8 @@ int sl_lod_order_pack(const sl_lod_model *m, size_t piece_size, void **out, size
     uint32_t n = t->node_count;
     *out = NULL;
     *out_size = 0;
+    if (m->cuts_only)
+        return -1; /* its nodes are gone (sl_lod_model_prepare) */
     uint32_t *order = sl_lod_order(m);
     uint32_t *pos_of = malloc((n ? n : 1) * sizeof *pos_of);
     uint32_t *new_id = order ? sl_lod_crossing_numbers(m, order) : NULL;

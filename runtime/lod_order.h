@@ -38,7 +38,8 @@
 /* The packed body of model m in format 5 (malloc'd), in pieces of piece_size plain bytes
  * (SL_LOD_ORDER_PIECE; the tests take small ones, so that every section spans several).
  * Each section is made in LOD order, packed and freed before the next, so writing needs
- * about one section's bytes beyond the model. Returns -1 when out of memory. */
+ * about one section's bytes beyond the model. Returns -1 when out of memory or for a model
+ * opened for cutting only (cuts_only: its nodes are gone). */
 int sl_lod_order_pack(const sl_lod_model *m, size_t piece_size, void **out, size_t *out_size);
 
 /* What a reader has of a format 5 body: the octree header's scalars, then the first

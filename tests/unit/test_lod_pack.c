@@ -233,8 +233,9 @@ static void check_same_cut(sl_lod_model *a, sl_lod_model *b, uint32_t k)
 }
 
 /* A model opened for cutting (sl_lod_model_open), from format 3 (rebuilt table) and
- * format 2 (stored table): every cut the same as the full reader's, no neighbour table
- * held, and written again it reads back with the header's neighbour count. */
+ * format 2 (stored table): every cut the same as the full reader's, holding no neighbour
+ * table, node records but the root, Morton keys, expansion indices or transition bases
+ * (sl_lod_model_prepare), the header's neighbour count kept; the writer refuses it. */
 static void test_opened(const char *v2, const char *v3, sl_lod_model *full)
 {
     const char *files[2] = {v3, v2};
@@ -249,18 +250,12 @@ static void test_opened(const char *v2, const char *v3, sl_lod_model *full)
         CHECK_MSG(!opened.neighbours.mask && !opened.neighbours.index &&
                       opened.neighbour_links == full->neighbours.count,
                   "opened: table held or count %llu lost", (unsigned long long)opened.neighbour_links);
+        CHECK(!opened.tree.morton && !opened.expansion_index && !opened.transitions.base);
         for (uint32_t k = 0; k <= full->expansion_count; k++)
             check_same_cut(full, &opened, k);
         char again[] = "/tmp/scanlod-test-pack-open-XXXXXX";
-        CHECK(write_again(again, &opened, &err) == 0);
-        sl_lod_model back;
-        rc = sl_lod_model_read(again, &back, &err);
-        CHECK_MSG(rc == 0, "an opened model written again: %s", err.message);
-        if (rc == 0) {
-            CHECK(back.neighbours.count == full->neighbours.count);
-            check_same_cut(full, &back, full->expansion_count / 2);
-            sl_lod_model_release(&back);
-        }
+        sl_error_init(&err);
+        CHECK(write_again(again, &opened, &err) == SL_E_INTERNAL);
         unlink(again);
         sl_lod_model_release(&opened);
     }
