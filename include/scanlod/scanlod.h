@@ -16,8 +16,12 @@
  *
  * A level is named by its expansion count k (0 = coarsest, scanlod_model_expansions() =
  * finest); the helpers turn a triangle budget, a LOD percent or an error into k.
+ * A model of format 5 (docs/formats.md) is read by prefixes: opening reads its level
+ * tables only, and an extraction reads the part of the file its level needs (the file
+ * stays open until scanlod_model_free). Older formats are read whole at opening.
  * Thread safety: a model may be read by many threads, but scanlod_extract uses a scratch
- * table inside the model: one extraction at a time per model.
+ * table inside the model (and may read more of the file): one extraction at a time per
+ * model.
  */
 #ifndef SCANLOD_SCANLOD_H
 #define SCANLOD_SCANLOD_H
@@ -62,9 +66,10 @@ scanlod_mesh_bound scanlod_extract_bound(const scanlod_model *model, uint32_t k)
  * (RGBA bytes per vertex, may be NULL; white when the model has no colour), indices (3 per
  * triangle, counter-clockwise seen from outside). *written (OUT) gets the counts.
  * Nothing is allocated for the mesh: it is generated into these arrays directly.
- * Returns 0, or non-zero when out of memory or when the mesh would not fit the bound (a
- * model whose accumulation table is wrong; the arrays' contents are then unspecified and
- * *written is zero). */
+ * Returns 0, or non-zero when out of memory, when the mesh would not fit the bound (a
+ * model whose accumulation table is wrong), or when the part of a format 5 file the level
+ * needs cannot be read or fails its check; the arrays' contents are then unspecified and
+ * *written is zero. */
 int scanlod_extract(scanlod_model *model, uint32_t k, float *positions, float *normals,
                     uint8_t *colors, uint32_t *indices, scanlod_mesh_bound *written);
 
