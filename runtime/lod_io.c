@@ -2,7 +2,6 @@
 #include "runtime/lod_io.h"
 
 #include <errno.h>
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -46,70 +45,6 @@ static void *take(const unsigned char **at, uint64_t bytes)
     return p;
 }
 
-/* The LOD array must be a valid expansion order, the tables in range. */
-static int validate(const sl_lod_model *m, const char *path, sl_error *err)
-{
-    const sl_octree *t = &m->tree;
-    uint32_t n = t->node_count;
-    uint8_t *seen = calloc(n ? n : 1, 1);
-    if (!seen)
-        return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
-    int rc = 0;
-    for (uint32_t i = 0; i < m->expansion_count && !rc; i++) {
-        uint32_t node = m->lod_array[i];
-        if (node >= n || seen[node] || !t->nodes[node].child_mask ||
-            (t->nodes[node].parent != SL_OCTREE_NONE && !seen[t->nodes[node].parent]))
-            rc = corrupt(err, path, "the LOD array is not an expansion order");
-        else
-            seen[node] = 1;
-    }
-    free(seen);
-    /* A frontier after k expansions has at most 1 + 7k cells: the sizes generation
-     * allocates from this table stay bounded whatever the file says. */
-    for (uint32_t i = 0; i <= m->expansion_count && !rc; i++)
-        if (m->accumulation[i] > (uint64_t)SL_MC_MAX_TRIANGLES * (1 + 7 * (uint64_t)i))
-            rc = corrupt(err, path, "accumulation table out of range");
-    /* Records must not overlap: loading rewrites their crossing ids in place, and one
-     * record's ids read as another's header would change its length. */
-    uint8_t *used = calloc(m->transitions.count ? m->transitions.count : 1, 1);
-    if (!used && !rc)
-        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
-    for (uint32_t i = 0; i < n && !rc; i++) {
-        uint32_t mask = m->neighbours.mask[i];
-        if (mask >> 27 || (mask >> 13 & 1) ||
-            (uint64_t)m->neighbours.base[i] + (uint64_t)__builtin_popcount(mask) > m->neighbours.count)
-            rc = corrupt(err, path, "neighbour table out of range");
-        uint32_t tb = m->transitions.base[i];
-        if (!rc && tb != SL_OCTREE_NONE) {
-            if ((uint64_t)tb + 3 > m->transitions.count)
-                rc = corrupt(err, path, "transition record out of range");
-            else {
-                const uint32_t *w = m->transitions.words + tb;
-                uint64_t ids = (uint64_t)__builtin_popcount(w[1] & 0xffffff) +
-                               (uint64_t)__builtin_popcount(w[2] & 0xffffff);
-                if ((uint64_t)tb + 3 + ids > m->transitions.count)
-                    rc = corrupt(err, path, "transition record out of range");
-                for (uint64_t j = 0; !rc && j < ids; j++)
-                    if (w[3 + j] >= t->crossing_count)
-                        rc = corrupt(err, path, "transition crossing out of range");
-                for (uint64_t j = 0; !rc && j < 3 + ids; j++)
-                    if (used[tb + j]++)
-                        rc = corrupt(err, path, "transition records overlap");
-            }
-        } else if (!rc && t->nodes[i].level > 0) {
-            rc = corrupt(err, path, "internal node without a transition record");
-        }
-    }
-    free(used);
-    for (uint64_t i = 0; i < m->neighbours.count && !rc; i++)
-        if (m->neighbours.index[i] >= n)
-            rc = corrupt(err, path, "neighbour index out of range");
-    for (uint32_t i = 0; i <= m->expansion_count && !rc; i++)
-        if (!isfinite(m->error_after[i]))
-            rc = corrupt(err, path, "non-finite error");
-    return rc;
-}
-
 /* `stored`: the section holds the neighbour table (format 2); else it is rebuilt from the
  * octree and must have the count the header declares. */
 static int parse_lod(sl_lod_model *m, const unsigned char *p, uint64_t size, int stored,
@@ -145,29 +80,6 @@ static int parse_lod(sl_lod_model *m, const unsigned char *p, uint64_t size, int
     return 0;
 }
 
-/* After the body is freed: format 3's neighbour table rebuilt from the octree (the count
- * the header declared must match), then every table checked. */
-static int check_lod(sl_lod_model *m, int stored, uint64_t declared, const char *path,
-                     sl_error *err)
-{
-    uint64_t all = 0;
-    if (stored) {
-        declared = m->neighbours.count;
-    } else {
-        if (m->cuts_only ? sl_neighbours_build_internal(&m->tree, &m->neighbours, &all)
-                         : sl_neighbours_build(&m->tree, &m->neighbours))
-            return sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
-        if (!m->cuts_only)
-            all = m->neighbours.count;
-        if (declared != UINT64_MAX && all != declared)
-            return corrupt(err, path, "neighbour count differs from the octree's");
-        if (declared == UINT64_MAX)
-            declared = all;
-    }
-    m->neighbour_links = declared;
-    return validate(m, path, err);
-}
-
 /* The octree and LOD sections of a plain body: with the neighbour table (format 2) or
  * without it (format 3, unpacked). Everything is copied out of `body`. */
 static int parse_tables(const void *body, uint64_t size, int stored, const char *name,
@@ -180,23 +92,6 @@ static int parse_tables(const void *body, uint64_t size, int stored, const char 
         rc = parse_lod(out, (const unsigned char *)body + used, size - used, stored, name, err);
     }
     return rc;
-}
-
-/* The checks and what generation derives from the tables (after the body is gone). */
-static int derive(sl_lod_model *out, int stored, uint64_t declared, const char *name,
-                  sl_error *err)
-{
-    int rc = check_lod(out, stored, declared, name, err);
-    if (rc)
-        return rc;
-    if (sl_lod_model_localize(out) || sl_lod_model_prepare(out))
-        return sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
-    return 0;
-}
-
-int sl_lod_model_derive(sl_lod_model *m, uint64_t links, const char *name, sl_error *err)
-{
-    return derive(m, 0, links, name, err);
 }
 
 /* Parses a body (packed or plain) into `out`. `owned` (may be NULL) is the caller's copy of
@@ -226,7 +121,7 @@ static int parse_body(const void *body, uint64_t size, void *owned, const char *
     }
     free(owned);
     if (rc == 0)
-        rc = derive(out, stored, out->neighbours.count, name, err);
+        rc = sl_lod_model_derive(out, stored, out->neighbours.count, name, err);
     if (rc)
         sl_lod_model_release(out);
     return rc;

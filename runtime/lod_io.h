@@ -41,10 +41,6 @@ int sl_lod_model_read(const char *path, sl_lod_model *out, sl_error *err);
  * model takes about half the memory (docs/benchmarks.md). Every check is the same, and
  * so is every cut. */
 int sl_lod_model_open(const char *path, sl_lod_model *out, sl_error *err);
-/* The checks and derived tables of a model whose tables are loaded (formats 3 on: the
- * neighbour table is rebuilt; `links` is the count the file declares, UINT64_MAX for a
- * prefix, which has no count to check). Returns 0 or an error naming `name`. */
-int sl_lod_model_derive(sl_lod_model *m, uint64_t links, const char *name, sl_error *err);
 /* The same from a body already out of its envelope (what sl_artifact_read returns; the
  * fuzz target feeds bodies here, past the checksum): packed (formats 3 and 4) or plain (format 2).
  * `name` is used in messages. On failure `out` holds nothing. */

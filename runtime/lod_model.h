@@ -23,6 +23,7 @@
 
 #include <stdint.h>
 
+#include "core/error.h"
 #include "runtime/lod_mesh.h"
 #include "runtime/mc_cube.h"
 #include "runtime/octree.h"
@@ -140,6 +141,14 @@ void sl_lod_model_init(sl_lod_model *m);
  * lod_array, neighbours and transitions.
  * Returns -1 when out of memory. */
 int sl_lod_model_prepare(sl_lod_model *m);
+/* The checks and derived tables of a model whose tables are loaded (lod_derive.c):
+ * `stored`, the neighbour table was in the file (format 2); else it is rebuilt and must
+ * have `links` links, the count the file declares (UINT64_MAX for a prefix, which has no
+ * count to check). Then sl_lod_model_localize and sl_lod_model_prepare. Returns 0 or an
+ * error naming `name`. */
+int sl_lod_model_derive(sl_lod_model *m, int stored, uint64_t links, const char *name,
+                        sl_error *err);
+
 /* Renumbers the crossings in the order the LOD array first reaches them (then the rest),
  * so a coarse level's vertices are read from one compact stretch of the crossing table
  * rather than from all over it, and lays out the per-node crossing ids and transition

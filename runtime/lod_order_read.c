@@ -7,7 +7,6 @@
 #include <string.h>
 
 #include "core/artifact.h"
-#include "runtime/lod_io.h"
 
 static int corrupt(sl_error *err, const char *name, const char *what)
 {
@@ -239,7 +238,7 @@ int sl_lod_raw_build(const sl_lod_raw *raw, int cuts_only, const char *name, sl_
     }
     rc = sl_octree_check(&out->tree, name, err);
     if (rc == 0)
-        rc = sl_lod_model_derive(out, raw->whole ? raw->neighbour_links : UINT64_MAX, name, err);
+        rc = sl_lod_model_derive(out, 0, raw->whole ? raw->neighbour_links : UINT64_MAX, name, err);
     /* The stored counts of expansions with surface below: the whole tree's must be what
      * it says; a prefix cannot see the surface below its last level, so it takes them. */
     for (uint32_t i = 0; rc == 0 && i <= e; i++) {
