@@ -44,8 +44,11 @@ static int pack_nodes(sl_packer *pk, const sl_lod_model *m, const uint32_t *orde
 }
 
 /* A crossing id as format 5 stores it: 0 for the next id not yet named (ids are numbered
- * by first use in LOD order), else how far back from it: most ids are new, and the rest
- * name a crossing a few cells back, so the codes are small numbers (docs/formats.md). */
+ * by first use in LOD order), d > 0 for the id d below it, or SL_LOD_ORDER_FROM_PARENT | j
+ * for the j-th id of the parent's transition record (node ids only). A cell's crossings on
+ * its parent's boundary (48 of the 54 edges of a parent's children) are the ones its
+ * parent's record names, numbered when the parent was placed, far back: as distances they
+ * were most of the codes and most of their bytes (docs/benchmarks.md section 7). */
 static uint32_t code_id(uint32_t id, uint32_t *next)
 {
     if (id == *next) {
@@ -80,8 +83,19 @@ static int pack_ids(sl_packer *pk, const sl_lod_model *m, const uint32_t *order,
         uint32_t n = order[pos];
         const sl_octree_node *node = &t->nodes[n];
         const uint32_t *own = t->node_crossings + node->crossing_base;
-        for (int i = 0, k = __builtin_popcount(node->edge_mask); i < k; i++)
-            ids[at++] = code_id(new_id[own[i]], &next);
+        const uint32_t *from = NULL; /* the parent's record's ids */
+        uint32_t from_count = 0;
+        if (node->parent != SL_OCTREE_NONE && has_record(m, node->parent)) {
+            const uint32_t *w = m->transitions.words + m->transitions.base[node->parent];
+            from = w + 3;
+            from_count = sl_transition_record_words(w) - 3;
+        }
+        for (int i = 0, k = __builtin_popcount(node->edge_mask); i < k; i++) {
+            uint32_t j = 0;
+            while (j < from_count && from[j] != own[i])
+                j++;
+            ids[at++] = j < from_count ? SL_LOD_ORDER_FROM_PARENT | j : code_id(new_id[own[i]], &next);
+        }
         if (!has_record(m, n))
             continue;
         const uint32_t *w = m->transitions.words + m->transitions.base[n];

@@ -31,6 +31,8 @@
 #define SL_LOD_ORDER_HEADER 64u
 /* A node's bytes in format 5: inside, child mask, flags, 0. */
 #define SL_LOD_ORDER_NODE 4u
+/* A node crossing code naming the parent's transition record's id j: this bit | j. */
+#define SL_LOD_ORDER_FROM_PARENT 0x80000000u
 /* Plain bytes per packed piece in format 5: a prefix reader unpacks whole pieces, so
  * smaller ones waste less on a small cut (docs/benchmarks.md). */
 #define SL_LOD_ORDER_PIECE ((size_t)1 << 20)
@@ -51,7 +53,7 @@ typedef struct sl_lod_raw {
     const uint8_t *node;                /* [nodes] stored records (SL_LOD_ORDER_NODE) */
     int32_t root[3];                    /* the root's coordinates (LOD header) */
     uint64_t ids;                       /* the positions' own crossing ids, in order, */
-    const uint32_t *node_crossings;     /* [ids] decoded (sl_lod_order_decode) */
+    const uint32_t *node_crossings;     /* [ids] as stored (coded: lod_order.c, code_id) */
     uint32_t crossings;
     const float *crossing_position;     /* [3 crossings] */
     const uint8_t *crossing_color;      /* [4 crossings] or NULL */
@@ -65,19 +67,19 @@ typedef struct sl_lod_raw {
     const uint32_t *surface_before;     /* [expansions + 1] */
     const uint32_t *transition_base;    /* [nodes] */
     uint64_t words;
-    const uint32_t *transition_words;   /* [words], their ids decoded */
+    const uint32_t *transition_words;   /* [words], their ids as stored */
     int whole;                 /* every node and expansion of the file */
     uint64_t neighbour_links;  /* the header's: checked against the octree when whole */
 } sl_lod_raw;
 
-/* Decodes in place the crossing ids of positions 0 .. nodes - 1 (stored records `node`):
- * each one's own ids from `ids` in turn, then its transition record's (words at base[p] + 3
- * on, base SL_OCTREE_NONE for none). *crossings gets how many crossings they number (the
- * prefix of the crossing table they use); 1 when a code names an id before the first or
- * the ids or records run past `id_count` or `word_count`. */
-int sl_lod_order_decode(const uint8_t *node, uint32_t nodes, uint32_t *ids, uint64_t id_count,
-                        const uint32_t *base, uint32_t *words, uint64_t word_count,
-                        uint64_t *crossings);
+/* Checks that the coded crossing ids of positions 0 .. nodes - 1 (stored records `node`;
+ * each one's own codes from `ids` in turn, then its transition record's, words at
+ * base[p] + 3 on, base SL_OCTREE_NONE for none) lie within `id_count` and `word_count`,
+ * and counts the new ones (the zero codes) into *crossings: the prefix of the crossing
+ * table they use. 1 when they run past. (sl_lod_raw_build decodes them.) */
+int sl_lod_order_count_new(const uint8_t *node, uint32_t nodes, const uint32_t *ids,
+                           uint64_t id_count, const uint32_t *base, const uint32_t *words,
+                           uint64_t word_count, uint64_t *crossings);
 
 /* The model (level order, checked, derived for cutting when cuts_only) from raw; on
  * failure `out` holds nothing. */
@@ -113,9 +115,8 @@ int sl_lod_order_sections(const sl_octree *head, const sl_octree_layout *layout,
                           const unsigned char *lod_header, uint64_t plain_size,
                           const char *name, sl_lod_sections *out, sl_error *err);
 
-/* Parses a whole plain body of format 5 into `out` (sl_lod_raw_build); decodes its ids
- * in place. */
-int sl_lod_order_parse(unsigned char *plain, uint64_t size, int cuts_only,
+/* Parses a whole plain body of format 5 into `out` (sl_lod_raw_build). */
+int sl_lod_order_parse(const unsigned char *plain, uint64_t size, int cuts_only,
                        const char *name, sl_lod_model *out, sl_error *err);
 
 #endif

@@ -198,6 +198,9 @@ static int build_lod(const sl_lod_raw *raw, const uint32_t *level, const uint32_
     return 0;
 }
 
+static int decode_pools(const sl_lod_raw *raw, const sl_octree_node *nodes, uint32_t *ids,
+                        uint32_t *words);
+
 int sl_lod_raw_build(const sl_lod_raw *raw, int cuts_only, const char *name, sl_lod_model *out,
                      sl_error *err)
 {
@@ -225,16 +228,21 @@ int sl_lod_raw_build(const sl_lod_raw *raw, int cuts_only, const char *name, sl_
         rc = level_order(raw, nodes, expanded, level, index_of);
     if (!rc)
         rc = build_tree(raw, nodes, expanded, level, index_of, &out->tree);
-    free(nodes);
     if (!rc)
         rc = build_lod(raw, level, index_of, out);
+    const char *why = "nodes in LOD order are not one tree";
+    if (!rc && decode_pools(raw, nodes, out->tree.node_crossings, out->transitions.words)) {
+        rc = 1;
+        why = "crossing ids out of range";
+    }
+    free(nodes);
     free(expanded);
     free(level);
     free(index_of);
     if (rc) {
         sl_lod_model_release(out);
         return rc < 0 ? sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory")
-                      : corrupt(err, name, "nodes in LOD order are not one tree");
+                      : corrupt(err, name, why);
     }
     rc = sl_octree_check(&out->tree, name, err);
     if (rc == 0)
@@ -251,45 +259,79 @@ int sl_lod_raw_build(const sl_lod_raw *raw, int cuts_only, const char *name, sl_
     return rc;
 }
 
-static int decode_id(uint32_t *id, uint32_t *next)
+int sl_lod_order_count_new(const uint8_t *node, uint32_t nodes, const uint32_t *ids,
+                           uint64_t id_count, const uint32_t *base, const uint32_t *words,
+                           uint64_t word_count, uint64_t *crossings)
 {
-    uint32_t code = *id;
-    if (code == 0) {
-        *id = (*next)++;
-        return 0;
-    }
-    if (code > *next)
-        return 1;
-    *id = *next - code;
-    return 0;
-}
-
-int sl_lod_order_decode(const uint8_t *node, uint32_t nodes, uint32_t *ids, uint64_t id_count,
-                        const uint32_t *base, uint32_t *words, uint64_t word_count,
-                        uint64_t *crossings)
-{
-    uint64_t at = 0;
-    uint32_t next = 0;
+    uint64_t at = 0, fresh = 0;
     for (uint32_t p = 0; p < nodes; p++) {
         uint32_t own = (uint32_t)__builtin_popcount(sl_octree_edge_mask(node[SL_LOD_ORDER_NODE * (size_t)p]));
         if (at + own > id_count)
             return 1;
         for (uint32_t i = 0; i < own; i++)
-            if (decode_id(&ids[at++], &next))
-                return 1;
+            fresh += ids[at++] == 0;
         if (base[p] == SL_OCTREE_NONE)
             continue;
         if ((uint64_t)base[p] + 3 > word_count)
             return 1;
-        uint32_t *w = words + base[p], size = sl_transition_record_words(w);
+        const uint32_t *w = words + base[p];
+        uint32_t size = sl_transition_record_words(w);
         if ((uint64_t)base[p] + size > word_count)
             return 1;
         for (uint32_t i = 3; i < size; i++)
-            if (decode_id(&w[i], &next))
+            fresh += w[i] == 0;
+    }
+    *crossings = fresh;
+    return 0;
+}
+
+/* One code into its id (lod_order.c, code_id): 1 when it names an id not yet numbered or
+ * a parent's record entry it has not. `from` is the parent's record ids (count of them). */
+static int decode_id(uint32_t *id, uint32_t *next, const uint32_t *from, uint32_t from_count)
+{
+    uint32_t code = *id;
+    if (code == 0) {
+        *id = (*next)++;
+    } else if (code & SL_LOD_ORDER_FROM_PARENT) {
+        uint32_t j = code & ~SL_LOD_ORDER_FROM_PARENT;
+        if (j >= from_count)
+            return 1;
+        *id = from[j];
+    } else if (code > *next) {
+        return 1;
+    } else {
+        *id = *next - code;
+    }
+    return 0;
+}
+
+/* The ids of the model's pools (still in LOD order: each position's own from its crossing
+ * base, its record at its transition base) decoded in place, positions in order, so a
+ * parent's record is decoded before its children name it. Ranges were checked by
+ * sl_lod_order_count_new. 1 on a code that names nothing. */
+static int decode_pools(const sl_lod_raw *raw, const sl_octree_node *nodes, uint32_t *ids,
+                        uint32_t *words)
+{
+    uint32_t next = 0;
+    for (uint32_t p = 0; p < raw->nodes; p++) {
+        const uint32_t *from = NULL;
+        uint32_t from_count = 0, parent = nodes[p].parent;
+        if (p && raw->transition_base[parent] != SL_OCTREE_NONE) {
+            from = words + raw->transition_base[parent] + 3;
+            from_count = sl_transition_record_words(from - 3) - 3;
+        }
+        uint32_t *own = ids + nodes[p].crossing_base;
+        for (int i = 0, k = __builtin_popcount(nodes[p].edge_mask); i < k; i++)
+            if (decode_id(&own[i], &next, from, from_count))
+                return 1;
+        if (raw->transition_base[p] == SL_OCTREE_NONE)
+            continue;
+        uint32_t *w = words + raw->transition_base[p], size = sl_transition_record_words(w);
+        for (uint32_t i = 3; i < size; i++)
+            if (decode_id(&w[i], &next, NULL, 0))
                 return 1;
     }
-    *crossings = next;
-    return 0;
+    return next > raw->crossings;
 }
 
 static float get_f32(const unsigned char *p)
@@ -334,7 +376,7 @@ int sl_lod_order_sections(const sl_octree *head, const sl_octree_layout *layout,
     return 0;
 }
 
-int sl_lod_order_parse(unsigned char *plain, uint64_t size, int cuts_only,
+int sl_lod_order_parse(const unsigned char *plain, uint64_t size, int cuts_only,
                        const char *name, sl_lod_model *out, sl_error *err)
 {
     sl_lod_model_init(out);
@@ -356,9 +398,9 @@ int sl_lod_order_parse(unsigned char *plain, uint64_t size, int cuts_only,
     raw.ids = raw.head.node_crossing_count;
     raw.node_crossings = (const uint32_t *)AT(SL_SEC_IDS);
     uint64_t named = 0;
-    if (sl_lod_order_decode(raw.node, sec.nodes, (uint32_t *)AT(SL_SEC_IDS), raw.ids,
-                            (const uint32_t *)AT(SL_SEC_TRANSITION_BASE),
-                            (uint32_t *)AT(SL_SEC_TRANSITION_WORDS), sec.words, &named) ||
+    if (sl_lod_order_count_new(raw.node, sec.nodes, (const uint32_t *)AT(SL_SEC_IDS), raw.ids,
+                               (const uint32_t *)AT(SL_SEC_TRANSITION_BASE),
+                               (const uint32_t *)AT(SL_SEC_TRANSITION_WORDS), sec.words, &named) ||
         named > raw.head.crossing_count)
         return corrupt(err, name, "crossing ids out of range");
     raw.crossings = raw.head.crossing_count;

@@ -306,8 +306,8 @@ static int reached_nodes(sl_lod_file *f, uint32_t k, uint32_t *nodes, sl_error *
     return 0;
 }
 
-/* The prefix of the per-node pools the first raw->nodes positions name, read and their
- * ids decoded into raw. */
+/* The prefix of the per-node pools the first raw->nodes positions name, read into raw
+ * (their ids as stored: sl_lod_raw_build decodes them). */
 static int read_pools(sl_lod_file *f, sl_lod_raw *raw, sl_error *err)
 {
     uint32_t nodes = raw->nodes;
@@ -338,9 +338,9 @@ static int read_pools(sl_lod_file *f, sl_lod_raw *raw, sl_error *err)
         return corrupt(f, err, "transition record out of range");
     if ((rc = ensure(f, SL_SEC_TRANSITION_WORDS, 4 * need, err)))
         return rc;
-    uint32_t *id = (uint32_t *)f->cache[SL_SEC_IDS].data;
-    uint32_t *words_read = (uint32_t *)f->cache[SL_SEC_TRANSITION_WORDS].data;
-    if (sl_lod_order_decode(raw->node, nodes, id, ids, base, words_read, need, &crossings) ||
+    const uint32_t *id = (const uint32_t *)f->cache[SL_SEC_IDS].data;
+    const uint32_t *words_read = (const uint32_t *)f->cache[SL_SEC_TRANSITION_WORDS].data;
+    if (sl_lod_order_count_new(raw->node, nodes, id, ids, base, words_read, need, &crossings) ||
         crossings > f->head.crossing_count)
         return corrupt(f, err, "crossing ids out of range");
     rc = ensure(f, SL_SEC_POSITIONS, 12 * crossings, err);

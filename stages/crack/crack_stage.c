@@ -17,8 +17,10 @@
  * crosses the same face again (sl_mc_split_double_passes): more triangles in those cuts,
  * so an older table no longer equals what is generated.
  * 5: model format 4 (no node errors and areas), pieces packed at zstd level 6 (was 9).
- * 6: model format 5 (LOD order, checked pieces: a cut reads a prefix, lod_prefix.h). */
-#define CRACK_STAGE_VERSION 6u
+ * 6: model format 5 (LOD order, checked pieces: a cut reads a prefix, lod_prefix.h).
+ * 7: format 5's node crossing ids may name the parent's transition record's (a smaller
+ * model; the first format 5 readers refuse such a file as corrupt). */
+#define CRACK_STAGE_VERSION 7u
 
 static int crack_configure(const sl_config *cfg, void **out, sl_error *err)
 {

@@ -261,10 +261,13 @@ static void mutate_ordered_terms(uint8_t *d, const sl_lod_sections *sec, uint64_
     case 2: /* a child mask bit: children appear or go, shifting every later position */
         d[sec->at[SL_SEC_NODES] + 4 * (next(s) % n) + 1] ^= (uint8_t)(1u << (next(s) % 8));
         break;
-    case 3: /* a coded crossing id: new, a step back, far back */
+    case 3: /* a coded crossing id: new, a step back, far back, a parent's record entry
+               (one it may have, one past any record) */
         if (ids) {
-            static const uint32_t codes[] = {0, 1, 2, 7, 100, 0x7fffffff};
-            put32(d, sec->at[SL_SEC_IDS] + 4 * (next(s) % ids), codes[next(s) % 6]);
+            static const uint32_t codes[] = {0, 1, 2, 7, 100, 0x7fffffff,
+                                             SL_LOD_ORDER_FROM_PARENT, SL_LOD_ORDER_FROM_PARENT | 5,
+                                             SL_LOD_ORDER_FROM_PARENT | 47, 0xffffffff};
+            put32(d, sec->at[SL_SEC_IDS] + 4 * (next(s) % ids), codes[next(s) % 10]);
         }
         break;
     case 4: /* a transition word: sign bits, a half-edge bit, or a coded id */

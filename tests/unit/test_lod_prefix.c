@@ -4,8 +4,8 @@
  * through the public API -- the very mesh the whole model gives, while holding only a
  * prefix of its nodes; the level tables and bounds are the whole model's; a damaged piece
  * past the prefix a cut needs leaves that cut alone and fails the one that reads it, naming
- * the file; LOD arrays and child masks that do not make one tree are refused on both
- * paths.
+ * the file; LOD arrays, child masks and crossing codes (a distance, an entry of the parent's
+ * record) that do not make one tree are refused on both paths.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -267,6 +267,17 @@ static void test_hostile_trees(const sl_lod_model *whole, const char *path)
     unsigned char *last = copy + sec.at[SL_SEC_NODES] + SL_LOD_ORDER_NODE * ((size_t)sec.nodes - 1);
     last[1] = 0xff;
     expect_rc(copy, &sec, path, "leaf with children", SL_E_CORRUPT);
+    /* Cells name their parent's record's ids (most of a model's codes): one past any
+     * record (at most 48 ids). */
+    size_t ids = sec.size[SL_SEC_IDS] / 4, from_parent = 0, first = 0;
+    for (size_t i = 0; i < ids; i++)
+        if (sl_get_u32(p + sec.at[SL_SEC_IDS] + 4 * i) & SL_LOD_ORDER_FROM_PARENT)
+            if (!from_parent++)
+                first = i;
+    CHECK_MSG(from_parent * 4 > ids, "%zu of %zu codes name the parent's record", from_parent, ids);
+    memcpy(copy, p, plain_size);
+    sl_put_u32(copy + sec.at[SL_SEC_IDS] + 4 * first, SL_LOD_ORDER_FROM_PARENT | 63);
+    expect_rc(copy, &sec, path, "a parent's record entry it does not have", SL_E_CORRUPT);
     /* A crossing code reaching before the first id. */
     memcpy(copy, p, plain_size);
     sl_put_u32(copy + sec.at[SL_SEC_IDS] + 4 * (sec.size[SL_SEC_IDS] / 4 - 1), 0x7fffffff);
