@@ -75,8 +75,7 @@ int sl_artifact_read(const char *path, const char magic[8], uint32_t format_vers
 }
 
 int sl_artifact_open(const char *path, const char magic[8], uint32_t oldest, uint32_t newest,
-                     int *fd_out, uint64_t *body_size, uint32_t *version_out,
-                     uint64_t *checksum, sl_error *err)
+                     int *fd_out, sl_artifact_info *info, sl_error *err)
 {
     *fd_out = -1;
     struct stat st;
@@ -112,10 +111,7 @@ int sl_artifact_open(const char *path, const char magic[8], uint32_t oldest, uin
         return rc;
     }
     *fd_out = fd;
-    *body_size = size;
-    *version_out = version;
-    if (checksum)
-        *checksum = sl_get_u64(header + 24);
+    *info = (sl_artifact_info){version, sl_get_u32(header + 12), size, sl_get_u64(header + 24)};
     return 0;
 }
 
@@ -147,17 +143,13 @@ int sl_artifact_read_versions(const char *path, const char magic[8], uint32_t ol
     *body = NULL;
     *body_size = 0;
     int fd = -1;
-    uint64_t size = 0, checksum = 0;
-    int rc = sl_artifact_open(path, magic, oldest, newest, &fd, &size, version_out, &checksum,
-                              err);
+    sl_artifact_info info;
+    int rc = sl_artifact_open(path, magic, oldest, newest, &fd, &info, err);
     if (rc)
         return rc;
-    unsigned char header[SL_ARTIFACT_HEADER_SIZE];
+    uint64_t size = info.body_size;
+    *version_out = info.version;
     void *data = NULL;
-    if (pread(fd, header, sizeof header, 0) != (ssize_t)sizeof header) {
-        rc = sl_error_set(err, SL_E_CORRUPT, 0, path, "truncated artifact header");
-        goto done;
-    }
     if (size > max_body_size) {
         rc = sl_error_set(err, SL_E_LIMIT, 0, path, "body of %llu bytes exceeds limit %llu",
                           (unsigned long long)size, (unsigned long long)max_body_size);
@@ -172,12 +164,12 @@ int sl_artifact_read_versions(const char *path, const char magic[8], uint32_t ol
         rc = sl_error_set(err, SL_E_CORRUPT, 0, path, "truncated artifact body");
         goto done;
     }
-    if (XXH3_64bits(data, size) != sl_get_u64(header + 24)) {
+    if (XXH3_64bits(data, size) != info.checksum) {
         rc = sl_error_set(err, SL_E_CORRUPT, 0, path, "checksum mismatch");
         goto done;
     }
     if (stage_version)
-        *stage_version = sl_get_u32(header + 12);
+        *stage_version = info.stage_version;
     *body = data;
     *body_size = size;
     data = NULL;

@@ -44,13 +44,18 @@ int sl_artifact_read_versions(const char *path, const char magic[8], uint32_t ol
                               uint64_t *body_size, uint32_t *stage_version, uint32_t *version,
                               sl_error *err);
 
-/* For a reader that takes only parts of a body (lod_prefix.h): the header checked as
- * above (magic, version, size against the file), the file left open in *fd (the caller
- * closes it), the body's size, version and envelope checksum out. The body is not read,
- * so its checksum is not checked: such a reader checks what it reads by other means. */
+/* What the header of an artifact says. */
+typedef struct sl_artifact_info {
+    uint32_t version, stage_version;
+    uint64_t body_size, checksum;
+} sl_artifact_info;
+
+/* The header read and checked (magic, version oldest..newest, body size against the file),
+ * the file left open in *fd after it (the caller closes it). sl_artifact_read_versions
+ * reads the body on; a reader that takes only parts of it (lod_prefix.h) preads them and
+ * checks what it reads by other means, since the body's checksum covers all of it. */
 int sl_artifact_open(const char *path, const char magic[8], uint32_t oldest, uint32_t newest,
-                     int *fd, uint64_t *body_size, uint32_t *version, uint64_t *checksum,
-                     sl_error *err);
+                     int *fd, sl_artifact_info *info, sl_error *err);
 /* `size` bytes of the body from offset `at` (SL_E_IO naming `path`, or SL_E_CORRUPT when
  * the file ends first). */
 int sl_artifact_pread(int fd, const char *path, void *dest, uint64_t size, uint64_t at,

@@ -44,7 +44,7 @@ uint32_t *sl_lod_order(const sl_lod_model *m)
      * places follow from the tree alone: model format 5 stores no links, lod_order.h). */
     for (uint32_t at = 0; at < pos; at++) {
         const sl_octree_node *p = &t->nodes[order[at]];
-        if (!p->child_mask || placed[p->first_child])
+        if (!p->child_mask || p->first_child >= n || placed[p->first_child])
             continue;
         for (uint32_t c = 0; c < (uint32_t)__builtin_popcount(p->child_mask); c++) {
             uint32_t child = p->first_child + c;
@@ -385,7 +385,7 @@ int sl_lod_model_prepare(sl_lod_model *m)
     if (!m->expansion_index || !m->surface_before ||
         sl_mesh_scratch_init(&m->scratch, t) != 0)
         return -1;
-    if (sl_lod_surface_counts(m) != 0)
+    if (sl_lod_surface_counts(m, m->surface_before) != 0)
         return -1;
     memset(m->expansion_index, 0xff, (size_t)n * sizeof *m->expansion_index);
     for (uint32_t i = 0; i < m->expansion_count; i++)

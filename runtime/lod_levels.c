@@ -9,7 +9,7 @@
 
 /* surface_before (see lod_model.h). Nodes are stored coarse to fine, so a reverse sweep
  * sees every child before its parent. */
-int sl_lod_surface_counts(sl_lod_model *m)
+int sl_lod_surface_counts(const sl_lod_model *m, uint32_t *out)
 {
     const sl_octree *t = &m->tree;
     uint8_t *below = calloc(t->node_count ? t->node_count : 1, 1);
@@ -21,9 +21,9 @@ int sl_lod_surface_counts(sl_lod_model *m)
         if (below[i] && node->parent != SL_OCTREE_NONE)
             below[node->parent] = 1;
     }
-    m->surface_before[0] = 0;
+    out[0] = 0;
     for (uint32_t k = 0; k < m->expansion_count; k++)
-        m->surface_before[k + 1] = m->surface_before[k] + below[m->lod_array[k]];
+        out[k + 1] = out[k] + below[m->lod_array[k]];
     free(below);
     return 0;
 }

@@ -165,9 +165,10 @@ uint32_t *sl_lod_order(const sl_lod_model *m);
  * them (their own, then their transition record's), then those no node names. NULL when
  * out of memory. */
 uint32_t *sl_lod_crossing_numbers(const sl_lod_model *m, const uint32_t *order);
-/* Fills surface_before (allocated by the caller, expansion_count + 1 entries) from the
- * tree and the LOD array; part of sl_lod_model_prepare. Returns -1 when out of memory. */
-int sl_lod_surface_counts(sl_lod_model *m);
+/* surface_before from the tree and the LOD array into out (expansion_count + 1 entries):
+ * sl_lod_model_prepare's, and what the format 5 writer stores. Returns -1 when out of
+ * memory. */
+int sl_lod_surface_counts(const sl_lod_model *m, uint32_t *out);
 void sl_lod_model_release(sl_lod_model *m);
 /* Works out the drawing of every state of every split list (each distinct configuration
  * triangulated once); part of sl_lod_model_prepare. Returns -1 when out of memory. */

@@ -58,30 +58,34 @@ static uint32_t code_id(uint32_t id, uint32_t *next)
     return *next - id;
 }
 
-/* The crossing ids of nodes and transition records in LOD order, coded; *words_out gets
- * the records (their ids coded) for pack_lod. */
+/* The pools in LOD order: each node's crossing ids, coded, into the packer; its
+ * transition record (ids coded) into *words at the base *bases gets, for pack_lod. */
 static int pack_ids(sl_packer *pk, const sl_lod_model *m, const uint32_t *order,
-                    const uint32_t *new_id, uint32_t **words_out, uint64_t *word_count)
+                    const uint32_t *new_id, uint32_t **words_out, uint32_t **bases_out,
+                    uint64_t *word_count)
 {
     const sl_octree *t = &m->tree;
+    uint32_t n = t->node_count;
     uint64_t total = 0, word_total = 0;
-    for (uint32_t i = 0; i < t->node_count; i++) {
+    for (uint32_t i = 0; i < n; i++) {
         total += (uint64_t)__builtin_popcount(t->nodes[i].edge_mask);
         if (has_record(m, i))
             word_total += sl_transition_record_words(m->transitions.words + m->transitions.base[i]);
     }
     uint32_t *ids = malloc((total ? total : 1) * sizeof *ids);
     uint32_t *words = malloc((word_total ? word_total : 1) * sizeof *words);
-    if (!ids || !words) {
+    uint32_t *bases = malloc((n ? n : 1) * sizeof *bases);
+    *words_out = words;
+    *bases_out = bases;
+    if (!ids || !words || !bases) {
         free(ids);
-        free(words);
         return -1;
     }
     uint64_t at = 0, at_words = 0;
     uint32_t next = 0;
-    for (uint32_t pos = 0; pos < t->node_count; pos++) {
-        uint32_t n = order[pos];
-        const sl_octree_node *node = &t->nodes[n];
+    for (uint32_t pos = 0; pos < n; pos++) {
+        uint32_t node_index = order[pos];
+        const sl_octree_node *node = &t->nodes[node_index];
         const uint32_t *own = t->node_crossings + node->crossing_base;
         const uint32_t *from = NULL; /* the parent's record's ids */
         uint32_t from_count = 0;
@@ -96,16 +100,17 @@ static int pack_ids(sl_packer *pk, const sl_lod_model *m, const uint32_t *order,
                 j++;
             ids[at++] = j < from_count ? SL_LOD_ORDER_FROM_PARENT | j : code_id(new_id[own[i]], &next);
         }
-        if (!has_record(m, n))
+        bases[pos] = SL_OCTREE_NONE;
+        if (!has_record(m, node_index))
             continue;
-        const uint32_t *w = m->transitions.words + m->transitions.base[n];
+        const uint32_t *w = m->transitions.words + m->transitions.base[node_index];
         uint32_t size = sl_transition_record_words(w);
+        bases[pos] = (uint32_t)at_words;
         memcpy(words + at_words, w, 3 * sizeof *w);
         for (uint32_t i = 3; i < size; i++)
             words[at_words + i] = code_id(new_id[w[i]], &next);
         at_words += size;
     }
-    *words_out = words;
     *word_count = at_words;
     return add_owned(pk, ids, at * sizeof *ids, 4);
 }
@@ -167,8 +172,8 @@ static void put_f32(unsigned char *p, float v)
     sl_put_u32(p, bits);
 }
 
-static int pack_lod(sl_packer *pk, const sl_lod_model *m, const uint32_t *order,
-                    const uint32_t *pos_of, uint32_t *words, uint64_t word_count)
+static int pack_lod(sl_packer *pk, const sl_lod_model *m, const uint32_t *pos_of,
+                    const uint32_t *words, const uint32_t *bases, uint64_t word_count)
 {
     const sl_octree *t = &m->tree;
     uint32_t n = t->node_count, e = m->expansion_count;
@@ -186,44 +191,25 @@ static int pack_lod(sl_packer *pk, const sl_lod_model *m, const uint32_t *order,
     sl_put_u32(header + 48, (uint32_t)t->nodes[0].x);
     sl_put_u32(header + 52, (uint32_t)t->nodes[0].y);
     sl_put_u32(header + 56, (uint32_t)t->nodes[0].z);
-    if (sl_packer_add(pk, header, sizeof header, 0)) {
-        free(words);
-        return -1;
-    }
     uint32_t *lod = malloc(((size_t)e + 1) * sizeof *lod);
     if (lod)
         for (uint32_t i = 0; i < e; i++)
             lod[i] = pos_of[m->lod_array[i]];
-    if (add_owned(pk, lod, (size_t)e * 4, 4) ||
-        sl_packer_add(pk, m->accumulation, ((size_t)e + 1) * 8, 8) ||
-        sl_packer_add(pk, m->error_after, ((size_t)e + 1) * 4, 4)) {
-        free(words);
-        return -1;
-    }
     /* surface_before: a model being written need not have been prepared. */
-    sl_lod_model counts = *m;
-    counts.surface_before = malloc(((size_t)e + 1) * sizeof *counts.surface_before);
-    if (!counts.surface_before || sl_lod_surface_counts(&counts)) {
-        free(counts.surface_before);
-        free(words);
-        return -1;
+    uint32_t *surface = malloc(((size_t)e + 1) * sizeof *surface);
+    if (surface && sl_lod_surface_counts(m, surface)) {
+        free(surface);
+        surface = NULL;
     }
-    if (add_owned(pk, counts.surface_before, ((size_t)e + 1) * 4, 4)) {
-        free(words);
-        return -1;
-    }
-    uint32_t *base = malloc((n ? n : 1) * sizeof *base);
-    if (base) {
-        uint64_t at = 0;
-        for (uint32_t pos = 0; pos < n; pos++) {
-            uint32_t node = order[pos];
-            base[pos] = has_record(m, node) ? (uint32_t)at : SL_OCTREE_NONE;
-            if (has_record(m, node))
-                at += sl_transition_record_words(m->transitions.words + m->transitions.base[node]);
-        }
-    }
-    int rc = add_owned(pk, base, (size_t)n * 4, 4);
-    rc |= add_owned(pk, words, word_count * 4, 4);
+    int rc = !lod || !surface || sl_packer_add(pk, header, sizeof header, 0) ||
+             sl_packer_add(pk, lod, (size_t)e * 4, 4) ||
+             sl_packer_add(pk, m->accumulation, ((size_t)e + 1) * 8, 8) ||
+             sl_packer_add(pk, m->error_after, ((size_t)e + 1) * 4, 4) ||
+             sl_packer_add(pk, surface, ((size_t)e + 1) * 4, 4) ||
+             sl_packer_add(pk, bases, (size_t)n * 4, 4) ||
+             sl_packer_add(pk, words, word_count * 4, 4);
+    free(lod);
+    free(surface);
     return rc ? -1 : 0;
 }
 
@@ -253,20 +239,20 @@ int sl_lod_order_pack(const sl_lod_model *m, size_t piece_size, void **out, size
     sl_octree_parts(&head, header, parts, SL_OCTREE_FLAG_LOD_ORDER);
     if (!rc)
         rc = sl_packer_add(pk, header, parts[0].size, 0);
-    uint32_t *words = NULL;
+    uint32_t *words = NULL, *bases = NULL;
     uint64_t word_count = 0;
     if (!rc)
         rc = pack_nodes(pk, m, order);
     if (!rc)
-        rc = pack_ids(pk, m, order, new_id, &words, &word_count);
+        rc = pack_ids(pk, m, order, new_id, &words, &bases, &word_count);
     if (!rc)
         rc = pack_crossings(pk, t, new_id);
     if (!rc && sl_octree_dual(t))
         rc = pack_vertices(pk, t, order);
     if (!rc)
-        rc = pack_lod(pk, m, order, pos_of, words, word_count);
-    else
-        free(words);
+        rc = pack_lod(pk, m, pos_of, words, bases, word_count);
+    free(words);
+    free(bases);
     free(order);
     free(pos_of);
     free(new_id);

@@ -75,7 +75,7 @@ typedef struct sl_lod_raw {
 /* Checks that the coded crossing ids of positions 0 .. nodes - 1 (stored records `node`;
  * each one's own codes from `ids` in turn, then its transition record's, words at
  * base[p] + 3 on, base SL_OCTREE_NONE for none) lie within `id_count` and `word_count`,
- * and counts the new ones (the zero codes) into *crossings: the prefix of the crossing
+ * the records in position order without overlap (as the writer lays them out), and counts the new ones (the zero codes) into *crossings: the prefix of the crossing
  * table they use. 1 when they run past. (sl_lod_raw_build decodes them.) */
 int sl_lod_order_count_new(const uint8_t *node, uint32_t nodes, const uint32_t *ids,
                            uint64_t id_count, const uint32_t *base, const uint32_t *words,

@@ -263,7 +263,7 @@ int sl_lod_order_count_new(const uint8_t *node, uint32_t nodes, const uint32_t *
                            uint64_t id_count, const uint32_t *base, const uint32_t *words,
                            uint64_t word_count, uint64_t *crossings)
 {
-    uint64_t at = 0, fresh = 0;
+    uint64_t at = 0, fresh = 0, end = 0;
     for (uint32_t p = 0; p < nodes; p++) {
         uint32_t own = (uint32_t)__builtin_popcount(sl_octree_edge_mask(node[SL_LOD_ORDER_NODE * (size_t)p]));
         if (at + own > id_count)
@@ -272,12 +272,15 @@ int sl_lod_order_count_new(const uint8_t *node, uint32_t nodes, const uint32_t *
             fresh += ids[at++] == 0;
         if (base[p] == SL_OCTREE_NONE)
             continue;
-        if ((uint64_t)base[p] + 3 > word_count)
+        /* Records in position order, none over another: decoding one record's ids must
+         * not change the heads (and so the lengths) of the next. */
+        if (base[p] < end || (uint64_t)base[p] + 3 > word_count)
             return 1;
         const uint32_t *w = words + base[p];
         uint32_t size = sl_transition_record_words(w);
         if ((uint64_t)base[p] + size > word_count)
             return 1;
+        end = (uint64_t)base[p] + size;
         for (uint32_t i = 3; i < size; i++)
             fresh += w[i] == 0;
     }

@@ -223,11 +223,10 @@ int sl_lod_file_open(const char *path, sl_lod_file **out, sl_error *err)
     f->fd = -1;
     sl_lod_model_init(&f->levels);
     sl_lod_model_init(&f->cut);
-    uint64_t body_size = 0;
-    uint32_t version = 0;
+    sl_artifact_info info;
     int rc = sl_artifact_open(path, SL_LOD_MAGIC, SL_LOD_OLDEST_VERSION, SL_LOD_FORMAT_VERSION,
-                              &f->fd, &body_size, &version, NULL, err);
-    if (rc == 0 && version < 5) { /* read whole, as before */
+                              &f->fd, &info, err);
+    if (rc == 0 && info.version < 5) { /* read whole, as before */
         close(f->fd);
         f->fd = -1;
         rc = sl_lod_model_open(path, &f->cut, err);
@@ -238,7 +237,7 @@ int sl_lod_file_open(const char *path, sl_lod_file **out, sl_error *err)
         }
     } else if (rc == 0) {
         f->ordered = 1;
-        rc = open_ordered(f, body_size, err);
+        rc = open_ordered(f, info.body_size, err);
         if (rc == 0)
             rc = read_levels(f, err);
     }

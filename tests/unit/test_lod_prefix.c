@@ -278,6 +278,18 @@ static void test_hostile_trees(const sl_lod_model *whole, const char *path)
     memcpy(copy, p, plain_size);
     sl_put_u32(copy + sec.at[SL_SEC_IDS] + 4 * first, SL_LOD_ORDER_FROM_PARENT | 63);
     expect_rc(copy, &sec, path, "a parent's record entry it does not have", SL_E_CORRUPT);
+    /* Two records over each other: the second position with a record takes the first's. */
+    memcpy(copy, p, plain_size);
+    uint32_t with_record[2], found = 0;
+    for (uint32_t i = 0; i < sec.nodes && found < 2; i++)
+        if (sl_get_u32(p + sec.at[SL_SEC_TRANSITION_BASE] + 4 * (size_t)i) != SL_OCTREE_NONE)
+            with_record[found++] = i;
+    CHECK(found == 2);
+    if (found == 2) {
+        sl_put_u32(copy + sec.at[SL_SEC_TRANSITION_BASE] + 4 * (size_t)with_record[1],
+                   sl_get_u32(p + sec.at[SL_SEC_TRANSITION_BASE] + 4 * (size_t)with_record[0]));
+        expect_rc(copy, &sec, path, "records over each other", SL_E_CORRUPT);
+    }
     /* A crossing code reaching before the first id. */
     memcpy(copy, p, plain_size);
     sl_put_u32(copy + sec.at[SL_SEC_IDS] + 4 * (sec.size[SL_SEC_IDS] / 4 - 1), 0x7fffffff);
