@@ -24,8 +24,9 @@ static struct {
     int initialised;
     int op;            /* -1: no fault */
     long at;           /* 1-based call index */
-    int err;           /* errno to inject, 0 = crash or halt */
+    int err;           /* errno to inject, 0 = crash, halt or stop */
     int halt;          /* a per-item child takes the engine down with it */
+    int stop;          /* SIGSTOP this process, then make the call: a frozen owner */
     char what[16];     /* its name, as given: "ENOSPC", "crash", "halt" */
     int scope;         /* SCOPE_* bits: which processes inject */
     long only_child;   /* SCANLOD_FAULT_SCOPE=child:K: only the K-th child injects; else 0 */
@@ -86,7 +87,9 @@ static void parse_spec(const char *spec)
             fault.op = i;
     fault.at = at;
     fault.halt = strcmp(what, "halt") == 0;
-    fault.err = fault.halt || strcmp(what, "crash") == 0 ? 0 : errno_from_name(what);
+    fault.stop = strcmp(what, "stop") == 0;
+    fault.err = fault.halt || fault.stop || strcmp(what, "crash") == 0 ? 0
+                                                                       : errno_from_name(what);
     memcpy(fault.what, what, sizeof fault.what);
     if (fault.err < 0 || at <= 0)
         fault.op = -1;
@@ -166,6 +169,12 @@ static int inject(enum io_op op)
         count_line(op, n, any, hit);
     if (!hit)
         return 0;
+    if (fault.stop) {
+        /* A Slurm suspend or an NFS stall at exactly this point: the test sends SIGCONT
+         * once another worker has taken the claim over, and the call then goes ahead. */
+        raise(SIGSTOP);
+        return 0;
+    }
     if (fault.err == 0) {
         /* halt: the whole run stops here, as on a power cut. The engine's own process
          * just exits (its children die with it: PR_SET_PDEATHSIG); a child kills the

@@ -7,7 +7,9 @@
  * sweep N over every durability point and check that resume recovers. Counting is per
  * process. "halt" is "crash" for the whole run, as on a power cut: in a per-item child
  * it SIGKILLs the engine before exiting (a child's "crash" alone is a stage crash, which
- * the engine retries and then quarantines as a bug).
+ * the engine retries and then quarantines as a bug). "stop" freezes the process with
+ * SIGSTOP right before the call, which goes ahead once it gets SIGCONT: an owner frozen
+ * at that exact point (tests/faults/test_frozen_owner.sh).
  *
  * SCANLOD_FAULT_COUNT=FILE (with or without a fault) appends one line per durable call
  * to FILE: "PID parent|child:K OP N ANY[ FAULT]" (the engine, or the K-th per-item child

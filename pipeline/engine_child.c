@@ -209,8 +209,11 @@ static int move_with_reason(sl_engine *e, int s, const char *name, sl_ticket *t,
         e->items_settled++; /* nothing more to do for it until it changes */
     sl_error werr;
     sl_error_init(&werr);
-    /* Without space to rewrite the ticket, the rename alone still records the state. */
-    sl_queue_put(e->work, stage, SL_STATE_CLAIMED, name, t, &werr);
+    /* Only a claim still ours is moved (a woken owner's late write must not recreate one
+     * another worker finished meanwhile). Without space to rewrite the ticket, the
+     * rename alone still records the state. */
+    if (sl_engine_lease_renew(e, stage, name, t, &werr) == SL_E_LEASE_LOST)
+        return 0;
     int rc = sl_queue_move(e->work, stage, name, SL_STATE_CLAIMED, to, err);
     return rc == SL_E_BUSY ? 0 : rc;
 }
@@ -223,8 +226,9 @@ static int advance(sl_engine *e, int from, const sl_ticket *t, sl_error *err);
  * newer owner committed (at worst it swaps in a complete, identical one). */
 static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, sl_hash key,
                           const char *staged, const char *out_dir, const child_outcome *o,
-                          sl_error *err)
+                          int *taken_over, sl_error *err)
 {
+    *taken_over = 0;
     const sl_stage *stage = e->stages[s];
     int rc = sl_engine_lease_check(e, stage->name, name, t, err);
     char path[PATH_MAX];
@@ -254,9 +258,16 @@ static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, s
         rc = sl_engine_swap_in(staged, out_dir, parent, err);
     }
     if (rc == 0) {
+        /* The claim is rewritten only while it is still ours: an owner frozen during the
+         * swap-in whose claim was taken over and released meanwhile must not re-create
+         * it (it did: the woken owner then moved its own new ticket to done and logged
+         * the stage done a second time; tests/faults/test_frozen_owner.sh). The
+         * artifact is in place either way, and the new owner finds its record. */
         sl_hash_hex(key, t->key);
         t->cls[0] = t->reason[0] = '\0';
-        rc = sl_queue_put(e->work, stage->name, SL_STATE_CLAIMED, name, t, err);
+        rc = sl_engine_lease_renew(e, stage->name, name, t, err);
+        if (rc == SL_E_LEASE_LOST)
+            *taken_over = 1;
     }
     return rc;
 }
@@ -433,7 +444,10 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
          * finished the stage and said so; nobody is to say it again. */
         int was_done = sl_queue_find(e->work, stage->name, name) == SL_STATE_DONE;
         sl_hash_hex(key, t->key);
-        sl_queue_put(e->work, stage->name, SL_STATE_CLAIMED, name, t, err);
+        sl_error perr;
+        sl_error_init(&perr);
+        if (sl_engine_lease_renew(e, stage->name, name, t, &perr) == SL_E_LEASE_LOST)
+            return 0; /* taken over again meanwhile: the new owner releases it */
         int released = 0;
         rc = release_done(e, s, name, t, &released, err);
         /* The owner that committed lost its claim before moving it to done and said
@@ -503,7 +517,15 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
     int ok = outcome.have_result && item_err.code == SL_OK && WIFEXITED(outcome.status) &&
              WEXITSTATUS(outcome.status) == 0 && !outcome.lease_lost;
     if (ok) {
-        rc = commit_success(e, s, name, t, key, staged, out_dir, &outcome, &item_err);
+        int taken_over = 0;
+        rc = commit_success(e, s, name, t, key, staged, out_dir, &outcome, &taken_over,
+                            &item_err);
+        if (taken_over) { /* committed; the claim and what follows are the new owner's */
+            e->counts.ran++;
+            SL_LOG(SL_LOG_WARN, stage->name, t->item,
+                   "committed, but the claim was taken over meanwhile");
+            return 0;
+        }
         if (rc == 0) {
             e->counts.ran++;
             int released = 0;

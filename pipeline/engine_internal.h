@@ -72,6 +72,8 @@ void sl_engine_stamp_lease(const sl_engine *e, sl_ticket *t);
 /* The owner of a leased ticket is gone: its lease expired (wherever it runs), or, on this
  * host, its pid died (or was reused). One rule for claims and scan marks. */
 int sl_lease_owner_gone(const sl_engine *e, const sl_ticket *t, int64_t now);
+/* Is the ticket also in a state other than claimed (a claim recreated by a late write)? */
+int sl_engine_ticket_elsewhere(const sl_engine *e, const char *stage, const char *name);
 int sl_engine_lease_renew(sl_engine *e, const char *stage, const char *name, sl_ticket *t,
                           sl_error *err);
 int sl_engine_lease_check(sl_engine *e, const char *stage, const char *name,

@@ -124,13 +124,45 @@ static int lease_held(const sl_engine *e, const char *stage, const char *name, c
            now.epoch == mine->epoch && strcmp(now.nonce, mine->nonce) == 0;
 }
 
+/* Whether ticket `name` of `stage` is also in a state other than claimed. A claimer
+ * frozen between its rename and its lease write (SIGSTOP, a Slurm suspend) may wake after
+ * another worker reclaimed the ticket, finished it and released it: the late lease write
+ * then recreates the claim beside the ticket's true state (seen in test_liveness: the
+ * woken run redid a done stage). A ticket is never in two states otherwise: every move
+ * is one rename. */
+int sl_engine_ticket_elsewhere(const sl_engine *e, const char *stage, const char *name)
+{
+    static const int others[] = {SL_STATE_READY, SL_STATE_DONE, SL_STATE_FAILED,
+                                 SL_STATE_QUARANTINE};
+    for (size_t k = 0; k < sizeof others / sizeof *others; k++) {
+        char path[PATH_MAX];
+        if (sl_queue_path(path, sizeof path, e->work, stage, others[k], name) == 0 &&
+            access(path, F_OK) == 0)
+            return 1;
+    }
+    return 0;
+}
+
+/* The check and the write are two steps: an owner frozen between them (at the write's
+ * rename: tests/faults/test_frozen_owner.sh) wakes to write its lease over a claim that
+ * was taken over, finished and released meanwhile, recreating it, and would then find the
+ * lease "held" and run the stage again. The check after the write catches that: the
+ * ticket is in its true state too, and the recreated claim is removed. */
 int sl_engine_lease_renew(sl_engine *e, const char *stage, const char *name, sl_ticket *t,
                           sl_error *err)
 {
     if (!lease_held(e, stage, name, t))
         return sl_error_set(err, SL_E_LEASE_LOST, 0, name, "lease lost to another worker");
     sl_engine_stamp_lease(e, t);
-    return sl_queue_put(e->work, stage, SL_STATE_CLAIMED, name, t, err);
+    int rc = sl_queue_put(e->work, stage, SL_STATE_CLAIMED, name, t, err);
+    if (rc == 0 && sl_engine_ticket_elsewhere(e, stage, name)) {
+        char path[PATH_MAX];
+        sl_queue_path(path, sizeof path, e->work, stage, SL_STATE_CLAIMED, name);
+        unlink(path);
+        return sl_error_set(err, SL_E_LEASE_LOST, 0, name,
+                            "lease lost to another worker (finished meanwhile)");
+    }
+    return rc;
 }
 
 int sl_engine_lease_check(sl_engine *e, const char *stage, const char *name,

@@ -71,25 +71,6 @@ static void reclaim_stale(sl_engine *e, int s)
     free(names);
 }
 
-/* Whether ticket `name` of `stage` is also in a state other than claimed. A claimer
- * frozen between its rename and its lease write (SIGSTOP, a Slurm suspend) may wake after
- * another worker reclaimed the ticket, finished it and released it: the late lease write
- * then recreates the claim beside the ticket's true state (seen in test_liveness: the
- * woken run redid a done stage). A ticket is never in two states otherwise: every move
- * is one rename. */
-static int elsewhere(const sl_engine *e, const char *stage, const char *name)
-{
-    static const int others[] = {SL_STATE_READY, SL_STATE_DONE, SL_STATE_FAILED,
-                                 SL_STATE_QUARANTINE};
-    for (size_t k = 0; k < sizeof others / sizeof *others; k++) {
-        char path[PATH_MAX];
-        if (sl_queue_path(path, sizeof path, e->work, stage, others[k], name) == 0 &&
-            access(path, F_OK) == 0)
-            return 1;
-    }
-    return 0;
-}
-
 /* Claims the first ready ticket of stage `s`; 1 claimed, 0 none, <0 error. */
 static int claim_one(sl_engine *e, int s, char *name, size_t name_size, sl_ticket *t,
                      sl_error *err)
@@ -134,7 +115,7 @@ static int claim_one(sl_engine *e, int s, char *name, size_t name_size, sl_ticke
             sl_queue_move(e->work, stage, names[i], SL_STATE_CLAIMED, SL_STATE_READY, &ignored);
             break;
         }
-        if (elsewhere(e, stage, names[i])) {
+        if (sl_engine_ticket_elsewhere(e, stage, names[i])) {
             unlink(path); /* a claim recreated by a late lease write: not ours */
             continue;
         }
