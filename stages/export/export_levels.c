@@ -105,19 +105,37 @@ static int write_files(const sl_export_config *c, const sl_export_level *lv,
     sl_lod_mesh textured = glb_geometry(mesh, baked, &glb);
     static const char *const exts[4] = {"ply", "glb", "obj", "png"};
     const int wanted[4] = {c->write_ply, c->write_glb, c->write_obj, c->thumbnail_size > 0};
-    int rc = 0;
-    for (int i = 0; i < 4 && rc == 0; i++) {
+    int rcs[4] = {0};
+    sl_error errs[4];
+    /* The four files are independent (each its own bytes, the GLB's stats its own), so they
+     * are written as tasks: the GLB's vertex-cache order and the thumbnail were the
+     * export's serial path (a one-thread main loop while the cut ahead ran beside it).
+     * The first failure in file order is reported, whatever finished first. */
+#pragma omp parallel num_threads(omp_in_parallel() ? 1 : omp_get_max_threads())
+#pragma omp single
+    for (int i = 0; i < 4; i++) {
+        sl_error_init(&errs[i]);
         if (!wanted[i])
             continue;
-        char file[sizeof lv->name + 8], path[PATH_MAX];
-        snprintf(file, sizeof file, "%s.%s", lv->name, exts[i]);
-        rc = sl_stage_path(path, io->out_dir, file, err);
-        if (rc == 0)
-            rc = i == 1 ? sl_export_write_mesh(path, &textured, extras, &glb, stats, err)
-                 : i < 3 ? sl_export_write_mesh(path, mesh, extras, &glb, NULL, err)
-                         : sl_export_thumbnail(path, mesh, c->thumbnail_size, glb.z_up, err);
+#pragma omp task firstprivate(i)
+        {
+            char file[sizeof lv->name + 8], path[PATH_MAX];
+            snprintf(file, sizeof file, "%s.%s", lv->name, exts[i]);
+            sl_error *e = &errs[i];
+            int r = sl_stage_path(path, io->out_dir, file, e);
+            if (r == 0)
+                r = i == 1 ? sl_export_write_mesh(path, &textured, extras, &glb, stats, e)
+                    : i < 3 ? sl_export_write_mesh(path, mesh, extras, &glb, NULL, e)
+                            : sl_export_thumbnail(path, mesh, c->thumbnail_size, glb.z_up, e);
+            rcs[i] = r;
+        }
     }
-    return rc;
+    for (int i = 0; i < 4; i++)
+        if (rcs[i]) {
+            *err = errs[i];
+            return rcs[i];
+        }
+    return 0;
 }
 
 /* The GLB's encoding and what quantisation did to it, in the input's units and as
