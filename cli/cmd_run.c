@@ -126,7 +126,8 @@ static int open_engine(const char *command, int argc, char **argv, int open_logs
         return -1;
     }
     sl_engine_options opts = {a.config, a.overrides, a.override_count, command,
-                              a.quiet, a.verbose, open_logs, sl_stage_registry()};
+                              a.quiet, a.verbose, open_logs, sl_stage_registry(),
+                              sl_plan_peak_mb};
     sl_error err;
     sl_error_init(&err);
     if (sl_engine_open(e, &opts, &err) != 0) {

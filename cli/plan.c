@@ -121,6 +121,51 @@ typedef struct plan_state {
     double total_seconds, peak_mb, work_mb, published_mb;
 } plan_state;
 
+/* The item's stages costed from its header: the sum of their times and the largest
+ * peak (and which stage has it, when `peak_stage` is given); each stage into `json` when
+ * it is not NULL. */
+static void stage_costs(const sl_engine_facts *e, const sl_ply_info *info, sl_json *json,
+                        double *seconds, double *peak, const char **peak_stage)
+{
+    int points = info->declared_faces == 0;
+    double n = (double)(points ? info->declared_vertices : info->declared_faces) / 1e6;
+    double tf = thread_factor(e->threads);
+    int fidelity = sl_config_bool(e->cfg, "export", "fidelity");
+    int thumbnails = sl_config_int(e->cfg, "export", "thumbnail_size") > 0;
+    *seconds = *peak = 0;
+    for (int s = 0; s < e->stage_count; s++) {
+        const char *name = e->stages[s]->name;
+        const stage_cost *c = cost_of(e->method, name, fidelity);
+        if (!c)
+            continue; /* a stage the model has not been fitted for: costs nothing here */
+        double t = (c->a + c->b * pow(n, c->e)) * tf, m = c->c + c->d * pow(n, c->f);
+        if (!strcmp(name, "export") && thumbnails)
+            m += IMAGES_MB;
+        *seconds += t;
+        if (m > *peak && peak_stage)
+            *peak_stage = name;
+        *peak = m > *peak ? m : *peak;
+        if (json) {
+            sl_json_object_begin(json, name);
+            sl_json_double(json, "seconds", t);
+            sl_json_double(json, "peak_rss_mb", m);
+            sl_json_object_end(json);
+        }
+    }
+}
+
+double sl_plan_peak_mb(const sl_engine_facts *facts, const char *path, const char **stage)
+{
+    sl_ply_info info;
+    sl_error err;
+    sl_error_init(&err);
+    if (sl_ply_read_info(path, NULL, &info, &err) != 0)
+        return 0; /* the range stage says what is wrong with it */
+    double seconds, peak;
+    stage_costs(facts, &info, NULL, &seconds, &peak, stage);
+    return peak;
+}
+
 static void plan_item(void *ctx, const char *rel, const char *path, const char *unreadable)
 {
     plan_state *p = ctx;
@@ -150,9 +195,6 @@ static void plan_item(void *ctx, const char *rel, const char *path, const char *
     }
     int points = info.declared_faces == 0;
     double n = (double)(points ? info.declared_vertices : info.declared_faces) / 1e6;
-    double tf = thread_factor(e->threads), seconds = 0, peak = 0;
-    int fidelity = sl_config_bool(e->cfg, "export", "fidelity");
-    int thumbnails = sl_config_int(e->cfg, "export", "thumbnail_size") > 0;
     if (p->json) {
         sl_json_object_begin(p->json, NULL);
         sl_json_string(p->json, "item", rel);
@@ -161,23 +203,8 @@ static void plan_item(void *ctx, const char *rel, const char *path, const char *
         sl_json_string(p->json, "basis", points ? "points" : "triangles");
         sl_json_object_begin(p->json, "stages");
     }
-    for (int s = 0; s < e->stage_count; s++) {
-        const char *name = e->stages[s]->name;
-        const stage_cost *c = cost_of(e->method, name, fidelity);
-        if (!c)
-            continue; /* a stage the model has not been fitted for: costs nothing here */
-        double t = (c->a + c->b * pow(n, c->e)) * tf, m = c->c + c->d * pow(n, c->f);
-        if (!strcmp(name, "export") && thumbnails)
-            m += IMAGES_MB;
-        seconds += t;
-        peak = m > peak ? m : peak;
-        if (p->json) {
-            sl_json_object_begin(p->json, name);
-            sl_json_double(p->json, "seconds", t);
-            sl_json_double(p->json, "peak_rss_mb", m);
-            sl_json_object_end(p->json);
-        }
-    }
+    double seconds = 0, peak = 0;
+    stage_costs(e, &info, p->json, &seconds, &peak, NULL);
     double work = work_mb[0] + work_mb[1] * n, published = published_mb[0] + published_mb[1] * n;
     int fits = e->memory_limit_mb <= 0 || peak <= (double)e->memory_limit_mb;
     if (p->json) {

@@ -73,6 +73,8 @@ int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err
     e->logs = sl_config_string(e->cfg, "run", "logs");
     e->threads = (int)sl_config_int(e->cfg, "run", "threads");
     e->memory_limit_mb = sl_config_int(e->cfg, "run", "memory_limit_mb");
+    e->memory_check = sl_config_bool(e->cfg, "run", "memory_check");
+    e->expected_peak_mb = opts->expected_peak_mb;
     e->item_timeout_s = sl_config_int(e->cfg, "run", "item_timeout_s");
     e->lease_seconds = sl_config_int(e->cfg, "queue", "lease_seconds");
     e->max_crashes = (int)sl_config_int(e->cfg, "queue", "max_crashes");

@@ -17,6 +17,7 @@
 
 typedef struct sl_engine sl_engine;
 struct sl_stage;
+struct sl_engine_facts;
 
 typedef struct sl_engine_options {
     const char *config_path;
@@ -29,6 +30,12 @@ typedef struct sl_engine_options {
     /* The stages, in pipeline order, NULL-terminated (the program's registry:
      * stages/registry.h). */
     const struct sl_stage *const *stages;
+    /* Optional: the expected peak RSS in MB of the item at `path` (its largest stage,
+     * named in *stage), 0 when unknown: the pre-flight cost model (cli/plan.c). With it
+     * and `[run] memory_check`, an item expected over the memory budget is not run
+     * (docs/engine.md, "Memory admission"). */
+    double (*expected_peak_mb)(const struct sl_engine_facts *facts, const char *path,
+                               const char **stage);
 } sl_engine_options;
 
 int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err);

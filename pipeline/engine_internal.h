@@ -41,6 +41,9 @@ struct sl_engine {
     const char *input, *work, *output, *logs;
     int threads;
     int64_t memory_limit_mb, item_timeout_s, lease_seconds;
+    int memory_check;        /* [run] memory_check: refuse items expected over the budget */
+    char admission[512];     /* why the last item refused was not run */
+    double (*expected_peak_mb)(const struct sl_engine_facts *, const char *, const char **);
     int64_t scan_mark_expires;    /* this process's scan mark (engine_work.c); 0 = none */
     int max_crashes;
     unsigned method;         /* [lod] method (sl_lod_method bit) */

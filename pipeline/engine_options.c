@@ -19,8 +19,16 @@ static const sl_option run_options[] = {
     {"run", "threads", SL_OPT_INT, "0", 0, 1024, NULL,
      "OpenMP threads per item; 0 = all cores."},
     {"run", "memory_limit_mb", SL_OPT_INT, "0", 0, 1 << 30, NULL,
-     "Address-space limit per item process in MiB (setrlimit); 0 = none. An item over it "
-     "fails as out of memory and is retried on the next run, never quarantined."},
+     "Memory limit per item process in MiB (setrlimit RLIMIT_DATA: the heap and other "
+     "private writable memory, not mapped libraries); 0 = none. An item over it fails as "
+     "out of memory and is retried on the next run, never quarantined. Also the budget of "
+     "memory_check (0: the node's memory, or its cgroup's limit). Allocated memory is at "
+     "least the peak RSS `scanlod plan` predicts: leave 30 % headroom over it."},
+    {"run", "memory_check", SL_OPT_BOOL, "true", 0, 0, NULL,
+     "Before each stage, estimate the item's peak memory from its PLY header (the model of "
+     "`scanlod plan`) and do not run an item expected over the budget (memory_limit_mb, or "
+     "the node's memory): it fails as out of memory at once, with what it needs, instead "
+     "of being killed hours in, every night."},
     {"run", "item_timeout_s", SL_OPT_INT, "0", 0, 30 * 86400, NULL,
      "Wall-time limit of one stage of one item in seconds; 0 = none. A timed-out item counts "
      "as a crash: retried once, then quarantined."},

@@ -9,6 +9,7 @@
  * paths tried and dlerror(); the rest of scanlod (everything but textures, thumbnails
  * and image writing) works without it. */
 #include <dlfcn.h>
+#include <errno.h>
 #include <limits.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -22,6 +23,7 @@ static pthread_once_t load_once = PTHREAD_ONCE_INIT;
 static const sl_oiio_api *api;
 static char module_path[PATH_MAX];
 static char load_error[1024];
+static int load_out_of_memory; /* a candidate failed for want of memory, not of a file */
 
 /* Tries one candidate; 1 when the module is loaded, else appends why not to load_error. */
 static int try_load(const char *path)
@@ -40,7 +42,13 @@ static int try_load(const char *path)
         why = a ? "another module version" : "no " SL_OIIO_MODULE_SYMBOL;
         dlclose(h);
     } else {
+        int saved = errno;
         why = dlerror();
+        /* The loader says "failed to map segment" or "cannot allocate memory" when the
+         * process's memory limit ([run] memory_limit_mb) is reached while mapping. */
+        if (saved == ENOMEM || (why && (strstr(why, "failed to map segment") ||
+                                        strstr(why, "annot allocate memory"))))
+            load_out_of_memory = 1;
     }
     size_t used = strlen(load_error);
     snprintf(load_error + used, sizeof load_error - used, "%s%s (%s)", used ? "; " : "", path,
@@ -76,7 +84,7 @@ static const sl_oiio_api *module(const char *path, sl_error *err)
 {
     pthread_once(&load_once, load);
     if (!api)
-        sl_error_set(err, SL_E_INTERNAL, 0, path,
+        sl_error_set(err, load_out_of_memory ? SL_E_NOMEM : SL_E_INTERNAL, 0, path,
                      "image support unavailable: cannot load the OpenImageIO module "
                      "scanlod-oiio.so: %s", load_error[0] ? load_error : "not found");
     return api;
