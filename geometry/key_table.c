@@ -1,7 +1,8 @@
-/* LSD radix sort on 64-bit keys, 16 bits per pass (see key_table.h). One routine serves
+/* LSD radix sort on 64-bit keys, 16 bits per pass, in parallel slices (see key_table.h). One routine serves
  * bare keys and (key, value) pairs: an element is `size` bytes whose first 8 are the key. */
 #include "geometry/key_table.h"
 
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -15,32 +16,57 @@ static uint64_t key_at(const unsigned char *base, size_t i, size_t size)
     return key;
 }
 
+/* One pass: the elements of src by the 16 bits at `shift`, stably into dst. With several
+ * threads each takes a fixed slice of src: the slices' histograms, prefixed bucket by
+ * bucket and slice by slice, place every element exactly where the one-slice pass would
+ * (a stable order is unique), so the result does not depend on the thread count. */
+static void radix_pass(const unsigned char *src, unsigned char *dst, size_t count, size_t size,
+                       int shift, size_t *histograms, int slices)
+{
+#pragma omp parallel for schedule(static) num_threads(slices)
+    for (int t = 0; t < slices; t++) {
+        size_t *h = histograms + (size_t)t * RADIX;
+        memset(h, 0, RADIX * sizeof *h);
+        for (size_t i = count * (size_t)t / (size_t)slices;
+             i < count * (size_t)(t + 1) / (size_t)slices; i++)
+            h[(key_at(src, i, size) >> shift) & (RADIX - 1)]++;
+    }
+    size_t sum = 0;
+    for (size_t b = 0; b < RADIX; b++)
+        for (int t = 0; t < slices; t++) {
+            size_t c = histograms[(size_t)t * RADIX + b];
+            histograms[(size_t)t * RADIX + b] = sum;
+            sum += c;
+        }
+#pragma omp parallel for schedule(static) num_threads(slices)
+    for (int t = 0; t < slices; t++) {
+        size_t *h = histograms + (size_t)t * RADIX;
+        for (size_t i = count * (size_t)t / (size_t)slices;
+             i < count * (size_t)(t + 1) / (size_t)slices; i++) {
+            size_t to = h[(key_at(src, i, size) >> shift) & (RADIX - 1)]++;
+            memcpy(dst + to * size, src + i * size, size);
+        }
+    }
+}
+
 static int radix_sort(void *data, size_t count, size_t size, int bits)
 {
     if (count < 2)
         return 0;
+    /* A slice per thread, of at least 64 Ki elements (below that the histogram dominates). */
+    int slices = omp_in_parallel() ? 1 : omp_get_max_threads();
+    if ((size_t)slices > count / 65536)
+        slices = count / 65536 > 0 ? (int)(count / 65536) : 1;
     unsigned char *tmp = malloc(count * size);
-    size_t *histogram = malloc(RADIX * sizeof *histogram);
-    if (!tmp || !histogram) {
+    size_t *histograms = malloc((size_t)slices * RADIX * sizeof *histograms);
+    if (!tmp || !histograms) {
         free(tmp);
-        free(histogram);
+        free(histograms);
         return -1;
     }
     unsigned char *src = data, *dst = tmp;
     for (int shift = 0; shift < bits; shift += RADIX_BITS) {
-        memset(histogram, 0, RADIX * sizeof *histogram);
-        for (size_t i = 0; i < count; i++)
-            histogram[(key_at(src, i, size) >> shift) & (RADIX - 1)]++;
-        size_t sum = 0;
-        for (size_t b = 0; b < RADIX; b++) {
-            size_t c = histogram[b];
-            histogram[b] = sum;
-            sum += c;
-        }
-        for (size_t i = 0; i < count; i++) {
-            size_t to = histogram[(key_at(src, i, size) >> shift) & (RADIX - 1)]++;
-            memcpy(dst + to * size, src + i * size, size);
-        }
+        radix_pass(src, dst, count, size, shift, histograms, slices);
         unsigned char *swap = src;
         src = dst;
         dst = swap;
@@ -48,7 +74,7 @@ static int radix_sort(void *data, size_t count, size_t size, int bits)
     if (src != (unsigned char *)data)
         memcpy(data, src, count * size);
     free(tmp);
-    free(histogram);
+    free(histograms);
     return 0;
 }
 

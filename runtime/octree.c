@@ -62,6 +62,7 @@ int sl_octree_index(sl_octree *t)
     t->morton = malloc((t->node_count ? t->node_count : 1) * sizeof *t->morton);
     if (!t->morton)
         return -1;
+#pragma omp parallel for schedule(static)
     for (uint32_t i = 0; i < t->node_count; i++)
         t->morton[i] = sl_morton3((uint32_t)t->nodes[i].x, (uint32_t)t->nodes[i].y,
                                   (uint32_t)t->nodes[i].z);

@@ -129,6 +129,93 @@ int sl_octree_grid_ok(const sl_octree *t)
     return 1;
 }
 
+
+/* Why item i of a table is invalid, or NULL (ctx: the check's own data). */
+typedef const char *(*item_check)(const sl_octree *t, uint64_t i, const void *ctx);
+
+/* The problem of the smallest i in [0, n) that has one, or NULL: the message a serial
+ * loop over the items would give, found by fixed chunks in parallel (reading a 1 M
+ * triangle model spent about half the priority stage checking its octree, on one
+ * thread). */
+static const char *first_problem(const sl_octree *t, uint64_t n, item_check check,
+                                 const void *ctx)
+{
+    enum { CHUNKS = 64 };
+    uint64_t best = UINT64_MAX;
+    const char *why = NULL;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int c = 0; c < CHUNKS; c++)
+        for (uint64_t i = n * (uint64_t)c / CHUNKS; i < n * (uint64_t)(c + 1) / CHUNKS; i++) {
+            const char *w = check(t, i, ctx);
+            if (!w)
+                continue;
+#pragma omp critical(sl_octree_first_problem)
+            if (i < best) {
+                best = i;
+                why = w;
+            }
+            break;
+        }
+    return why;
+}
+
+static const char *node_problem(const sl_octree *t, uint64_t at, const void *ctx)
+{
+    (void)ctx;
+    uint32_t i = (uint32_t)at;
+    const sl_octree_node *n = &t->nodes[i];
+    int kids = __builtin_popcount(n->child_mask);
+    if (n->level > t->depth || i < t->level_first[n->level] ||
+        i >= t->level_first[n->level] + t->level_count[n->level])
+        return "node outside its level's range";
+    if (n->x < 0 || n->y < 0 || n->z < 0 || n->x >= (1 << 20) || n->y >= (1 << 20) ||
+        n->z >= (1 << 20))
+        return "node coordinates out of range";
+    if ((i == 0) != (n->parent == SL_OCTREE_NONE) || (i && n->parent >= i))
+        return "bad parent link";
+    if (kids && (n->level == 0 || n->first_child == SL_OCTREE_NONE ||
+                 n->first_child < t->level_first[n->level - 1] ||
+                 (uint64_t)n->first_child + (uint64_t)kids >
+                     (uint64_t)t->level_first[n->level - 1] + t->level_count[n->level - 1]))
+        return "bad child range";
+    /* Each child names this node as its parent and sits in its octant: child ranges are
+     * then disjoint, and a walk down the tree meets every node once. */
+    for (int j = 0, mask = n->child_mask; mask; mask &= mask - 1, j++) {
+        const sl_octree_node *c = &t->nodes[n->first_child + (uint32_t)j];
+        int o = __builtin_ctz((unsigned)mask);
+        if (c->parent != i || c->x != 2 * n->x + (o & 1) || c->y != 2 * n->y + (o >> 1 & 1) ||
+            c->z != 2 * n->z + (o >> 2))
+            return "child does not belong to its parent";
+    }
+    if (i > t->level_first[n->level] && t->nodes[i - 1].level == n->level &&
+        morton_of(&t->nodes[i - 1]) >= morton_of(n))
+        return "nodes of a level out of Morton order";
+    /* The crossings are exactly the edges whose corners differ in sign: generation looks
+     * up a crossing for every such edge and for no other. */
+    if ((uint64_t)n->crossing_base + (uint64_t)__builtin_popcount(n->edge_mask) >
+            t->node_crossing_count || n->edge_mask != sl_octree_edge_mask(n->inside))
+        return "bad crossing range";
+    return NULL;
+}
+
+static const char *crossing_id_problem(const sl_octree *t, uint64_t i, const void *ctx)
+{
+    (void)ctx;
+    return t->node_crossings[i] >= t->crossing_count ? "crossing id out of range" : NULL;
+}
+
+/* ctx: the root's cube with its slack, lo[3] then hi[3]. */
+static const char *position_problem(const sl_octree *t, uint64_t i, const void *ctx)
+{
+    const double *box = ctx;
+    double v = t->crossing_position[i];
+    if (!isfinite(v))
+        return "non-finite crossing position";
+    if (!(v >= box[i % 3] && v <= box[3 + i % 3]))
+        return "crossing outside the octree's cube";
+    return NULL;
+}
+
 /* Every index in range, levels consistent, the tree a tree: nothing downstream
  * re-checks, so a file with a valid checksum but hostile contents stops here. */
 static int validate(const sl_octree *t, const char *name, sl_error *err)
@@ -147,63 +234,28 @@ static int validate(const sl_octree *t, const char *name, sl_error *err)
     }
     if (sum != t->node_count || t->level_count[t->depth] != 1 || t->level_first[t->depth] != 0)
         return bad(err, name, "level counts do not add up to one root");
+    const char *why = first_problem(t, t->node_count, node_problem, NULL);
+    if (why)
+        return bad(err, name, why);
     uint64_t children = 0;
-    for (uint32_t i = 0; i < t->node_count; i++) {
-        const sl_octree_node *n = &t->nodes[i];
-        int kids = __builtin_popcount(n->child_mask);
-        if (n->level > t->depth || i < t->level_first[n->level] ||
-            i >= t->level_first[n->level] + t->level_count[n->level])
-            return bad(err, name, "node outside its level's range");
-        if (n->x < 0 || n->y < 0 || n->z < 0 || n->x >= (1 << 20) || n->y >= (1 << 20) ||
-            n->z >= (1 << 20))
-            return bad(err, name, "node coordinates out of range");
-        if ((i == 0) != (n->parent == SL_OCTREE_NONE) || (i && n->parent >= i))
-            return bad(err, name, "bad parent link");
-        if (kids && (n->level == 0 || n->first_child == SL_OCTREE_NONE ||
-                     n->first_child < t->level_first[n->level - 1] ||
-                     (uint64_t)n->first_child + (uint64_t)kids >
-                         (uint64_t)t->level_first[n->level - 1] + t->level_count[n->level - 1]))
-            return bad(err, name, "bad child range");
-        /* Each child names this node as its parent and sits in its octant: child ranges
-         * are then disjoint, and a walk down the tree meets every node once. */
-        for (int j = 0, mask = n->child_mask; mask; mask &= mask - 1, j++) {
-            const sl_octree_node *c = &t->nodes[n->first_child + (uint32_t)j];
-            int o = __builtin_ctz((unsigned)mask);
-            if (c->parent != i || c->x != 2 * n->x + (o & 1) || c->y != 2 * n->y + (o >> 1 & 1) ||
-                c->z != 2 * n->z + (o >> 2))
-                return bad(err, name, "child does not belong to its parent");
-        }
-        children += (uint64_t)kids;
-        if (i > t->level_first[n->level] && t->nodes[i - 1].level == n->level &&
-            morton_of(&t->nodes[i - 1]) >= morton_of(n))
-            return bad(err, name, "nodes of a level out of Morton order");
-        /* The crossings are exactly the edges whose corners differ in sign: generation
-         * looks up a crossing for every such edge and for no other. */
-        if ((uint64_t)n->crossing_base + (uint64_t)__builtin_popcount(n->edge_mask) >
-                t->node_crossing_count || n->edge_mask != sl_octree_edge_mask(n->inside))
-            return bad(err, name, "bad crossing range");
-    }
+#pragma omp parallel for schedule(static) reduction(+ : children)
+    for (uint32_t i = 0; i < t->node_count; i++)
+        children += (uint64_t)__builtin_popcount(t->nodes[i].child_mask);
     if (children != (uint64_t)t->node_count - 1)
         return bad(err, name, "nodes outside the tree");
-    for (uint64_t i = 0; i < t->node_crossing_count; i++)
-        if (t->node_crossings[i] >= t->crossing_count)
-            return bad(err, name, "crossing id out of range");
+    if ((why = first_problem(t, t->node_crossing_count, crossing_id_problem, NULL)))
+        return bad(err, name, why);
     /* Crossings lie on cube edges, so inside the root's cube, give or take their rounding
      * to float (a scan far from the origin with a fine grid rounds by more than a leaf). */
-    double lo[3], hi[3];
-    root_cube(t, lo, hi);
+    double box[6];
+    root_cube(t, box, box + 3);
     for (int a = 0; a < 3; a++) {
-        double slack = t->leaf_size + 2 * FLT_EPSILON * fmax(fabs(lo[a]), fabs(hi[a]));
-        lo[a] -= slack;
-        hi[a] += slack;
+        double slack = t->leaf_size + 2 * FLT_EPSILON * fmax(fabs(box[a]), fabs(box[3 + a]));
+        box[a] -= slack;
+        box[3 + a] += slack;
     }
-    for (uint64_t i = 0; i < 3 * (uint64_t)t->crossing_count; i++) {
-        double v = t->crossing_position[i];
-        if (!isfinite(v))
-            return bad(err, name, "non-finite crossing position");
-        if (!(v >= lo[i % 3] && v <= hi[i % 3]))
-            return bad(err, name, "crossing outside the octree's cube");
-    }
+    if ((why = first_problem(t, 3 * (uint64_t)t->crossing_count, position_problem, box)))
+        return bad(err, name, why);
     return 0;
 }
 
@@ -211,36 +263,48 @@ static int validate(const sl_octree *t, const char *name, sl_error *err)
  * for a node without loops; every vertex finite and in its node's cube (give or take
  * float rounding: the normals' scaling relies on it, lod_mesh.c); errors and areas finite
  * and not negative. */
+static const char *vertex_order_problem(const sl_octree *t, uint64_t i, const void *ctx)
+{
+    (void)ctx;
+    return t->vertex_first[i + 1] < t->vertex_first[i] ? "vertex ranges out of order" : NULL;
+}
+
+/* ctx: the uniform loop table. */
+static const char *node_vertices_problem(const sl_octree *t, uint64_t at, const void *ctx)
+{
+    const sl_mc_triangles *table = ctx;
+    uint32_t i = (uint32_t)at;
+    const sl_octree_node *n = &t->nodes[i];
+    uint32_t first = t->vertex_first[i], next = t->vertex_first[i + 1];
+    uint32_t count = next - first, loops = table[n->inside].loops;
+    if (count != 0 && count != (loops ? loops : 1))
+        return "vertex count does not match the node's loops";
+    if (t->node_error && (!isfinite(t->node_error[i]) || !(t->node_error[i] >= 0) ||
+                          !isfinite(t->node_area[i]) || !(t->node_area[i] >= 0)))
+        return "node error or area not finite and positive";
+    double lo[3], hi[3];
+    sl_octree_corner_world(t, n, 0, lo);
+    sl_octree_corner_world(t, n, 7, hi);
+    for (uint32_t v = first; v < next; v++)
+        for (int a = 0; a < 3; a++) {
+            double slack = 2 * FLT_EPSILON * fmax(fabs(lo[a]), fabs(hi[a])) +
+                           1e-6 * (hi[a] - lo[a]);
+            double x = t->vertex_position[3 * (size_t)v + (size_t)a];
+            if (!isfinite(x) || !(x >= lo[a] - slack && x <= hi[a] + slack))
+                return "vertex outside its node's cube";
+        }
+    return NULL;
+}
+
 static int validate_vertices(const sl_octree *t, const char *name, sl_error *err)
 {
-    const sl_mc_triangles *table = sl_dual_uniform_table();
     if (t->vertex_first[0] != 0 || t->vertex_first[t->node_count] != t->vertex_count)
         return bad(err, name, "vertex ranges do not cover the vertex table");
-    for (uint32_t i = 0; i < t->node_count; i++) /* all in order before any is read */
-        if (t->vertex_first[i + 1] < t->vertex_first[i])
-            return bad(err, name, "vertex ranges out of order");
-    for (uint32_t i = 0; i < t->node_count; i++) {
-        const sl_octree_node *n = &t->nodes[i];
-        uint32_t first = t->vertex_first[i], next = t->vertex_first[i + 1];
-        uint32_t count = next - first, loops = table[n->inside].loops;
-        if (count != 0 && count != (loops ? loops : 1))
-            return bad(err, name, "vertex count does not match the node's loops");
-        if (t->node_error && (!isfinite(t->node_error[i]) || !(t->node_error[i] >= 0) ||
-                              !isfinite(t->node_area[i]) || !(t->node_area[i] >= 0)))
-            return bad(err, name, "node error or area not finite and positive");
-        double lo[3], hi[3];
-        sl_octree_corner_world(t, n, 0, lo);
-        sl_octree_corner_world(t, n, 7, hi);
-        for (uint32_t v = first; v < next; v++)
-            for (int a = 0; a < 3; a++) {
-                double slack = 2 * FLT_EPSILON * fmax(fabs(lo[a]), fabs(hi[a])) +
-                               1e-6 * (hi[a] - lo[a]);
-                double x = t->vertex_position[3 * (size_t)v + (size_t)a];
-                if (!isfinite(x) || !(x >= lo[a] - slack && x <= hi[a] + slack))
-                    return bad(err, name, "vertex outside its node's cube");
-            }
-    }
-    return 0;
+    /* All ranges in order before any is read. */
+    const char *why = first_problem(t, t->node_count, vertex_order_problem, NULL);
+    if (!why)
+        why = first_problem(t, t->node_count, node_vertices_problem, sl_dual_uniform_table());
+    return why ? bad(err, name, why) : 0;
 }
 
 static void *copy_out(const unsigned char *src, uint64_t size)
