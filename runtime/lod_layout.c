@@ -164,14 +164,18 @@ int sl_lod_model_localize(sl_lod_model *m)
         free(color);
         return -1;
     }
+    /* new_id is a permutation: every loop below writes each slot once. */
+#pragma omp parallel for schedule(static)
     for (uint32_t i = 0; i < c; i++) {
         memcpy(position + 3 * (size_t)new_id[i], t->crossing_position + 3 * (size_t)i,
                3 * sizeof *position);
         if (color)
             memcpy(color + 4 * (size_t)new_id[i], t->crossing_color + 4 * (size_t)i, 4);
     }
+#pragma omp parallel for schedule(static)
     for (uint64_t i = 0; i < t->node_crossing_count; i++)
         t->node_crossings[i] = new_id[t->node_crossings[i]];
+#pragma omp parallel for schedule(dynamic, 4096)
     for (uint32_t n = 0; n < t->node_count; n++) {
         if (t->nodes[n].level == 0 || m->transitions.base[n] == SL_OCTREE_NONE)
             continue;
