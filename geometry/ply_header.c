@@ -305,9 +305,9 @@ static int handle_property(header_parser *hp)
     if (hp->more || hp->ntok != (is_list ? 5 : 3))
         return herr(hp, SL_E_BADINPUT, is_list ? "needs 'property list COUNT_TYPE TYPE NAME'"
                                                : "needs 'property TYPE NAME'");
-    int type, rc;
+    int type = 0, rc; /* set by parse_type on success (GCC -O3 cannot tell) */
     if (is_list) {
-        int count_type;
+        int count_type = 0;
         if ((rc = parse_type(hp, &hp->tok[2], &count_type)))
             return rc;
         if (count_type == PLY_FLOAT32 || count_type == PLY_FLOAT64)

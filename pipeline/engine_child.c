@@ -209,7 +209,8 @@ static int move_with_reason(sl_engine *e, int s, const char *name, sl_ticket *t,
 {
     const char *stage = e->stages[s]->name;
     snprintf(t->cls, sizeof t->cls, "%s", cls);
-    snprintf(t->reason, sizeof t->reason, "%s", reason);
+    /* The error line, cut to the ticket's field (a long path makes it longer). */
+    snprintf(t->reason, sizeof t->reason, "%.*s", (int)sizeof t->reason - 1, reason);
     if (to == SL_STATE_QUARANTINE)
         e->items_settled++; /* nothing more to do for it until it changes */
     sl_error werr;

@@ -38,8 +38,11 @@ static const struct plyb_type {
 
 static inline const struct plyb_type *plyb_type_of(const char *name)
 {
+    /* Lengths first: GCC -O3 flags strcmp of a 7-character name against a constant
+     * 6-character caller's string (-Wstring-compare), true but harmless. */
+    size_t n = strlen(name);
     for (int i = 0; i < PLYB_NTYPES; i++)
-        if (strcmp(plyb_types[i].name, name) == 0)
+        if (strlen(plyb_types[i].name) == n && memcmp(plyb_types[i].name, name, n) == 0)
             return &plyb_types[i];
     fprintf(stderr, "plyb: unknown type %s\n", name);
     abort();
