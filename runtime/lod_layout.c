@@ -152,25 +152,14 @@ uint32_t *sl_lod_crossing_numbers(const sl_lod_model *m, const uint32_t *order)
 int sl_lod_model_localize(sl_lod_model *m)
 {
     sl_octree *t = &m->tree;
-    uint32_t c = t->crossing_count;
     uint32_t *order = sl_lod_order(m);
     uint32_t *new_id = order ? sl_lod_crossing_numbers(m, order) : NULL;
-    float *position = malloc((c ? c : 1) * 3 * sizeof *position);
-    uint8_t *color = t->crossing_color ? malloc((c ? c : 1) * 4) : NULL;
-    if (!order || !new_id || !position || (t->crossing_color && !color)) {
+    float *position = NULL;
+    uint8_t *color = NULL;
+    if (!order || !new_id || sl_octree_permuted_crossings(t, new_id, &position, &color)) {
         free(order);
         free(new_id);
-        free(position);
-        free(color);
         return -1;
-    }
-    /* new_id is a permutation: every loop below writes each slot once. */
-#pragma omp parallel for schedule(static)
-    for (uint32_t i = 0; i < c; i++) {
-        memcpy(position + 3 * (size_t)new_id[i], t->crossing_position + 3 * (size_t)i,
-               3 * sizeof *position);
-        if (color)
-            memcpy(color + 4 * (size_t)new_id[i], t->crossing_color + 4 * (size_t)i, 4);
     }
 #pragma omp parallel for schedule(static)
     for (uint64_t i = 0; i < t->node_crossing_count; i++)

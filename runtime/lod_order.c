@@ -117,20 +117,14 @@ static int pack_ids(sl_packer *pk, const sl_lod_model *m, const uint32_t *order,
 
 static int pack_crossings(sl_packer *pk, const sl_octree *t, const uint32_t *new_id)
 {
-    uint32_t c = t->crossing_count;
-    float *position = malloc((c ? c : 1) * 12);
-    if (position)
-        for (uint32_t i = 0; i < c; i++)
-            memcpy(position + 3 * (size_t)new_id[i], t->crossing_position + 3 * (size_t)i, 12);
-    if (add_owned(pk, position, (size_t)c * 12, 12))
+    float *position;
+    uint8_t *color;
+    if (sl_octree_permuted_crossings(t, new_id, &position, &color))
         return -1;
-    if (!t->crossing_color)
-        return 0;
-    uint8_t *color = malloc((c ? c : 1) * 4);
+    int rc = add_owned(pk, position, (size_t)t->crossing_count * 12, 12);
     if (color)
-        for (uint32_t i = 0; i < c; i++)
-            memcpy(color + 4 * (size_t)new_id[i], t->crossing_color + 4 * (size_t)i, 4);
-    return add_owned(pk, color, (size_t)c * 4, 4);
+        rc |= add_owned(pk, color, (size_t)t->crossing_count * 4, 4);
+    return rc ? -1 : 0;
 }
 
 static int pack_vertices(sl_packer *pk, const sl_octree *t, const uint32_t *order)

@@ -91,6 +91,29 @@ uint32_t sl_octree_find(const sl_octree *t, uint32_t level, int64_t x, int64_t y
     return SL_OCTREE_NONE;
 }
 
+int sl_octree_permuted_crossings(const sl_octree *t, const uint32_t *new_id, float **position,
+                                 uint8_t **color)
+{
+    uint32_t c = t->crossing_count;
+    float *p = malloc((c ? c : 1) * 3 * sizeof *p);
+    uint8_t *q = t->crossing_color ? malloc((c ? c : 1) * 4) : NULL;
+    if (!p || (t->crossing_color && !q)) {
+        free(p);
+        free(q);
+        return -1;
+    }
+    /* new_id is a permutation: each slot is written once, by one thread. */
+#pragma omp parallel for schedule(static)
+    for (uint32_t i = 0; i < c; i++) {
+        memcpy(p + 3 * (size_t)new_id[i], t->crossing_position + 3 * (size_t)i, 3 * sizeof *p);
+        if (q)
+            memcpy(q + 4 * (size_t)new_id[i], t->crossing_color + 4 * (size_t)i, 4);
+    }
+    *position = p;
+    *color = q;
+    return 0;
+}
+
 void sl_octree_crossing_bounds(const sl_octree *t, float lo[3], float hi[3])
 {
     for (int a = 0; a < 3; a++) {

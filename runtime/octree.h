@@ -97,6 +97,12 @@ void sl_octree_drop_node_metrics(sl_octree *t);
 /* The box of every crossing: lo[3], hi[3] (FLT_MAX and -FLT_MAX when there are none). */
 void sl_octree_crossing_bounds(const sl_octree *t, float lo[3], float hi[3]);
 
+/* The crossings renumbered by the permutation new_id (crossing i goes to new_id[i]):
+ * fresh arrays in *position and, when the tree has colours, *color (else NULL). 0, or -1
+ * when out of memory (nothing allocated). The model's layout and its writer both need it. */
+int sl_octree_permuted_crossings(const sl_octree *t, const uint32_t *new_id, float **position,
+                                 uint8_t **color);
+
 /* Crossing id of edge e of node n (edge_mask must have bit e). */
 static inline uint32_t sl_octree_crossing(const sl_octree *t, const sl_octree_node *n, int e)
 {
