@@ -69,13 +69,8 @@ int sl_octree_index(sl_octree *t)
     return 0;
 }
 
-uint32_t sl_octree_find(const sl_octree *t, uint32_t level, int64_t x, int64_t y, int64_t z)
+uint32_t sl_octree_search(const sl_octree *t, uint32_t lo, uint32_t hi, uint64_t key)
 {
-    if (level > t->depth || x < 0 || y < 0 || z < 0 || x >= (1 << 20) || y >= (1 << 20) ||
-        z >= (1 << 20))
-        return SL_OCTREE_NONE;
-    uint64_t key = sl_morton3((uint32_t)x, (uint32_t)y, (uint32_t)z);
-    uint32_t lo = t->level_first[level], hi = lo + t->level_count[level];
     while (lo < hi) {
         uint32_t mid = lo + (hi - lo) / 2;
         const sl_octree_node *n = &t->nodes[mid];
@@ -89,6 +84,16 @@ uint32_t sl_octree_find(const sl_octree *t, uint32_t level, int64_t x, int64_t y
             hi = mid;
     }
     return SL_OCTREE_NONE;
+}
+
+uint32_t sl_octree_find(const sl_octree *t, uint32_t level, int64_t x, int64_t y, int64_t z)
+{
+    if (level > t->depth || x < 0 || y < 0 || z < 0 || x >= (1 << 20) || y >= (1 << 20) ||
+        z >= (1 << 20))
+        return SL_OCTREE_NONE;
+    uint64_t key = sl_morton3((uint32_t)x, (uint32_t)y, (uint32_t)z);
+    return sl_octree_search(t, t->level_first[level], t->level_first[level] + t->level_count[level],
+                            key);
 }
 
 int sl_octree_permuted_crossings(const sl_octree *t, const uint32_t *new_id, float **position,

@@ -117,6 +117,10 @@ void sl_octree_corner_world(const sl_octree *t, const sl_octree_node *n, int c, 
  * Morton order: O(log n). */
 uint32_t sl_octree_find(const sl_octree *t, uint32_t level, int64_t x, int64_t y, int64_t z);
 
+/* Index of the node with Morton key `key` among nodes [lo, hi) of one level, or
+ * SL_OCTREE_NONE: the binary search behind sl_octree_find, for a run of a level (a brick). */
+uint32_t sl_octree_search(const sl_octree *t, uint32_t lo, uint32_t hi, uint64_t key);
+
 /* Derives the per-node Morton keys that make sl_octree_find fast (called by the
  * builder and the readers; -1 when out of memory). */
 int sl_octree_index(sl_octree *t);

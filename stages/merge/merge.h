@@ -63,10 +63,18 @@ typedef struct sl_surface {
                                open scan: no surface across its holes) */
 } sl_surface;
 
+/* The level of the vertex bricks' roots the merge stage uses: a brick (the subtree under
+ * one node of that level) is 64 leaf cubes wide, holds about 10^4 leaves of a smooth
+ * surface and repeats the cutting of the few triangles across its faces. */
+#define SL_VERTEX_BRICK_LEVEL 6u
+
 /* Dual vertices of every node from the quadrics of `s` (octree_vertices.c; octree.h
  * "Vertices"): fills vertex_first, vertex_position, vertex_color (when the tree has
- * colours and `s` has), node_error and node_area. `tau`: sl_qef_solve's truncation.
- * Deterministic whatever the thread count. */
-int sl_octree_vertices(sl_octree *t, const sl_surface *s, double tau, sl_error *err);
+ * colours and `s` has), node_error and node_area. `tau`: sl_qef_solve's truncation. The
+ * levels below `brick_level` are built brick by brick (a brick: the subtree under one node
+ * of that level; clamped to 1 .. the root's level). Byte-identical whatever the brick
+ * level and the thread count. */
+int sl_octree_vertices(sl_octree *t, const sl_surface *s, double tau, uint32_t brick_level,
+                       sl_error *err);
 
 #endif

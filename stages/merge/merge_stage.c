@@ -117,7 +117,7 @@ static int place_vertices(const sl_merge_config *c, const sl_stage_io *io, sl_oc
     if (rc == 0)
         rc = sl_stage_step(io, "merge: vertices", 0.8, err);
     if (rc == 0)
-        rc = sl_octree_vertices(tree, &s, c->qef_tau, err);
+        rc = sl_octree_vertices(tree, &s, c->qef_tau, SL_VERTEX_BRICK_LEVEL, err);
     if (rc == 0)
         sl_json_bool(io->report, "trimmed_open_surface", open);
     sl_pointset_release(&ps);

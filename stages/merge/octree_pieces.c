@@ -2,34 +2,52 @@
  * has the method): each triangle is split at its edge midpoints until it spans at most two
  * cubes per axis, then clipped to each; each piece's plane, weighted by its area, goes
  * into the quadric of the loop of its leaf nearest to it. A point of a cloud is a piece
- * of its own: its tangent plane, weighted by the area a point stands for. */
-#include <errno.h>
+ * of its own: its tangent plane, weighted by the area a point stands for. One brick at a
+ * time (octree_bricks.c): the pieces outside the brick's leaves are dropped, the others
+ * summed as they are made, in item order. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "stages/merge/vertices_internal.h"
 
-typedef struct piece {
-    uint32_t slot;          /* leaf vertex slot, or UINT32_MAX for none */
-    double w, point[3], n[3], rgba[4];
-} piece;
-
-static int nomem(sl_error *err)
-{
-    return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory placing vertices");
-}
-
 typedef struct cutter {
     const sl_octree *t;
-    const level_slots *leaves;
+    level_slots *leaves;    /* the brick's leaves: pieces elsewhere are another brick's */
     double n[3];            /* the triangle's unit normal */
     double corner_rgba[3][4];
     int coloured;
     double tri[3][3];       /* the original triangle, grid units (for colour barycentrics) */
-    piece *out;             /* NULL: count only */
-    uint64_t count;
 } cutter;
+
+/* The brick's leaf at cube (x, y, z), or UINT32_MAX: a binary search in the brick's run of
+ * the leaves' Morton order. */
+static uint32_t brick_leaf(const cutter *c, int64_t x, int64_t y, int64_t z)
+{
+    if (x < 0 || y < 0 || z < 0 || x >= (1 << 20) || y >= (1 << 20) || z >= (1 << 20))
+        return UINT32_MAX;
+    uint64_t key = sl_morton3((uint32_t)x, (uint32_t)y, (uint32_t)z);
+    const uint64_t *m = c->t->morton;
+    uint32_t lo = c->leaves->node0, hi = lo + c->leaves->nodes;
+    if (lo == hi || (m && (key < m[lo] || key > m[hi - 1])))
+        return UINT32_MAX; /* another brick's: no search */
+    uint32_t leaf = sl_octree_search(c->t, lo, hi, key);
+    return leaf == SL_OCTREE_NONE ? UINT32_MAX : leaf;
+}
+
+/* A piece's plane (unit normal n through `point`, grid units from its leaf's corner),
+ * weighted by w, into the quadric of the leaf's loop nearest to it. */
+static void add_piece(const cutter *c, uint32_t leaf, const double point[3], const double n[3],
+                      double w, const double rgba[4])
+{
+    level_slots *ls = c->leaves;
+    uint32_t slot = ls->first[leaf - ls->node0] +
+                    (uint32_t)sl_vertices_nearest_loop(c->t, &c->t->nodes[leaf], point);
+    sl_qef_add_plane(&ls->qef[slot], n, point, w);
+    if (c->coloured)
+        for (int i = 0; i < 4; i++)
+            ls->color[4 * (size_t)slot + (size_t)i] += w * rgba[i];
+}
 
 static int clip(double in[][3], int n, double out[][3], int axis, double v, int keep_below)
 {
@@ -95,28 +113,17 @@ static void emit_piece(cutter *c, int64_t x, int64_t y, int64_t z, double poly[]
     }
     if (!(area > 0))
         return;
-    if (!c->out) {
-        c->count++;
-        return;
-    }
-    piece *p = &c->out[c->count++];
-    for (int a = 0; a < 3; a++)
+    uint32_t leaf = brick_leaf(c, x, y, z);
+    if (leaf == UINT32_MAX)
+        return; /* outside the sampled band (no cell draws it), or another brick's */
+    double corner[3] = {(double)x, (double)y, (double)z}, point[3], rgba[4] = {0, 0, 0, 0};
+    for (int a = 0; a < 3; a++) {
         cen[a] /= area;
-    p->w = area;
-    memcpy(p->n, c->n, sizeof p->n);
-    p->slot = UINT32_MAX;
-    memset(p->rgba, 0, sizeof p->rgba);
+        point[a] = cen[a] - corner[a];
+    }
     if (c->coloured)
-        piece_color(c, cen, p->rgba);
-    uint32_t leaf = sl_octree_find(c->t, 0, x, y, z);
-    if (leaf == SL_OCTREE_NONE)
-        return; /* outside the sampled band: no cell draws it */
-    double corner[3] = {(double)x, (double)y, (double)z};
-    for (int a = 0; a < 3; a++)
-        p->point[a] = cen[a] - corner[a];
-    const level_slots *ls = c->leaves;
-    uint32_t i = leaf - ls->node0;
-    p->slot = ls->first[i] + (uint32_t)sl_vertices_nearest_loop(c->t, &c->t->nodes[leaf], p->point);
+        piece_color(c, cen, rgba);
+    add_piece(c, leaf, point, c->n, area, rgba);
 }
 
 /* Splits a triangle until it spans at most two cubes per axis, then clips it to them. */
@@ -208,95 +215,31 @@ static void point_piece(cutter *c, const sl_surface *s, uint64_t i)
         n[a] = s->normals[3 * i + (uint64_t)a];
     }
     double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    if (!(len > 0) || !isfinite(len))
+    if (!(len > 0) || !isfinite(len) || !isfinite(p[0] + p[1] + p[2]))
         return;
-    if (!c->out) {
-        c->count++;
-        return;
-    }
-    piece *q = &c->out[c->count++];
-    int64_t cube[3];
+    double cube[3], point[3], unit[3], rgba[4];
     for (int a = 0; a < 3; a++) {
-        cube[a] = (int64_t)floor(p[a]);
-        q->n[a] = n[a] / len;
+        cube[a] = fmax(-1, fmin(floor(p[a]), 1 << 20)); /* out of range: no leaf */
+        point[a] = p[a] - cube[a];
+        unit[a] = n[a] / len;
     }
-    q->w = s->point_area / (t->leaf_size * t->leaf_size);
-    q->slot = UINT32_MAX;
-    for (int k = 0; k < 4; k++)
-        q->rgba[k] = c->coloured ? s->colors[4 * i + (uint64_t)k] : 0;
-    uint32_t leaf = sl_octree_find(t, 0, cube[0], cube[1], cube[2]);
-    if (leaf == SL_OCTREE_NONE)
+    uint32_t leaf = brick_leaf(c, (int64_t)cube[0], (int64_t)cube[1], (int64_t)cube[2]);
+    if (leaf == UINT32_MAX)
         return;
-    for (int a = 0; a < 3; a++)
-        q->point[a] = p[a] - (double)cube[a];
-    q->slot = c->leaves->first[leaf - c->leaves->node0] +
-              (uint32_t)sl_vertices_nearest_loop(t, &t->nodes[leaf], q->point);
+    for (int k = 0; k < 4; k++)
+        rgba[k] = c->coloured ? s->colors[4 * i + (uint64_t)k] : 0;
+    add_piece(c, leaf, point, unit, s->point_area / (t->leaf_size * t->leaf_size), rgba);
 }
 
-static void item_pieces(cutter *c, const sl_surface *s, uint64_t i)
+void sl_vertices_leaf_quadrics(const sl_octree *t, const sl_surface *s, level_slots *leaves,
+                               const uint32_t *items, uint64_t count)
 {
-    if (s->triangle_count)
-        triangle_pieces(c, s, i);
-    else
-        point_piece(c, s, i);
-}
-
-/* Pieces made at once (96 bytes each): the pieces of the whole input (a few per triangle,
- * many for triangles far larger than the leaf) were the larger part of a qef run's extra
- * peak memory (docs/lod.md, Vertices from quadrics). */
-#define PIECE_CHUNK 65536
-
-/* The leaves' quadrics: pieces counted per item, then made in parallel, about PIECE_CHUNK
- * at a time (whole items), into per-item slots and summed in item order (the same sums in
- * the same order as all at once). */
-int sl_vertices_leaf_quadrics(const sl_octree *t, const sl_surface *s, level_slots *leaves,
-                              sl_error *err)
-{
-    uint64_t items = s->triangle_count ? s->triangle_count : s->point_count, capacity = 0;
-    uint64_t *start = malloc((items + 1) * sizeof *start);
-    piece *pieces = NULL;
-    if (!start)
-        return nomem(err);
-    int coloured = s->colors && t->crossing_color;
-#pragma omp parallel for schedule(dynamic, 1024)
-    for (uint64_t i = 0; i < items; i++) {
-        cutter c = {t, leaves, {0, 0, 0}, {{0}}, coloured, {{0}}, NULL, 0};
-        item_pieces(&c, s, i);
-        start[i + 1] = c.count;
+    cutter c = {t, leaves, {0, 0, 0}, {{0}}, s->colors && t->crossing_color, {{0}}};
+    for (uint64_t k = 0; k < count; k++) {
+        uint64_t i = items ? items[k] : k;
+        if (s->triangle_count)
+            triangle_pieces(&c, s, i);
+        else
+            point_piece(&c, s, i);
     }
-    start[0] = 0;
-    for (uint64_t i = 0; i < items; i++)
-        start[i + 1] += start[i];
-    for (uint64_t from = 0, to; from < items; from = to) {
-        for (to = from + 1; to < items && start[to + 1] - start[from] <= PIECE_CHUNK; to++)
-            ;
-        uint64_t n = start[to] - start[from];
-        if (n > capacity) {
-            free(pieces);
-            capacity = n;
-            pieces = malloc(capacity * sizeof *pieces);
-            if (!pieces) {
-                free(start);
-                return nomem(err);
-            }
-        }
-#pragma omp parallel for schedule(dynamic, 256)
-        for (uint64_t i = from; i < to; i++) {
-            cutter c = {t, leaves, {0, 0, 0}, {{0}}, coloured, {{0}},
-                        pieces + (start[i] - start[from]), 0};
-            item_pieces(&c, s, i);
-        }
-        for (uint64_t k = 0; k < n; k++) {
-            const piece *p = &pieces[k];
-            if (p->slot == UINT32_MAX)
-                continue;
-            sl_qef_add_plane(&leaves->qef[p->slot], p->n, p->point, p->w);
-            if (coloured)
-                for (int i = 0; i < 4; i++)
-                    leaves->color[4 * (size_t)p->slot + (size_t)i] += p->w * p->rgba[i];
-        }
-    }
-    free(pieces);
-    free(start);
-    return 0;
 }

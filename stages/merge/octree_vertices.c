@@ -19,8 +19,12 @@
  *
  * Units: quadrics live in leaf-grid units relative to their node's corner (numbers of
  * order one whatever the scan's coordinates), converted to world units on output.
- * Determinism: pieces are made in parallel into per-triangle slots and summed in triangle
- * order; each parent sums its children in octant order.
+ * Memory: the levels below the vertex bricks' (SL_VERTEX_BRICK_LEVEL) are built one brick
+ * (subtree) at a time per thread, so the leaves' quadrics, 112 bytes a slot and the largest
+ * table of the merge, are never held for the whole tree (docs/bricks.md).
+ * Determinism: each leaf sums its pieces in item order (a brick's items are ascending),
+ * each parent its children in octant order: the same sums whatever the brick level and the
+ * thread count.
  */
 #include <errno.h>
 #include <float.h>
@@ -93,11 +97,12 @@ int sl_vertices_nearest_loop(const sl_octree *t, const sl_octree_node *n, const 
 
 /* ---- levels -------------------------------------------------------------------------- */
 
-static int slots_init(const sl_octree *t, uint32_t level, level_slots *ls)
+/* Slots for the run of `count` nodes from `node0` (one level's, or a brick's part of it). */
+static int slots_init(const sl_octree *t, uint32_t node0, uint32_t count, level_slots *ls)
 {
     memset(ls, 0, sizeof *ls);
-    ls->node0 = t->level_first[level];
-    ls->nodes = t->level_count[level];
+    ls->node0 = node0;
+    ls->nodes = count;
     ls->first = malloc(((size_t)ls->nodes + 1) * sizeof *ls->first);
     if (!ls->first)
         return -1;
@@ -155,10 +160,10 @@ static void gather_children(const sl_octree *t, const level_slots *child, level_
     }
 }
 
-/* Solves the level's vertices. */
-static void solve_level(const sl_octree *t, level_slots *ls, double tau)
+/* Solves the run's vertices (in parallel when `parallel`: not inside a brick). */
+static void solve_level(const sl_octree *t, level_slots *ls, double tau, int parallel)
 {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (parallel)
     for (uint32_t i = 0; i < ls->nodes; i++) {
         double size = (double)(1u << t->nodes[ls->node0 + i].level);
         const double lo[3] = {0, 0, 0}, hi[3] = {size, size, size};
@@ -181,10 +186,10 @@ typedef struct all_slots {
 
 /* The level's solved slots into `all` (world units). A loop that stands for no surface
  * sits at its crossings' centroid. */
-static void store_level(const sl_octree *t, const level_slots *ls, all_slots *all)
+static void store_level(const sl_octree *t, const level_slots *ls, all_slots *all, int parallel)
 {
     double leaf = t->leaf_size, leaf2 = leaf * leaf;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (parallel)
     for (uint32_t i = 0; i < ls->nodes; i++) {
         uint32_t node = ls->node0 + i;
         const sl_octree_node *n = &t->nodes[node];
@@ -221,32 +226,94 @@ static void store_level(const sl_octree *t, const level_slots *ls, all_slots *al
     }
 }
 
-static int run_levels(const sl_octree *t, const sl_surface *s, double tau, all_slots *all,
-                      sl_error *err)
+/* Brick k's levels below the bricks' (vertices_internal.h), bottom-up: the leaves'
+ * quadrics from the brick's items, each parent's from its children; then the brick's root,
+ * a slot run of `top` (the bricks' level), gathers its children. A brick's nodes at each
+ * level are a run of that level's order, from its first node's first child to its last
+ * node's last. Serial: the bricks run in parallel. */
+static int run_brick(const sl_octree *t, const sl_surface *s, const vertex_bricks *vb,
+                     uint32_t k, double tau, level_slots *top, all_slots *all)
 {
+    uint32_t root = t->level_first[vb->level] + k, lo = root, hi = root + 1;
+    uint32_t first[SL_OCTREE_MAX_LEVELS], count[SL_OCTREE_MAX_LEVELS];
+    for (uint32_t l = vb->level; l-- > 0;) {
+        const sl_octree_node *a = &t->nodes[lo], *z = &t->nodes[hi - 1];
+        lo = a->first_child;
+        hi = z->first_child + (uint32_t)__builtin_popcount(z->child_mask);
+        first[l] = lo;
+        count[l] = hi - lo;
+    }
+    level_slots child, cur;
+    memset(&child, 0, sizeof child);
+    int rc = 0;
+    for (uint32_t l = 0; l < vb->level && rc == 0; l++) {
+        if (slots_init(t, first[l], count[l], &cur)) {
+            slots_release(&cur);
+            rc = -1;
+            break;
+        }
+        if (l == 0)
+            sl_vertices_leaf_quadrics(t, s, &cur, vb->item + vb->item_first[k],
+                                      vb->item_first[k + 1] - vb->item_first[k]);
+        else
+            for (uint32_t i = 0; i < cur.nodes; i++)
+                gather_children(t, &child, &cur, cur.node0 + i);
+        solve_level(t, &cur, tau, 0);
+        store_level(t, &cur, all, 0);
+        slots_release(&child);
+        child = cur;
+    }
+    if (rc == 0)
+        gather_children(t, &child, top, root);
+    slots_release(&child);
+    return rc;
+}
+
+/* Every level's vertices: the levels below the bricks' brick by brick (one brick's slots
+ * per thread at a time, not a level's), the rest level by level. */
+static int run_levels(const sl_octree *t, const sl_surface *s, double tau, uint32_t brick_level,
+                      all_slots *all, sl_error *err)
+{
+    uint32_t b = sl_vertex_brick_level(t, brick_level);
     level_slots child, cur;
     memset(&child, 0, sizeof child);
     memset(&cur, 0, sizeof cur);
+    if (slots_init(t, t->level_first[b], t->level_count[b], &cur)) {
+        slots_release(&cur);
+        return nomem(err);
+    }
     int rc = 0;
-    for (uint32_t level = 0; level <= t->depth && rc == 0; level++) {
-        if (slots_init(t, level, &cur)) {
-            rc = nomem(err);
-            break;
+    if (b == 0) { /* one node: a brick of its own */
+        sl_vertices_leaf_quadrics(t, s, &cur, NULL,
+                                  s->triangle_count ? s->triangle_count : s->point_count);
+    } else {
+        vertex_bricks vb;
+        rc = sl_vertex_bricks_bin(t, s, b, &vb, err);
+        int failed = 0;
+        if (rc == 0) {
+#pragma omp parallel for schedule(dynamic, 1) reduction(| : failed)
+            for (uint32_t k = 0; k < vb.count; k++)
+                failed |= run_brick(t, s, &vb, k, tau, &cur, all) != 0;
+            if (failed)
+                rc = nomem(err);
         }
-        if (level == 0) {
-            rc = sl_vertices_leaf_quadrics(t, s, &cur, err);
-        } else {
+        sl_vertex_bricks_release(&vb);
+    }
+    for (uint32_t level = b; rc == 0; level++) {
+        if (level > b) {
 #pragma omp parallel for schedule(dynamic, 256)
             for (uint32_t i = 0; i < cur.nodes; i++)
                 gather_children(t, &child, &cur, cur.node0 + i);
         }
-        if (rc == 0) {
-            solve_level(t, &cur, tau);
-            store_level(t, &cur, all);
-        }
+        solve_level(t, &cur, tau, 1);
+        store_level(t, &cur, all, 1);
         slots_release(&child);
         child = cur;
         memset(&cur, 0, sizeof cur);
+        if (level == t->depth)
+            break;
+        if (slots_init(t, t->level_first[level + 1], t->level_count[level + 1], &cur))
+            rc = nomem(err);
     }
     slots_release(&child);
     slots_release(&cur);
@@ -323,7 +390,8 @@ static void drop_output(sl_octree *t)
     t->vertex_count = 0;
 }
 
-int sl_octree_vertices(sl_octree *t, const sl_surface *s, double tau, sl_error *err)
+int sl_octree_vertices(sl_octree *t, const sl_surface *s, double tau, uint32_t brick_level,
+                       sl_error *err)
 {
     drop_output(t);
     if (s->triangle_count == 0 && !s->normals)
@@ -348,7 +416,7 @@ int sl_octree_vertices(sl_octree *t, const sl_surface *s, double tau, sl_error *
             rc = nomem(err);
     }
     if (rc == 0)
-        rc = run_levels(t, s, tau, &all, err);
+        rc = run_levels(t, s, tau, brick_level, &all, err);
     if (rc == 0 && write_output(t, &all, s->open))
         rc = nomem(err);
     free(all.first);

@@ -26,8 +26,29 @@ void sl_vertices_crossing_local(const sl_octree *t, uint32_t id, const double co
                                 double p[3]);
 int sl_vertices_nearest_loop(const sl_octree *t, const sl_octree_node *n, const double p[3]);
 
-/* The leaves' quadrics from the input surface (octree_pieces.c). */
-int sl_vertices_leaf_quadrics(const sl_octree *t, const sl_surface *s, level_slots *leaves,
-                              sl_error *err);
+/* The quadrics of the leaves in `leaves` (a run of level 0) from the input's items (its
+ * triangles, or the points of a cloud) items[0 .. count), or 0 .. count when items is
+ * NULL: their pieces in other leaves are dropped (octree_pieces.c). Serial: a brick is
+ * one thread's. */
+void sl_vertices_leaf_quadrics(const sl_octree *t, const sl_surface *s, level_slots *leaves,
+                               const uint32_t *items, uint64_t count);
+
+/* The vertex bricks (octree_bricks.c): the subtrees under the nodes of one level, brick k
+ * under node level_first[level] + k; its items (triangles, or points of a cloud) are
+ * those whose box meets its cube, ascending: item[item_first[k] .. item_first[k + 1]). */
+typedef struct vertex_bricks {
+    uint32_t level;
+    uint32_t count;
+    uint64_t *item_first;   /* count + 1 */
+    uint32_t *item;
+} vertex_bricks;
+
+/* The level of the bricks' roots for a wanted one: within 1 .. the root's level (0 for a
+ * tree of one node). */
+uint32_t sl_vertex_brick_level(const sl_octree *t, uint32_t wanted);
+/* Bins s's items to the bricks of `level` (>= 1; needs t->morton). Deterministic. */
+int sl_vertex_bricks_bin(const sl_octree *t, const sl_surface *s, uint32_t level,
+                         vertex_bricks *out, sl_error *err);
+void sl_vertex_bricks_release(vertex_bricks *b);
 
 #endif

@@ -90,13 +90,13 @@ static int build_model(sdf_fn sdf, int n, sl_priority_metric metric, sl_lod_mode
         sl_surface surface = {leaves.vertex_count, leaves.positions, NULL, NULL,
                               leaves.triangle_count, leaves.indices, 0, 0};
         omp_set_num_threads(1);
-        rc = rc || sl_octree_vertices(&m->tree, &surface, 0.02, &err);
+        rc = rc || sl_octree_vertices(&m->tree, &surface, 0.02, SL_VERTEX_BRICK_LEVEL, &err);
         uint32_t vertices_one = m->tree.vertex_count;
         float *one = malloc((vertices_one ? vertices_one : 1) * 12);
         if (!rc)
             memcpy(one, m->tree.vertex_position, vertices_one * 12);
         omp_set_num_threads(2);
-        rc = rc || sl_octree_vertices(&m->tree, &surface, 0.02, &err);
+        rc = rc || sl_octree_vertices(&m->tree, &surface, 0.02, SL_VERTEX_BRICK_LEVEL, &err);
         CHECK_MSG(rc || (vertices_one == m->tree.vertex_count &&
                          memcmp(one, m->tree.vertex_position, vertices_one * 12) == 0),
                   "the vertices differ between 1 and 2 threads");
