@@ -259,6 +259,12 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
         }
         sl_json_object_end(io->report);
     }
+    /* Past here the input's surface is read only to measure the levels or to bake its
+     * texture: otherwise it goes now, not after the levels (at 20 M triangles a mesh of
+     * 360 MB was held beside the model and the two levels in flight for nothing). */
+    uint64_t input_triangles = input.triangle_count;
+    if (!measure && !texture.input)
+        sl_mesh_release(&input);
     if (list_dir) {
         rc = sl_export_level_list(c, list_method, list_dir, sl_stage_dir(io, "range"),
                                   measure ? &input : NULL, &frame,
@@ -267,7 +273,7 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
         rc = sl_link_or_copy(model_path, published, err);
         if (rc == 0)
             rc = sl_export_levels(c, &model, measure ? &input : NULL,
-                                  c->cap_at_input && have_input ? input.triangle_count : 0, &frame,
+                                  c->cap_at_input && have_input ? input_triangles : 0, &frame,
                                   texture.input ? &texture : NULL, io, err);
     }
     sl_export_texture_close(&texture);
