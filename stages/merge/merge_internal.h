@@ -29,7 +29,8 @@ typedef struct crossing_table {
 } crossing_table;
 
 typedef struct build_state {
-    const sl_sample_grid *samples;
+    const sl_sample_grid *samples; /* its arrays are gone once the leaves are built */
+    int coloured;                  /* the samples have colours */
     int64_t shift[3];     /* added to sample coords to make them >= 0 */
     double origin[3];     /* world of shifted vertex (0,0,0) */
     crossing_table crossings;

@@ -124,6 +124,11 @@ static int place_vertices(const sl_merge_config *c, const sl_stage_io *io, sl_oc
     return rc;
 }
 
+static void release_samples(void *samples)
+{
+    sl_vdb_samples_release(samples);
+}
+
 static int merge_run(const void *config, const sl_stage_io *io, sl_error *err)
 {
     const sl_merge_config *c = config;
@@ -141,7 +146,7 @@ static int merge_run(const void *config, const sl_stage_io *io, sl_error *err)
                            samples.voxel_size,
                            {samples.origin[0], samples.origin[1], samples.origin[2]}};
     sl_octree tree;
-    rc = sl_octree_build(&grid, &tree, io->progress, err);
+    rc = sl_octree_build_releasing(&grid, release_samples, &samples, &tree, io->progress, err);
     sl_vdb_samples_release(&samples);
     if (rc)
         return rc;

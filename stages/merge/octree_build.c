@@ -54,7 +54,7 @@ int crossings_reserve(build_state *b, uint32_t extra)
     if (!p)
         return nomem(b);
     c->position = p;
-    if (b->samples->colors) {
+    if (b->coloured) {
         uint8_t *col = realloc(c->color, (size_t)cap * 4);
         if (!col)
             return nomem(b);
@@ -360,9 +360,29 @@ static int build_parent(build_state *b, const level_tables *child, level_tables 
 
 /* ---- assembly: levels root-first into one node array ------------------------------ */
 
+/* Level l's node i as the octree's node `at`, its crossings from `cross` on. */
+static uint64_t place_node(sl_octree *out, const level_tables *lt, uint32_t l, size_t i,
+                           uint32_t at, uint64_t cross)
+{
+    sl_octree_node *n = &out->nodes[at];
+    *n = lt->nodes[i];
+    n->level = (uint8_t)l;
+    n->parent = SL_OCTREE_NONE;
+    n->first_child = SL_OCTREE_NONE;
+    n->crossing_base = (uint32_t)cross;
+    for (int e = 0; e < 12; e++)
+        if (n->edge_mask >> e & 1)
+            out->node_crossings[cross++] = lt->ncross[12 * i + (size_t)e];
+    return cross;
+}
+
+/* The levels into one octree, the root's level first. The leaves, three quarters of the
+ * nodes, become the tail of the node and crossing arrays in place: their tables are grown
+ * into the octree's (realloc, then moved up) instead of copied beside them, which was the
+ * merge's peak (every level's tables and the whole octree at once). */
 static int assemble(build_state *b, level_tables *levels, uint32_t depth, sl_octree *out)
 {
-    uint64_t total = 0, crossings = 0;
+    uint64_t total = 0, crossings = 0, leaf_crossings = 0;
     for (uint32_t l = 0; l <= depth; l++) {
         total += levels[l].ncount;
         for (size_t i = 0; i < levels[l].ncount; i++)
@@ -370,31 +390,57 @@ static int assemble(build_state *b, level_tables *levels, uint32_t depth, sl_oct
     }
     if (total >= UINT32_MAX)
         return sl_error_set(b->err, SL_E_LIMIT, 0, NULL, "more than 2^32 octree nodes");
-    out->nodes = malloc((size_t)total * sizeof *out->nodes);
-    out->node_crossings = malloc((size_t)(crossings ? crossings : 1) * sizeof *out->node_crossings);
-    if (!out->nodes || !out->node_crossings)
+    level_tables *leaves = &levels[0];
+    /* The leaves' crossings packed to the front of their own table (each node's edges in
+     * order: a write never passes the read), then the table grown to hold every level's. */
+    for (size_t i = 0; i < leaves->ncount; i++)
+        for (int e = 0; e < 12; e++)
+            if (leaves->nodes[i].edge_mask >> e & 1)
+                leaves->ncross[leaf_crossings++] = leaves->ncross[12 * i + (size_t)e];
+    uint32_t n0 = (uint32_t)leaves->ncount;
+    uint64_t upper = total - n0, upper_crossings = crossings - leaf_crossings;
+    sl_octree_node *nodes = realloc(leaves->nodes, (size_t)(total ? total : 1) * sizeof *nodes);
+    if (nodes)
+        leaves->nodes = nodes;
+    uint32_t *node_crossings =
+        realloc(leaves->ncross, (size_t)(crossings ? crossings : 1) * sizeof *node_crossings);
+    if (node_crossings)
+        leaves->ncross = node_crossings;
+    if (!nodes || !node_crossings)
         return nomem(b);
+    memmove(nodes + upper, nodes, (size_t)n0 * sizeof *nodes);
+    memmove(node_crossings + upper_crossings, node_crossings,
+            (size_t)leaf_crossings * sizeof *node_crossings);
+    leaves->nodes = NULL; /* the octree's now */
+    leaves->ncross = NULL;
+    out->nodes = nodes;
+    out->node_crossings = node_crossings;
     out->node_count = (uint32_t)total;
     out->node_crossing_count = crossings;
     out->depth = depth;
     uint32_t next = 0;
     uint64_t cross = 0;
-    for (int32_t l = (int32_t)depth; l >= 0; l--) {
+    for (int32_t l = (int32_t)depth; l >= 1; l--) {
         level_tables *lt = &levels[l];
         out->level_first[l] = next;
         out->level_count[l] = (uint32_t)lt->ncount;
-        for (size_t i = 0; i < lt->ncount; i++) {
-            sl_octree_node *n = &out->nodes[next + i];
-            *n = lt->nodes[i];
-            n->level = (uint8_t)l;
-            n->parent = SL_OCTREE_NONE;
-            n->first_child = SL_OCTREE_NONE;
-            n->crossing_base = (uint32_t)cross;
-            for (int e = 0; e < 12; e++)
-                if (n->edge_mask >> e & 1)
-                    out->node_crossings[cross++] = lt->ncross[12 * i + (size_t)e];
-        }
+        for (size_t i = 0; i < lt->ncount; i++)
+            cross = place_node(out, lt, (uint32_t)l, i, next + (uint32_t)i, cross);
         next += (uint32_t)lt->ncount;
+        free(lt->nodes);
+        free(lt->ncross);
+        lt->nodes = NULL;
+        lt->ncross = NULL;
+    }
+    out->level_first[0] = next;
+    out->level_count[0] = n0;
+    for (uint32_t i = 0; i < n0; i++) { /* the leaves, in place */
+        sl_octree_node *n = &out->nodes[next + i];
+        n->level = 0;
+        n->parent = SL_OCTREE_NONE;
+        n->first_child = SL_OCTREE_NONE;
+        n->crossing_base = (uint32_t)cross;
+        cross += (uint64_t)__builtin_popcount(n->edge_mask);
     }
     /* Children of level l + 1 nodes are the level-l nodes, in the same Morton order. */
     for (uint32_t l = 1; l <= depth; l++) {
@@ -462,16 +508,25 @@ static int no_surface(const build_state *b, const level_tables *leaves)
 int sl_octree_build(const sl_sample_grid *samples, sl_octree *out, sl_progress *progress,
                     sl_error *err)
 {
+    return sl_octree_build_releasing(samples, NULL, NULL, out, progress, err);
+}
+
+int sl_octree_build_releasing(const sl_sample_grid *samples, void (*release)(void *owner),
+                              void *owner, sl_octree *out, sl_progress *progress, sl_error *err)
+{
     sl_octree_init(out);
     build_state b;
     memset(&b, 0, sizeof b);
     b.samples = samples;
+    b.coloured = samples->colors != NULL;
     b.err = err;
     level_tables levels[SL_OCTREE_MAX_LEVELS];
     memset(levels, 0, sizeof levels);
     int rc = check_samples(&b);
     if (rc == 0)
         rc = build_leaves(&b, &levels[0]);
+    if (release) /* the parents read only the level below them */
+        release(owner);
     if (rc == 0 && levels[0].ncount == 0)
         rc = sl_error_set(err, SL_E_BADINPUT, 0, NULL,
                           "no leaf cube has all 8 corners sampled: the samples are too sparse");
