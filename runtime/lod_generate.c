@@ -40,6 +40,27 @@ void sl_lod_model_release(sl_lod_model *m)
     sl_lod_model_init(m);
 }
 
+void sl_lod_model_drop_layout(sl_lod_model *m)
+{
+    free(m->expansion_index);
+    sl_mesh_scratch_release(&m->scratch);
+    free(m->split_drawings);
+    free(m->frontier_end);
+    free(m->cells);
+    free(m->split_words);
+    free(m->surface_before);
+    free(m->cell_node);
+    free(m->dual_position);
+    free(m->dual_color);
+    m->expansion_index = m->split_drawings = m->frontier_end = m->split_words = NULL;
+    m->surface_before = m->cell_node = NULL;
+    m->cells = NULL;
+    m->dual_position = NULL;
+    m->dual_color = NULL;
+    m->split_drawing_words = 0;
+    m->dual_count = 0;
+}
+
 typedef struct record_view {
     uint32_t mid_known, mid_inside, centre_known, centre_inside, half_mask, spoke_mask;
     const uint32_t *ids;

@@ -170,6 +170,11 @@ uint32_t *sl_lod_crossing_numbers(const sl_lod_model *m, const uint32_t *order);
  * memory. */
 int sl_lod_surface_counts(const sl_lod_model *m, uint32_t *out);
 void sl_lod_model_release(sl_lod_model *m);
+/* Frees what sl_lod_model_prepare derived (the cell layout, split lists and their
+ * drawings, the dual vertex table, the expansion index, the builder's scratch): what the
+ * writer never reads. The crack stage's model, prepared for its triangle counts, goes
+ * without them while it is packed; a model needs sl_lod_model_prepare again to be cut. */
+void sl_lod_model_drop_layout(sl_lod_model *m);
 /* Works out the drawing of every state of every split list (each distinct configuration
  * triangulated once); part of sl_lod_model_prepare. Returns -1 when out of memory. */
 int sl_lod_draw_states(sl_lod_model *m);
