@@ -59,15 +59,16 @@ typedef struct stage_cost {
  * stopped holding the samples and a copy of the leaves (docs/bricks.md; growth benchmark
  * 2026-12-05: 194 / 813 / 3,065 MB at 1, 5 and 20 M; time x 0.8, the build after against
  * the build before on one machine: 0.75 / 0.73 / 0.96 at 1 / 5 / 20 M), and the crack's
- * memory when it dropped the node metrics and its layout early (251 / 1,230 / 4,828 MB).
- * Refit with scripts/bench/plan_calibrate.py. */
+ * memory when it dropped the node metrics and its layout early (251 / 1,230 / 4,828 MB);
+ * their constants c set again to rocker_arm's peaks without thumbnails (merge 24, crack
+ * 23 MB; 3 runs). Refit with scripts/bench/plan_calibrate.py. */
 #define IMAGES_MB 110.0
 static const stage_cost mesh_costs[] = {
     {"range", 0.014, 0.403, 1.081, 5, 94, 0.95},
     {"samples", 0.105, 2.42, 1.047, 15, 133, 0.95},
-    {"merge", 0.078, 2.34, 1.13, 27, 167, 0.963},
+    {"merge", 0.078, 2.34, 1.13, 20, 167, 0.963},
     {"priority", 0.107, 0.65, 1.14, 7, 164, 1.0},
-    {"crack", 0.117, 3.7, 1.04, 27, 230, 1.0},
+    {"crack", 0.117, 3.7, 1.04, 18, 230, 1.0},
     {"export", 0.3, 4.05, 1.062, 8, 287, 0.95},
     {"export+fidelity", 2.5, 5.5, 1.062, 8, 287, 0.95},
     /* The segment and cluster methods: plan_calibrate.py at 30k, 100k and 200k triangles on
