@@ -23,18 +23,9 @@ void sl_lod_model_release(sl_lod_model *m)
 {
     sl_octree_release(&m->tree);
     free(m->lod_array);
-    free(m->expansion_index);
     free(m->accumulation);
     free(m->error_after);
-    sl_mesh_scratch_release(&m->scratch);
-    free(m->split_drawings);
-    free(m->frontier_end);
-    free(m->cells);
-    free(m->split_words);
-    free(m->surface_before);
-    free(m->cell_node);
-    free(m->dual_position);
-    free(m->dual_color);
+    sl_lod_model_drop_layout(m);
     sl_neighbours_release(&m->neighbours);
     sl_transitions_release(&m->transitions);
     sl_lod_model_init(m);
