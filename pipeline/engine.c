@@ -77,6 +77,7 @@ int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err
     e->expected_peak_mb = opts->expected_peak_mb;
     e->item_timeout_s = sl_config_int(e->cfg, "run", "item_timeout_s");
     e->lease_seconds = sl_config_int(e->cfg, "queue", "lease_seconds");
+    e->part_mb = sl_config_double(e->cfg, "queue", "part_mb");
     e->max_crashes = (int)sl_config_int(e->cfg, "queue", "max_crashes");
     rc = choose_method(e, opts->stages, err);
     sl_identity_self(&e->self);

@@ -35,7 +35,6 @@
 #include "core/io.h"
 #include "core/json.h"
 #include "core/log.h"
-#include "core/memory.h"
 #include "core/progress.h"
 
 typedef struct child_result {
@@ -70,10 +69,20 @@ static void write_all(int fd, const void *data, size_t size)
     }
 }
 
-static int run_stage_in_child(sl_engine *e, int s, const char *item, const char *source,
-                              const char *in_dir, const char *out_dir, shared_progress *sp,
+/* The work of a claim: which stage of which item, and which part of it (part -1: the
+ * whole stage, or the join of its `parts` parts when parts > 1). */
+typedef struct claim_work {
+    int s;
+    const char *item, *source, *in_dir, *out_dir;
+    int part, parts;
+} claim_work;
+
+static int run_stage_in_child(sl_engine *e, const claim_work *w, shared_progress *sp,
                               sl_error *err)
 {
+    int s = w->s;
+    const char *item = w->item, *source = w->source, *in_dir = w->in_dir;
+    const char *out_dir = w->out_dir;
     /* Every earlier stage's artifact directory, for stages that read more than the
      * previous one (the key chain covers them all). */
     static char dirs[SL_MAX_STAGES][PATH_MAX];
@@ -99,9 +108,21 @@ static int run_stage_in_child(sl_engine *e, int s, const char *item, const char 
     progress.report = report_to_parent;
     progress.ctx = sp;
     progress.interrupt_flag = sl_interrupt_flag();
-    sl_stage_io io = {item,     source,    in_dir, out_dir, &report,
-                      &progress, omp_get_max_threads(), upstream};
-    rc = stage->run(stage_config, &io, err);
+    sl_stage_io io = {.item = item, .source_path = source, .in_dir = in_dir,
+                      .out_dir = out_dir, .report = &report, .progress = &progress,
+                      .threads = omp_get_max_threads(), .upstream = upstream};
+    char **part_dirs = NULL;
+    if (w->parts > 1) {
+        io.part = w->part;
+        io.parts = w->parts;
+        if (w->part < 0 && !(part_dirs = sl_engine_part_dirs(e, s, ticket, w->parts)))
+            rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+        io.part_dirs = (const char *const *)part_dirs;
+    }
+    if (rc == 0)
+        rc = w->part >= 0 ? stage->run_part(stage_config, &io, err)
+                          : stage->run(stage_config, &io, err);
+    free(part_dirs);
     sl_json_object_end(&report);
     if (rc == 0 && report.failed)
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "report too large");
@@ -116,9 +137,8 @@ static int run_stage_in_child(sl_engine *e, int s, const char *item, const char 
     return rc;
 }
 
-static void child_main(sl_engine *e, int s, const char *item, const char *source,
-                       const char *in_dir, const char *out_dir, shared_progress *sp,
-                       int result_fd, pid_t parent)
+static void child_main(sl_engine *e, const claim_work *w, shared_progress *sp, int result_fd,
+                       pid_t parent)
 {
     prctl(PR_SET_PDEATHSIG, SIGKILL);
     if (getppid() != parent)
@@ -138,7 +158,7 @@ static void child_main(sl_engine *e, int s, const char *item, const char *source
     child_result result;
     memset(&result, 0, sizeof result);
     sl_error_init(&result.err);
-    int rc = run_stage_in_child(e, s, item, source, in_dir, out_dir, sp, &result.err);
+    int rc = run_stage_in_child(e, w, sp, &result.err);
     if (rc && result.err.code == SL_OK)
         sl_error_set(&result.err, rc, 0, NULL, "%s", sl_strerror(rc));
     struct rusage ru;
@@ -242,11 +262,15 @@ static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, s
         char stats[256];
         int n = snprintf(stats, sizeof stats,
                          "{\"seconds\":%.3f,\"cpu_seconds\":%.3f,\"peak_rss_kb\":%ld,"
-                         "\"threads\":%d}\n",
+                         "\"threads\":%d",
                          o->seconds, o->result.cpu_seconds, o->result.max_rss_kb,
                          e->threads > 0 ? e->threads : omp_get_num_procs());
+        /* A join's timings carry its parts' (their folders go once it is committed). */
+        char *text = sl_engine_parts_stats(e, s, name, stats, (size_t)n);
         sl_engine_path(path, sizeof path, "%s/_stats.json", staged);
-        rc = sl_write_file_atomic(path, stats, (size_t)n, err);
+        rc = text ? sl_write_file_atomic(path, text, strlen(text), err)
+                  : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
+        free(text);
     }
     if (rc == 0) {
         sl_engine_path(path, sizeof path, "%s/%s", staged, SL_RECORD_FILE);
@@ -285,7 +309,10 @@ static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, s
 static int release_done(sl_engine *e, int s, const char *name, const sl_ticket *t,
                         int *released, sl_error *err)
 {
-    int rc = advance(e, s + 1, t, err);
+    /* A part's next step is its own stage's: the join, once every part is committed. */
+    char ticket[SL_TICKET_NAME_MAX + 1];
+    int part, is_part = sl_part_parse(name, ticket, sizeof ticket, &part);
+    int rc = advance(e, is_part ? s : s + 1, t, err);
     sl_error merr;
     sl_error_init(&merr);
     int moved = sl_queue_move(e->work, e->stages[s]->name, name, SL_STATE_CLAIMED,
@@ -392,54 +419,14 @@ static int advance(sl_engine *e, int from, const sl_ticket *t, sl_error *err)
     return 0;
 }
 
-static int item_paths(sl_engine *e, int s, const char *name, const sl_ticket *t, char *source,
-                      char *in_dir, char *out_dir, sl_error *err)
+static int item_paths(sl_engine *e, int s, const char *name, const char *ticket,
+                      const sl_ticket *t, char *source, char *in_dir, char *out_dir,
+                      sl_error *err)
 {
     if (sl_engine_path(source, PATH_MAX, "%s/%s", e->input, t->source) ||
         sl_artifact_dir(e, s, name, out_dir, PATH_MAX) ||
-        (s > 0 && sl_artifact_dir(e, s - 1, name, in_dir, PATH_MAX)))
+        (s > 0 && sl_artifact_dir(e, s - 1, ticket, in_dir, PATH_MAX)))
         return sl_error_set(err, SL_E_LIMIT, 0, t->source, "path too long");
-    return 0;
-}
-
-/* The private folder a claim's stage process writes into: a hidden sibling of the
- * artifact folder named after its writer (`.TICKET.stage.HOST.PID`, which gc removes once
- * that pid is gone), swapped in by commit_success. */
-static int staged_path(const sl_engine *e, const char *out_dir, char *buf, sl_error *err)
-{
-    const char *slash = strrchr(out_dir, '/');
-    int dir_len = slash ? (int)(slash - out_dir) : 0;
-    const char *base = slash ? slash + 1 : out_dir;
-    if (sl_engine_path(buf, PATH_MAX, "%.*s/.%.100s.stage.%s.%ld", dir_len, out_dir, base,
-                       e->self.host, e->self.pid))
-        return sl_error_set(err, SL_E_LIMIT, 0, out_dir, "path too long");
-    return 0;
-}
-
-/* Memory admission (docs/engine.md): an item whose expected peak (the plan's cost model,
- * from its header) is over the budget -- [run] memory_limit_mb, or else what this node
- * or its cgroup has -- is not run: it would be killed for memory hours in, and again on
- * every later run. Says why once and leaves the reason in e->admission; 1 = run it. */
-static int admitted(sl_engine *e, int s, const sl_ticket *t, const char *source)
-{
-    if (!e->memory_check || !e->expected_peak_mb)
-        return 1;
-    char what[64] = "[run] memory_limit_mb";
-    uint64_t budget = e->memory_limit_mb > 0 ? (uint64_t)e->memory_limit_mb
-                                             : sl_memory_available_mb(what, sizeof what);
-    sl_engine_facts facts;
-    sl_engine_facts_of(e, &facts);
-    const char *peak_stage = "?";
-    double need = e->expected_peak_mb(&facts, source, &peak_stage);
-    if (budget == 0 || need <= (double)budget)
-        return 1;
-    e->counts.transient++;
-    snprintf(e->admission, sizeof e->admission,
-             "not run: expected to need about %.0f MB (its %s stage; `scanlod plan`), over "
-             "the %llu MB of %s; raise [run] memory_limit_mb, run it on a larger node, or "
-             "set [run] memory_check = false",
-             need, peak_stage, (unsigned long long)budget, what);
-    SL_LOG(SL_LOG_ERROR, e->stages[s]->name, t->item, "%s", e->admission);
     return 0;
 }
 
@@ -447,7 +434,12 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
 {
     const sl_stage *stage = e->stages[s];
     char source[PATH_MAX], in_dir[PATH_MAX] = "", out_dir[PATH_MAX], record[PATH_MAX];
-    int rc = item_paths(e, s, name, t, source, in_dir, out_dir, err);
+    /* A part's claim (docs/engine.md, "Parts") reads the item's upstream like its join. */
+    char ticket[SL_TICKET_NAME_MAX + 1];
+    int part = -1;
+    if (!sl_part_parse(name, ticket, sizeof ticket, &part))
+        snprintf(ticket, sizeof ticket, "%s", name);
+    int rc = item_paths(e, s, name, ticket, t, source, in_dir, out_dir, err);
     if (rc)
         return move_with_reason(e, s, name, t, SL_STATE_QUARANTINE, "badinput", err->message, err);
 
@@ -456,7 +448,11 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
     sl_hash upstream;
     sl_error uerr;
     sl_error_init(&uerr);
-    rc = sl_upstream_chain(e, name, t->source, s, 1, &upstream, &uerr);
+    rc = sl_upstream_chain(e, ticket, t->source, s, 1, &upstream, &uerr);
+    sl_hash key = sl_stage_key(stage->name, stage->version, e->config_hash[s], upstream);
+    int parts = sl_engine_parts(e, s, t->source);
+    if (rc == 0 && !sl_engine_parts_ready(e, s, ticket, part, parts, &key))
+        rc = SL_E_CORRUPT; /* a stale part, or a join whose parts are not all committed */
     if (rc) {
         char path[PATH_MAX];
         sl_queue_path(path, sizeof path, e->work, stage->name, SL_STATE_CLAIMED, name);
@@ -467,7 +463,6 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         }
         return advance(e, s, t, err);
     }
-    sl_hash key = sl_stage_key(stage->name, stage->version, e->config_hash[s], upstream);
     sl_engine_path(record, sizeof record, "%s/%s", out_dir, SL_RECORD_FILE);
     sl_error verr;
     sl_error_init(&verr);
@@ -489,7 +484,7 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
             sl_log_event("stage_done", stage->name, t->item, -1, NULL, "\"adopted\":true");
         return rc;
     }
-    if (!admitted(e, s, t, source))
+    if (!sl_engine_admitted(e, s, t, source))
         return move_with_reason(e, s, name, t, SL_STATE_FAILED, "memory", e->admission, err);
     /* The claim is fenced by its lease right before the artifact folder is emptied: an
      * owner frozen since it claimed (SIGSTOP, a Slurm suspend, an NFS stall) whose claim
@@ -504,7 +499,7 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         return 0;
     }
     char staged[PATH_MAX];
-    rc = staged_path(e, out_dir, staged, err);
+    rc = sl_engine_staged_path(e, out_dir, staged, err);
     if (rc == 0)
         rc = sl_mkdirs(staged, err);
     if (rc == 0)
@@ -517,7 +512,11 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         return rc;
     }
 
-    SL_LOG(SL_LOG_INFO, stage->name, t->item, "start (attempt %d)", t->attempt);
+    if (part >= 0)
+        SL_LOG(SL_LOG_INFO, stage->name, t->item, "start part %d of %d (attempt %d)", part + 1,
+               parts, t->attempt);
+    else
+        SL_LOG(SL_LOG_INFO, stage->name, t->item, "start (attempt %d)", t->attempt);
     shared_progress *sp = mmap(NULL, sizeof *sp, PROT_READ | PROT_WRITE,
                                MAP_SHARED | MAP_ANONYMOUS, -1, 0);
     int fds[2];
@@ -532,7 +531,8 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
     pid_t pid = fork();
     if (pid == 0) {
         close(fds[0]);
-        child_main(e, s, t->item, source, s > 0 ? in_dir : NULL, staged, sp, fds[1], parent);
+        claim_work w = {s, t->item, source, s > 0 ? in_dir : NULL, staged, part, parts};
+        child_main(e, &w, sp, fds[1], parent);
     }
     close(fds[1]);
     if (pid < 0) {
@@ -568,10 +568,15 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
             /* Said only by the owner that moved the claim to done: an owner that lost
              * its lease after the commit (the record is the same either way) is silent,
              * so the log shows each stage done once. */
+            if (part < 0 && parts > 1)
+                sl_engine_parts_remove(e, s, ticket, parts); /* joined: no longer read */
             if (released) {
                 char extra[160];
                 snprintf(extra, sizeof extra, "\"cpu_seconds\":%.3f,\"peak_rss_kb\":%ld",
                          outcome.result.cpu_seconds, outcome.result.max_rss_kb);
+                if (part >= 0)
+                    snprintf(extra + strlen(extra), sizeof extra - strlen(extra),
+                             ",\"part\":%d,\"parts\":%d", part, parts);
                 sl_log_event("stage_done", stage->name, t->item, outcome.seconds, NULL, extra);
                 SL_LOG(SL_LOG_INFO, stage->name, t->item, "done in %.2f s, peak RSS %ld MiB",
                        outcome.seconds, outcome.result.max_rss_kb / 1024);

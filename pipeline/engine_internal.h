@@ -41,6 +41,7 @@ struct sl_engine {
     const char *input, *work, *output, *logs;
     int threads;
     int64_t memory_limit_mb, item_timeout_s, lease_seconds;
+    double part_mb;          /* [queue] part_mb: input MB per part of a splittable stage */
     int memory_check;        /* [run] memory_check: refuse items expected over the budget */
     char admission[512];     /* why the last item refused was not run */
     double (*expected_peak_mb)(const struct sl_engine_facts *, const char *, const char **);
@@ -131,6 +132,52 @@ void sl_ticket_for(sl_ticket *t, const char *item, const char *source_rel, sl_ha
 int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
                         int *settled, sl_error *err); /* settled (may be NULL): 1 when the
                                                          item needs nothing more */
+
+/* engine_parts.c: one item's stage split into parts (docs/engine.md, "Parts"). A part's
+ * ticket and artifact folder are the item's ticket name + "#part-NNNN"; its key is the
+ * stage key chained with (part, parts). */
+#define SL_PART_SUFFIX "#part-"
+#define SL_PARTS_MAX 1024
+/* How many parts stage s of the item splits into: 0 when it is not split (the stage has
+ * no run_part, [queue] part_mb is 0, or the input is at most one part's size). */
+int sl_engine_parts(const sl_engine *e, int s, const char *source_rel);
+int sl_part_name(const char *ticket, int part, char *out, size_t size);
+/* 1 and the item's ticket name and the part's index when `name` names a part, else 0. */
+int sl_part_parse(const char *name, char *ticket, size_t size, int *part);
+sl_hash sl_part_key(sl_hash stage_key, int part, int parts);
+/* Brings stage s's parts of the item in line with `key` (each part's record checked, a
+ * ready ticket for every part that is neither done, claimed nor quarantined under its
+ * key). *all_done: every part is committed; *quarantined: some part is quarantined. */
+int sl_engine_reconcile_parts(sl_engine *e, int s, const char *item, const char *source_rel,
+                              const char *ticket, sl_hash key, int parts, int *all_done,
+                              int *quarantined, sl_error *err);
+/* Whether claim `part` (-1: the join) of stage s may run now, with *key turned into the
+ * part's key: a part must be one of the item's current `parts`, a join needs every part
+ * committed. 0: drop the claim and reconcile the item. */
+int sl_engine_parts_ready(const sl_engine *e, int s, const char *ticket, int part, int parts,
+                          sl_hash *key);
+/* The parts' artifact folders, in order (one malloc'd block; NULL when out of memory). */
+char **sl_engine_part_dirs(const sl_engine *e, int s, const char *ticket, int parts);
+/* The text of a claim's _stats.json: `head` (an open JSON object), then for the join of a
+ * split stage its parts' own stats (`"parts":[...]`), then "}\n"; malloc'd, NULL when
+ * out of memory. `name` is the claim's ticket name. */
+char *sl_engine_parts_stats(const sl_engine *e, int s, const char *name, const char *head,
+                            size_t head_size);
+/* Removes the parts' artifact folders and done tickets once their join is committed
+ * (best effort: leftovers are only disk). */
+void sl_engine_parts_remove(sl_engine *e, int s, const char *ticket, int parts);
+/* engine_reconcile.c: a ticket `name` of `stage` for `key` in ready unless it is claimed,
+ * already ready under that key, or quarantined under it (then *quarantined = 1). */
+int sl_engine_ensure_ready(sl_engine *e, const char *stage, const char *name, const char *item,
+                           const char *source_rel, sl_hash key, int *quarantined,
+                           sl_error *err);
+
+/* engine_admission.c: 1 when the item's expected peak memory for stage s fits the budget;
+ * else 0, with the reason logged and left in e->admission (docs/engine.md). */
+int sl_engine_admitted(sl_engine *e, int s, const sl_ticket *t, const char *source);
+/* engine_layout.c: the private folder a claim's stage process writes into, a hidden
+ * sibling of `out_dir` named after this process (SL_E_LIMIT when too long). */
+int sl_engine_staged_path(const sl_engine *e, const char *out_dir, char *buf, sl_error *err);
 
 /* engine_child.c: runs stage `s` for the claimed ticket; moves the ticket on. */
 int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_error *err);

@@ -191,3 +191,17 @@ int sl_engine_check_writable(sl_engine *e, sl_error *err)
         rc = probe_writable(e, "output", e->output, err);
     return rc;
 }
+
+/* The private folder a claim's stage process writes into: a hidden sibling of the
+ * artifact folder named after its writer (`.TICKET.stage.HOST.PID`, which gc removes once
+ * that pid is gone), swapped in by commit_success. */
+int sl_engine_staged_path(const sl_engine *e, const char *out_dir, char *buf, sl_error *err)
+{
+    const char *slash = strrchr(out_dir, '/');
+    int dir_len = slash ? (int)(slash - out_dir) : 0;
+    const char *base = slash ? slash + 1 : out_dir;
+    if (sl_engine_path(buf, PATH_MAX, "%.*s/.%.100s.stage.%s.%ld", dir_len, out_dir, base,
+                       e->self.host, e->self.pid))
+        return sl_error_set(err, SL_E_LIMIT, 0, out_dir, "path too long");
+    return 0;
+}

@@ -55,6 +55,12 @@ static const sl_option queue_options[] = {
     {"queue", "max_crashes", SL_OPT_INT, "2", 1, 100, NULL,
      "Crashes of our own code (segfault, abort, timeout) an item may cause before it is "
      "quarantined and flagged as a bug."},
+    {"queue", "part_mb", SL_OPT_DOUBLE, "0", 0, 1 << 30, NULL,
+     "Split a stage that can be split (today the samples stage) into work items of about "
+     "this many MB of input PLY each, claimed, leased and committed like items, so that "
+     "workers on many nodes share one large scan and a killed worker redoes only its part; "
+     "the joined result is byte-identical to the unsplit one. 0 = never split (one process "
+     "per item and stage)."},
     SL_OPTION_END,
 };
 

@@ -39,6 +39,37 @@ static int requeue(sl_engine *e, const char *stage, const char *name, int from, 
     return rc == SL_E_BUSY ? 0 : rc;
 }
 
+int sl_engine_ensure_ready(sl_engine *e, const char *stage, const char *name, const char *item,
+                           const char *source_rel, sl_hash key, int *quarantined,
+                           sl_error *err)
+{
+    sl_ticket t;
+    int state = sl_queue_find(e->work, stage, name);
+    if (state == SL_STATE_CLAIMED)
+        return 0; /* a worker holds it; its lease decides */
+    if (state == SL_STATE_NONE) {
+        sl_ticket_for(&t, item, source_rel, key);
+        return sl_queue_put(e->work, stage, SL_STATE_READY, name, &t, err);
+    }
+    char ticket_path[PATH_MAX];
+    sl_queue_path(ticket_path, sizeof ticket_path, e->work, stage, state, name);
+    sl_error terr;
+    sl_error_init(&terr);
+    if (sl_ticket_read(ticket_path, &t, &terr) != 0)
+        sl_ticket_for(&t, item, source_rel, key); /* torn ticket: start over */
+    char key_hex[SL_HASH_HEX_SIZE];
+    sl_hash_hex(key, key_hex);
+    int same_key = strcmp(t.key, key_hex) == 0;
+    snprintf(t.source, sizeof t.source, "%s", source_rel);
+    if (state == SL_STATE_QUARANTINE && same_key) {
+        *quarantined = 1;
+        return 0; /* stays quarantined until its input, config or code changes */
+    }
+    if (state == SL_STATE_READY && same_key)
+        return 0;
+    return requeue(e, stage, name, state, &t, key, !same_key || state == SL_STATE_DONE, err);
+}
+
 int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
                         int *settled, sl_error *err)
 {
@@ -83,27 +114,21 @@ int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, 
             upstream = sl_chain_hash(upstream, rec.outputs_digest);
             continue;
         }
-        if (state == SL_STATE_NONE) {
-            sl_ticket_for(&t, item, source_rel, key);
-            return sl_queue_put(e->work, stage, SL_STATE_READY, name, &t, err);
+        int parts = sl_engine_parts(e, s, source_rel), quarantined = 0;
+        if (parts > 1) { /* the join's ticket waits until every part is committed */
+            int all_done = 0;
+            rc = sl_engine_reconcile_parts(e, s, item, source_rel, name, key, parts,
+                                           &all_done, &quarantined, err);
+            if (rc || !all_done) {
+                if (quarantined && settled)
+                    *settled = 1;
+                return rc;
+            }
         }
-        sl_queue_path(ticket_path, sizeof ticket_path, e->work, stage, state, name);
-        sl_error terr;
-        sl_error_init(&terr);
-        if (sl_ticket_read(ticket_path, &t, &terr) != 0)
-            sl_ticket_for(&t, item, source_rel, key); /* torn ticket: start over */
-        char key_hex[SL_HASH_HEX_SIZE];
-        sl_hash_hex(key, key_hex);
-        int same_key = strcmp(t.key, key_hex) == 0;
-        snprintf(t.source, sizeof t.source, "%s", source_rel);
-        if (state == SL_STATE_QUARANTINE && same_key) {
-            if (settled)
-                *settled = 1;
-            return 0; /* stays quarantined until its input, config or code changes */
-        }
-        if (state == SL_STATE_READY && same_key)
-            return 0;
-        return requeue(e, stage, name, state, &t, key, !same_key || state == SL_STATE_DONE, err);
+        rc = sl_engine_ensure_ready(e, stage, name, item, source_rel, key, &quarantined, err);
+        if (quarantined && settled)
+            *settled = 1;
+        return rc;
     }
     if (sl_engine_publish_valid(e, item, name)) {
         if (settled)

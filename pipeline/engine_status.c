@@ -126,12 +126,17 @@ int sl_engine_status(sl_engine *e, FILE *out, sl_error *err)
                 sl_ticket t;
                 if (sl_queue_get(e->work, e->stages[s]->name, listed[l], names[i], &t) != 0)
                     continue;
+                char ticket[SL_TICKET_NAME_MAX + 1], part_label[32] = "";
+                int part;
+                if (sl_part_parse(names[i], ticket, sizeof ticket, &part))
+                    snprintf(part_label, sizeof part_label, " part %d", part + 1);
                 if (listed[l] == SL_STATE_CLAIMED)
-                    fprintf(out, "%s %s: claimed by %s pid %ld%s%s, lease epoch %llu\n",
-                            e->stages[s]->name, t.item, t.host, t.pid, t.job[0] ? " job " : "",
-                            t.job, (unsigned long long)t.epoch);
+                    fprintf(out, "%s %s%s: claimed by %s pid %ld%s%s, lease epoch %llu\n",
+                            e->stages[s]->name, t.item, part_label, t.host, t.pid,
+                            t.job[0] ? " job " : "", t.job, (unsigned long long)t.epoch);
                 else
-                    fprintf(out, "%s %s: %s (%s): %s%s\n", e->stages[s]->name, t.item,
+                    fprintf(out, "%s %s%s: %s (%s): %s%s\n", e->stages[s]->name, t.item,
+                            part_label,
                             sl_queue_state_name(listed[l]), t.cls, t.reason,
                             listed[l] == SL_STATE_QUARANTINE &&
                                     sl_engine_item_published(e, t.item)

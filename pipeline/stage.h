@@ -43,6 +43,12 @@ typedef struct sl_stage_io {
     const struct sl_stage_dir_entry {
         const char *stage, *dir;
     } *upstream;
+    /* Parts (docs/engine.md, "Parts"): a stage with `run_part` may have its work for one
+     * item split into `parts` work items, each run by `run_part` with `part` in
+     * [0, parts) into its own out_dir, then joined by `run`, which finds part p's
+     * artifacts in part_dirs[p]. parts = 0 (and part_dirs NULL): not split. */
+    int part, parts;
+    const char *const *part_dirs;
 } sl_stage_io;
 
 /* The artifact directory of the earlier stage `name` for this item, or NULL. */
@@ -84,6 +90,9 @@ typedef struct sl_stage {
     int (*configure)(const sl_config *cfg, void **stage_config, sl_error *err);
     void (*release_config)(void *stage_config);
     int (*run)(const void *stage_config, const sl_stage_io *io, sl_error *err);
+    /* NULL, or one part of the item's work (io->part of io->parts) into io->out_dir; `run`
+     * then joins the parts. The joined result must be byte-identical to `run` alone. */
+    int (*run_part)(const void *stage_config, const sl_stage_io *io, sl_error *err);
     /* Nonzero: the stage's output files (all but its report.json) are published with the
      * item under [run] output/ITEM/. */
     int publish;

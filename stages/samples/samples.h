@@ -122,6 +122,29 @@ int sl_samples_plan_make(const sl_samples_config *cfg, const sl_pointset *ps,
 int sl_samples_compute(const sl_samples_config *cfg, const sl_pointset *ps, sl_vdb_samples *out,
                        sl_samples_counts *counts, sl_progress *progress, sl_error *err);
 
+/* A split of the computation into parts (the engine's parts, docs/engine.md: one work
+ * item each). The vertices are cut into `parts` runs of whole blocks of the sorted
+ * order (sl_samples_part_range); a part evaluates its run only (out is allocated for
+ * every vertex; [first, end) is filled, closed_surface and sign_flips are the part's, no
+ * sign repair, no inside/outside counts); the join (fill set) makes the vertices, then
+ * `fill` puts every part's values in place (and says whether the surface is closed and
+ * how many signs the votes flipped), and repairs and counts as the whole pass does: the
+ * result is byte-identical to sl_samples_compute. */
+typedef struct sl_samples_split {
+    int part, parts; /* a part: part in [0, parts) */
+    /* NULL for a part; for the join: fills out->distance (and colors) of every vertex */
+    int (*fill)(void *ctx, sl_vdb_samples *out, int *closed, uint64_t *flips, sl_error *err);
+    void *ctx;
+} sl_samples_split;
+
+/* The vertices [*first, *end) of `part` of `parts` among n sorted vertices. */
+void sl_samples_part_range(uint64_t n, int part, int parts, uint64_t *first, uint64_t *end);
+
+/* sl_samples_compute for a part or the join of a split (NULL: the whole computation). */
+int sl_samples_compute_split(const sl_samples_config *cfg, const sl_pointset *ps,
+                             const sl_samples_split *split, sl_vdb_samples *out,
+                             sl_samples_counts *counts, sl_progress *progress, sl_error *err);
+
 /* Plain marching cubes over the samples, as a reference for tests and measurements:
  * every cube whose 8 corners are samples is triangulated with the runtime's 256-case
  * table (runtime/mc_cube.h, consistent between face neighbours), one vertex per

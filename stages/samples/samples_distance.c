@@ -110,19 +110,31 @@ static int eval_vertex(const eval_ctx *c, uint64_t i, uint32_t *hint)
 }
 
 /* The parallel phase; returns SL_E_INTERRUPTED if asked to stop. */
-static int eval_all(const eval_ctx *c, uint64_t n, sl_progress *progress, uint64_t *flips)
+void sl_samples_part_range(uint64_t n, int part, int parts, uint64_t *first, uint64_t *end)
 {
-    int64_t blocks = (int64_t)((n + BLOCK - 1) / BLOCK);
+    uint64_t blocks = (n + BLOCK - 1) / BLOCK;
+    uint64_t b0 = blocks * (uint64_t)part / (uint64_t)parts;
+    uint64_t b1 = blocks * (uint64_t)(part + 1) / (uint64_t)parts;
+    *first = b0 * BLOCK < n ? b0 * BLOCK : n;
+    *end = b1 * BLOCK < n ? b1 * BLOCK : n;
+}
+
+/* Vertices [first, end) (block-aligned: a block's closest-triangle hint starts afresh, so a
+ * part evaluates exactly what the whole pass does there). */
+static int eval_all(const eval_ctx *c, uint64_t first, uint64_t n, sl_progress *progress,
+                    uint64_t *flips)
+{
+    int64_t b0 = (int64_t)(first / BLOCK), blocks = (int64_t)((n + BLOCK - 1) / BLOCK);
     int stop = 0;
     uint64_t flipped = 0;
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : flipped) if (blocks > 1)
-    for (int64_t b = 0; b < blocks; b++) {
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : flipped) if (blocks - b0 > 1)
+    for (int64_t b = b0; b < blocks; b++) {
         int stopped;
 #pragma omp atomic read
         stopped = stop;
         if (stopped)
             continue;
-        if (sl_progress_step(progress, "samples", (double)b / (double)blocks)) {
+        if (sl_progress_step(progress, "samples", (double)(b - b0) / (double)(blocks - b0))) {
 #pragma omp atomic write
             stop = 1;
         }
@@ -148,16 +160,33 @@ static int alloc_samples(sl_vdb_samples *out, uint64_t n, int colors, sl_error *
                         (unsigned long long)n);
 }
 
+/* The join of a split: every vertex's grid position, the values from the parts. */
+static int join_parts(const sl_samples_split *split, const samples_keys *vertices,
+                      sl_vdb_samples *out, int *closed, uint64_t *flips, sl_error *err)
+{
+#pragma omp parallel for schedule(static)
+    for (uint64_t i = 0; i < vertices->count; i++) {
+        uint32_t g[3];
+        sl_vertex_unpack(vertices->keys[i], g);
+        for (int k = 0; k < 3; k++)
+            out->coords[3 * i + k] = (int32_t)g[k];
+    }
+    return split->fill(split->ctx, out, closed, flips, err);
+}
+
 static int compute_samples(const sl_samples_config *cfg, const sl_pointset *ps,
-                           const samples_keys *vertices, sl_vdb_samples *out,
-                           sl_samples_counts *counts, sl_progress *progress, sl_error *err)
+                           const samples_keys *vertices, const sl_samples_split *split,
+                           sl_vdb_samples *out, sl_samples_counts *counts,
+                           sl_progress *progress, sl_error *err)
 {
     sl_kdtree *tree = NULL;
     samples_surface surface, *use_surface = NULL;
     int closed = 0;
     double t0 = omp_get_wtime();
-    int rc;
-    if (counts->triangles) {
+    int rc = SL_OK;
+    if (split && split->fill) {
+        /* the join: the parts hold the values and whether the surface is closed */
+    } else if (counts->triangles) {
         rc = samples_surface_build(&surface, ps, err);
         use_surface = rc == SL_OK ? &surface : NULL;
         closed = use_surface && surface.closed;
@@ -171,12 +200,20 @@ static int compute_samples(const sl_samples_config *cfg, const sl_pointset *ps,
         eval_ctx c = {cfg, &counts->plan, ps, tree, use_surface, vertices->keys, out};
         out->voxel_size = counts->plan.leaf_size;
         memcpy(out->origin, counts->plan.origin, sizeof out->origin);
-        rc = eval_all(&c, vertices->count, progress, &counts->sign_flips);
+        uint64_t first = 0, end = vertices->count;
+        if (split && split->fill)
+            rc = join_parts(split, vertices, out, &closed, &counts->sign_flips, err);
+        else if (split)
+            sl_samples_part_range(vertices->count, split->part, split->parts, &first, &end);
+        if (!(split && split->fill))
+            rc = eval_all(&c, first, end, progress, &counts->sign_flips);
     }
     sl_kdtree_free(tree);
     if (use_surface)
         samples_surface_release(use_surface);
     counts->closed_surface = closed;
+    if (split && !split->fill)
+        return rc; /* a part: the signs are repaired and counted by the join */
     if (rc == SL_OK && closed) /* open scans have no inside: nothing to repair against */
         rc = samples_repair_signs(vertices->keys, out, counts->plan.leaf_size,
                                   &counts->sign_repairs, err);
@@ -190,6 +227,13 @@ static int compute_samples(const sl_samples_config *cfg, const sl_pointset *ps,
 
 int sl_samples_compute(const sl_samples_config *cfg, const sl_pointset *ps, sl_vdb_samples *out,
                        sl_samples_counts *counts, sl_progress *progress, sl_error *err)
+{
+    return sl_samples_compute_split(cfg, ps, NULL, out, counts, progress, err);
+}
+
+int sl_samples_compute_split(const sl_samples_config *cfg, const sl_pointset *ps,
+                             const sl_samples_split *split, sl_vdb_samples *out,
+                             sl_samples_counts *counts, sl_progress *progress, sl_error *err)
 {
     memset(out, 0, sizeof *out);
     memset(counts, 0, sizeof *counts);
@@ -219,7 +263,7 @@ int sl_samples_compute(const sl_samples_config *cfg, const sl_pointset *ps, sl_v
     if (rc == SL_OK && sl_progress_step(progress, "samples", 0.0))
         rc = SL_E_INTERRUPTED;
     if (rc == SL_OK)
-        rc = compute_samples(cfg, ps, &keys, out, counts, progress, err);
+        rc = compute_samples(cfg, ps, &keys, split, out, counts, progress, err);
     samples_keys_release(&keys);
     if (rc != SL_OK)
         sl_vdb_samples_release(out);

@@ -74,4 +74,19 @@ int samples_dilate(samples_keys *k, int axis, const int *offsets, int offset_cou
 int samples_band_vertices(const sl_samples_plan *plan, samples_keys *cubes, uint64_t max_count,
                           uint64_t *band_cubes, sl_error *err);
 
+/* Parts (samples_parts.c): part p's values in its own artifact folder, joined by the
+ * stage's run when the engine split it (docs/engine.md, "Parts"). */
+#define SL_SAMPLES_PART_FILE "samples.part"
+typedef struct samples_parts {
+    const char *const *dirs; /* the parts' artifact folders, in order */
+    int count;
+} samples_parts;
+/* Writes part `part` of `parts` of `s` (its run of vertices: sl_samples_part_range). */
+int samples_part_write(const char *path, const sl_vdb_samples *s, int part, int parts,
+                       int closed, uint64_t flips, sl_error *err);
+/* sl_samples_split.fill over a samples_parts: SL_E_CORRUPT naming the file when a part
+ * does not fit its place. */
+int samples_parts_fill(void *ctx, sl_vdb_samples *out, int *closed, uint64_t *flips,
+                       sl_error *err);
+
 #endif

@@ -13,7 +13,7 @@
 
 #include "core/atomicfile.h"
 #include "core/log.h"
-#include "stages/samples/samples.h"
+#include "stages/samples/samples_internal.h"
 
 #define STRING_(x) #x
 #define STRING(x) STRING_(x)
@@ -151,10 +151,13 @@ static void record_phases(const sl_stage_io *io, const sl_samples_counts *c, dou
         sl_write_file_atomic(path, text, (size_t)n, &ignored); /* best effort: diagnostics */
 }
 
-static int samples_run(const void *stage_config, const sl_stage_io *io, sl_error *err)
+/* The whole stage (io->parts = 0), a part of it (io->part >= 0) or the join of its parts;
+ * the samples in `samples`, the counts in `counts`. */
+static int compute(const sl_samples_config *cfg, const sl_stage_io *io, char path[PATH_MAX],
+                   sl_vdb_samples *samples, sl_samples_counts *counts, int *colors,
+                   sl_error *err)
 {
-    const sl_samples_config *cfg = stage_config;
-    char path[PATH_MAX];
+    memset(samples, 0, sizeof *samples); /* released by the caller whatever happens */
     sl_vdb_set_threads(io->threads); /* OpenVDB's TBB pool next to our OpenMP threads */
     const char *range_dir = sl_stage_dir(io, "range"); /* the range stage's artifacts */
     if (!range_dir)
@@ -165,29 +168,72 @@ static int samples_run(const void *stage_config, const sl_stage_io *io, sl_error
         rc = sl_pointset_read(path, &ps, err);
     if (rc != SL_OK)
         return rc;
-    sl_vdb_samples samples;
-    sl_samples_counts counts;
-    rc = sl_samples_compute(cfg, &ps, &samples, &counts, io->progress, err);
+    samples_parts parts = {io->part_dirs, io->parts};
+    sl_samples_split split = {io->part, io->parts, NULL, NULL};
+    if (io->parts > 1 && io->part < 0) {
+        split.fill = samples_parts_fill;
+        split.ctx = &parts;
+    }
+    rc = sl_samples_compute_split(cfg, &ps, io->parts > 1 ? &split : NULL, samples, counts,
+                                  io->progress, err);
     if (rc != SL_OK && !err->file[0]) { /* the failure is about the points file */
         size_t n = strlen(path) < sizeof err->file ? strlen(path) : sizeof err->file - 1;
         memcpy(err->file, path, n);
         err->file[n] = '\0';
     }
-    int colors = ps.colors != NULL;
+    *colors = ps.colors != NULL;
     sl_pointset_release(&ps);
+    return rc;
+}
+
+/* The stage's run (is_part 0: the whole stage, or the join of its parts) and run_part
+ * (is_part 1: one part's run of vertices into samples.part, docs/engine.md "Parts"). */
+static int run_samples(const void *stage_config, const sl_stage_io *io, int is_part,
+                       sl_error *err)
+{
+    const sl_samples_config *cfg = stage_config;
+    char path[PATH_MAX];
+    sl_vdb_samples samples;
+    sl_samples_counts counts;
+    int colors = 0;
+    int rc = compute(cfg, io, path, &samples, &counts, &colors, err);
     if (rc == SL_OK)
         rc = sl_stage_step(io, "write", 0.95, err);
     double t0 = omp_get_wtime();
     if (rc == SL_OK)
-        rc = sl_stage_path(path, io->out_dir, SL_SAMPLES_FILE, err);
+        rc = sl_stage_path(path, io->out_dir, is_part ? SL_SAMPLES_PART_FILE : SL_SAMPLES_FILE,
+                           err);
     if (rc == SL_OK)
-        rc = sl_vdb_samples_write(path, &samples, err);
+        rc = is_part ? samples_part_write(path, &samples, io->part, io->parts,
+                                          counts.closed_surface, counts.sign_flips, err)
+                     : sl_vdb_samples_write(path, &samples, err);
+    uint64_t first = 0, end = 0;
+    if (is_part)
+        sl_samples_part_range(samples.count, io->part, io->parts, &first, &end);
     sl_vdb_samples_release(&samples);
     if (rc != SL_OK)
         return rc;
+    if (is_part) {
+        sl_json_u64(io->report, "part", (uint64_t)io->part);
+        sl_json_u64(io->report, "parts", (uint64_t)io->parts);
+        sl_json_u64(io->report, "samples", counts.samples);
+        sl_json_u64(io->report, "first", first);
+        sl_json_u64(io->report, "count", end - first);
+        return SL_OK;
+    }
     report_counts(io->report, cfg, &counts, colors);
     record_phases(io, &counts, omp_get_wtime() - t0);
     return SL_OK;
+}
+
+static int samples_run(const void *stage_config, const sl_stage_io *io, sl_error *err)
+{
+    return run_samples(stage_config, io, 0, err);
+}
+
+static int samples_run_part(const void *stage_config, const sl_stage_io *io, sl_error *err)
+{
+    return run_samples(stage_config, io, 1, err);
 }
 
 const sl_stage sl_samples_stage = {
@@ -201,4 +247,5 @@ const sl_stage sl_samples_stage = {
     .configure = samples_configure,
     .release_config = free,
     .run = samples_run,
+    .run_part = samples_run_part,
 };

@@ -7,7 +7,8 @@
 # again. Expected: the cancelled task is not requeued by the script (it stays CANCELLED),
 # the exit-75 task is requeued and finishes on its restart, every task of the second
 # array completes, and the work dir and every published file (timings.json aside) are
-# byte-identical to a clean `scanlod run` without Slurm. Takes about 45 s on 2 cores.
+# byte-identical to a clean `scanlod run` without Slurm (which, unlike the array's config,
+# does not split the samples stage into parts). Takes about 45 s on 2 cores.
 # SCANLOD_SLURM_SCRIPT tests another copy of the sbatch script (e.g. an older one).
 source "$(dirname "$0")/../lib.sh"
 source "$(dirname "$0")/slurm.sh"
@@ -40,7 +41,10 @@ for f in cow fandisk bun_zipper_res3; do cp "$SCANS/$f.ply" "$TMP/in/again/"; do
 export_lines=("[export]" "lod_percents = 20,50,100" "budgets =" "formats = ply,glb"
               "thumbnail_size = 48" "fidelity = true")
 write_config "$TMP/ref.ini" "$TMP/in" "$TMP/ref-work" "$TMP/ref-out" "${export_lines[@]}"
-write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out" "${export_lines[@]}"
+# The array's run splits the samples stage of the larger scans into parts of 0.1 MB of
+# input (docs/engine.md, "Parts": each a ticket the tasks share); the clean run does not.
+write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out" "${export_lines[@]}" \
+  "[queue]" "part_mb = 0.1"
 
 slurm_start 4
 echo "slurm up after $((SECONDS - started))s"
@@ -145,6 +149,10 @@ while IFS= read -r -d '' f; do
   cmp -s "$TMP/ref-out/$f" "$TMP/out/$f" || { differ=$((differ + 1)); echo "differs: $f" >&2; }
 done < <(cd "$TMP/ref-out" && find . -type f ! -name timings.json ! -path '*/.*' -print0)
 check "$files published files byte-identical ($differ differ)" [ "$differ" -eq 0 -a "$files" -gt 0 ]
+part_logs=$(grep -l "start part" "$TMP"/logs/*.log 2>/dev/null | wc -l)
+parts_done=$(cat "$TMP"/logs/*.jsonl | grep '"event":"stage_done"' | grep -c '"part":' || true)
+check "the samples parts ran as tickets of the array's tasks ($parts_done parts in $part_logs processes)" \
+  [ "$parts_done" -ge 8 -a "$part_logs" -ge 1 ]
 
 echo "test_slurm_array: $((SECONDS - started))s"
 completed=1

@@ -26,6 +26,7 @@
 #include "stages/registry.h"
 #include "stages/samples/samples.h"
 #include "tests/check.h"
+#include "tests/stages/stage_fixtures.h"
 
 static char tmp_root[256];
 
@@ -362,39 +363,11 @@ static int run_stage(const char *in_dir, const char *out, int threads,
     return rc;
 }
 
-/* points.slpts of `ply` (range stage defaults) into dir. */
-static int make_points(const char *ply, const char *dir)
-{
-    sl_range_config rcfg = sl_range_default_config();
-    sl_json j;
-    sl_json_init(&j, 0);
-    sl_json_object_begin(&j, NULL);
-    sl_stage_io io = {.item = "item", .source_path = ply, .out_dir = dir, .report = &j,
-                      .threads = 2};
-    sl_error err;
-    sl_error_init(&err);
-    mkdir(dir, 0755);
-    int rc = sl_range_stage.run(&rcfg, &io, &err);
-    sl_json_release(&j);
-    return rc;
-}
-
-/* Same size and XXH3-128 (the engine's own output hash). */
-static int same_file(const char *a, const char *b)
-{
-    sl_hash ha, hb;
-    uint64_t na = 0, nb = 0;
-    sl_error err;
-    sl_error_init(&err);
-    return sl_hash_file(a, &ha, &na, &err) == SL_OK && sl_hash_file(b, &hb, &nb, &err) == SL_OK &&
-           na == nb && na > 0 && sl_hash_equal(ha, hb);
-}
-
 static void test_stage_on(const char *ply, const char *name)
 {
     char in[300], out[3][300], vdb[3][1000], pts[400];
     snprintf(in, sizeof in, "%s/%s-points", tmp_root, name);
-    CHECK(make_points(ply, in) == SL_OK);
+    CHECK(fixture_range_points(ply, in) == SL_OK);
     char *report[3] = {NULL, NULL, NULL};
     const int threads[3] = {1, 2, 2};
     double secs[3];
@@ -405,8 +378,8 @@ static void test_stage_on(const char *ply, const char *name)
         CHECK(run_stage(in, out[r], threads[r], NULL, &report[r]) == SL_OK);
         secs[r] = omp_get_wtime() - t0;
     }
-    CHECK_MSG(same_file(vdb[0], vdb[1]), "%s: samples.vdb differs between 1 and 2 threads", name);
-    CHECK_MSG(same_file(vdb[1], vdb[2]), "%s: samples.vdb differs between two runs", name);
+    CHECK_MSG(fixture_same_file(vdb[0], vdb[1]), "%s: samples.vdb differs between 1 and 2 threads", name);
+    CHECK_MSG(fixture_same_file(vdb[1], vdb[2]), "%s: samples.vdb differs between two runs", name);
     CHECK(report[0] && report[1] && !strcmp(report[0], report[1]) && strstr(report[0], "\"samples\":"));
     printf("  %s: samples stage %.3f s (1 thread), %.3f s (2 threads)\n    %s\n", name, secs[0],
            secs[1], report[0] ? report[0] : "");

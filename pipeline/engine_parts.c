@@ -1,0 +1,201 @@
+/* Parts: one item's stage split into work items (docs/engine.md, "Parts").
+ *
+ * A stage that declares `run_part` can have its work for a large item cut into parts,
+ * each a ticket of the stage's own queue (`TICKET#part-0003`), claimed under a lease, run
+ * in its own child process into its own artifact folder and committed with its own
+ * record, exactly like an item: so `scanlod worker` processes on many nodes share one
+ * scan, and a worker killed mid-part costs that part alone. The item's own ticket of the
+ * stage (the join: `run`, which reads every part's artifacts) is enqueued only when
+ * every part is committed; until then the parts' ready and claimed tickets are what
+ * keeps the item unfinished (docs/engine.md, "When a run is finished"). A part's key is
+ * the stage key chained with (part, parts), so a changed input, config or [queue] part_mb
+ * makes old parts stale. The join's key is the stage key: parts are scheduling, and the
+ * joined result is byte-identical to the unsplit stage's.
+ */
+#include "pipeline/engine_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "core/atomicfile.h"
+#include "core/dirs.h"
+
+int sl_engine_parts(const sl_engine *e, int s, const char *source_rel)
+{
+    if (!e->stages[s]->run_part || e->part_mb <= 0)
+        return 0;
+    char source[PATH_MAX];
+    struct stat st;
+    if (sl_engine_path(source, sizeof source, "%s/%s", e->input, source_rel) ||
+        stat(source, &st) != 0 || st.st_size <= 0)
+        return 0; /* the stage itself reports what is wrong with the input */
+    double part_bytes = e->part_mb * 1048576.0;
+    double whole = ceil((double)st.st_size / (part_bytes > 1 ? part_bytes : 1));
+    uint64_t parts = whole < SL_PARTS_MAX ? (uint64_t)whole : SL_PARTS_MAX;
+    if (parts > SL_PARTS_MAX)
+        parts = SL_PARTS_MAX;
+    return parts > 1 ? (int)parts : 0;
+}
+
+int sl_part_name(const char *ticket, int part, char *out, size_t size)
+{
+    int n = snprintf(out, size, "%s" SL_PART_SUFFIX "%04d", ticket, part);
+    return n < 0 || (size_t)n >= size;
+}
+
+int sl_part_parse(const char *name, char *ticket, size_t size, int *part)
+{
+    const char *at = strstr(name, SL_PART_SUFFIX), *next;
+    while (at && (next = strstr(at + 1, SL_PART_SUFFIX)))
+        at = next;
+    if (!at)
+        return 0;
+    const char *digits = at + strlen(SL_PART_SUFFIX);
+    char *end;
+    long p = strtol(digits, &end, 10);
+    if (end == digits || *end || p < 0 || p >= SL_PARTS_MAX || (size_t)(at - name) >= size)
+        return 0; /* item tickets end in ".ply" or a hash: never in a part suffix */
+    memcpy(ticket, name, (size_t)(at - name));
+    ticket[at - name] = '\0';
+    *part = (int)p;
+    return 1;
+}
+
+sl_hash sl_part_key(sl_hash stage_key, int part, int parts)
+{
+    struct {
+        sl_hash key;
+        int32_t part, parts;
+        char tag[8];
+    } in;
+    memset(&in, 0, sizeof in);
+    in.key = stage_key;
+    in.part = part;
+    in.parts = parts;
+    memcpy(in.tag, "part", 4);
+    return sl_hash_bytes(&in, sizeof in);
+}
+
+static int part_committed(const sl_engine *e, int s, const char *part_name, sl_hash key)
+{
+    char dir[PATH_MAX], record[PATH_MAX];
+    if (sl_artifact_dir(e, s, part_name, dir, sizeof dir) ||
+        sl_engine_path(record, sizeof record, "%s/%s", dir, SL_RECORD_FILE))
+        return 0;
+    sl_error ignored;
+    sl_error_init(&ignored);
+    return sl_record_check(record, dir, &key, NULL, &ignored) == 0;
+}
+
+int sl_engine_reconcile_parts(sl_engine *e, int s, const char *item, const char *source_rel,
+                              const char *ticket, sl_hash key, int parts, int *all_done,
+                              int *quarantined, sl_error *err)
+{
+    *all_done = 1;
+    for (int p = 0; p < parts; p++) {
+        char name[PATH_MAX];
+        if (sl_part_name(ticket, p, name, sizeof name))
+            return sl_error_set(err, SL_E_LIMIT, 0, source_rel, "part name too long");
+        sl_hash part_key = sl_part_key(key, p, parts);
+        if (part_committed(e, s, name, part_key))
+            continue;
+        *all_done = 0;
+        int rc = sl_engine_ensure_ready(e, e->stages[s]->name, name, item, source_rel,
+                                        part_key, quarantined, err);
+        if (rc)
+            return rc;
+    }
+    return 0;
+}
+
+void sl_engine_parts_remove(sl_engine *e, int s, const char *ticket, int parts)
+{
+    for (int p = 0; p < parts; p++) {
+        char name[PATH_MAX], dir[PATH_MAX], path[PATH_MAX];
+        if (sl_part_name(ticket, p, name, sizeof name) ||
+            sl_artifact_dir(e, s, name, dir, sizeof dir))
+            continue;
+        sl_error ignored;
+        sl_error_init(&ignored);
+        sl_remove_tree(dir, 0, &ignored);
+        sl_queue_path(path, sizeof path, e->work, e->stages[s]->name, SL_STATE_DONE, name);
+        unlink(path);
+    }
+}
+
+int sl_engine_parts_ready(const sl_engine *e, int s, const char *ticket, int part, int parts,
+                          sl_hash *key)
+{
+    if (part >= 0) {
+        if (part >= parts)
+            return 0; /* left from another split ([queue] part_mb or the input changed) */
+        *key = sl_part_key(*key, part, parts);
+        return 1;
+    }
+    for (int p = 0; p < parts && parts > 1; p++) {
+        char name[PATH_MAX];
+        if (sl_part_name(ticket, p, name, sizeof name) ||
+            !part_committed(e, s, name, sl_part_key(*key, p, parts)))
+            return 0;
+    }
+    return 1;
+}
+
+char **sl_engine_part_dirs(const sl_engine *e, int s, const char *ticket, int parts)
+{
+    char **dirs = malloc((size_t)parts * (sizeof *dirs + PATH_MAX));
+    if (!dirs)
+        return NULL;
+    char *text = (char *)(dirs + parts);
+    for (int p = 0; p < parts; p++) {
+        char name[PATH_MAX];
+        dirs[p] = text + (size_t)p * PATH_MAX;
+        dirs[p][0] = '\0';
+        if (sl_part_name(ticket, p, name, sizeof name) == 0)
+            sl_artifact_dir(e, s, name, dirs[p], PATH_MAX);
+    }
+    return dirs;
+}
+
+char *sl_engine_parts_stats(const sl_engine *e, int s, const char *name, const char *head,
+                            size_t head_size)
+{
+    char ticket[SL_TICKET_NAME_MAX + 1], *text = NULL;
+    int part = -1, parts = 0;
+    size_t size = 0;
+    FILE *f = open_memstream(&text, &size);
+    if (!f)
+        return NULL;
+    fwrite(head, 1, head_size, f);
+    /* the item's source is in the join's ticket; its parts count is what sl_engine_parts
+     * gave when the parts were made: count the parts' folders that hold stats */
+    if (!sl_part_parse(name, ticket, sizeof ticket, &part))
+        for (; parts < SL_PARTS_MAX; parts++) {
+            char part_name[PATH_MAX], dir[PATH_MAX], path[PATH_MAX], *stats = NULL;
+            size_t n = 0;
+            sl_error ignored;
+            sl_error_init(&ignored);
+            if (sl_part_name(name, parts, part_name, sizeof part_name) ||
+                sl_artifact_dir(e, s, part_name, dir, sizeof dir) ||
+                sl_engine_path(path, sizeof path, "%s/_stats.json", dir) ||
+                sl_read_file(path, 1 << 16, &stats, &n, &ignored) != 0)
+                break;
+            while (n > 0 && (stats[n - 1] == '\n' || stats[n - 1] == ' '))
+                n--;
+            fputs(parts == 0 ? ",\"parts\":[" : ",", f);
+            fwrite(stats, 1, n, f);
+            free(stats);
+        }
+    if (parts > 0)
+        fputc(']', f);
+    fputs("}\n", f);
+    if (fclose(f) != 0) {
+        free(text);
+        return NULL;
+    }
+    return text;
+}
