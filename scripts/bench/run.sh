@@ -13,6 +13,7 @@
 #   octree  uniform levels vs OpenVDB at the same voxel size; memory at depths 8..11
 #   lod     equal-count fidelity vs meshoptimizer and OpenVDB adaptive; extraction cost
 #   growth  synthetic surfaces (gen_surface) of growing size: time, memory, fitted slope
+#   parts   the largest surface built by 3 local workers as parts, one killed -9 in a part
 # and writes docs/benchmarks.md and the gnuplot PNGs in docs/bench/. Raw figures stay in
 # DIR/bench-results/STAMP/*.json (--report-only regenerates the docs from them).
 # --quick: bun_zipper, fandisk, rocker_arm, 3 repetitions, 0.2M and 1M triangles once,
@@ -27,7 +28,7 @@ root=$(cd "$here/../.." && pwd)
 lib=$here/lib
 
 quick=0 build=$root/build-bench docs=$root/docs minutes="" keep=0 report_only="" resume=""
-phases="models stages octree lod growth"
+phases="models stages octree lod growth parts"
 while [ $# -gt 0 ]; do
   case $1 in
     --quick) quick=1 ;;
@@ -38,7 +39,7 @@ while [ $# -gt 0 ]; do
     --report-only) report_only=$2; shift ;;
     --resume) resume=$2; shift ;;
     --phases) phases=$2; shift ;;
-    -h|--help) sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,24p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "run.sh: unknown argument $1 (see --help)" >&2; exit 64 ;;
   esac
   shift

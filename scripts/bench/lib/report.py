@@ -321,6 +321,55 @@ def section_growth(out, h):
         out.append("")
 
 
+def section_parts(out, results):
+    """The parts phase (lib/parts.py): one scan by three workers as parts, one killed."""
+    path = os.path.join(results, "parts.json")
+    if not os.path.exists(path):
+        return
+    with open(path) as f:
+        p = json.load(f)
+    out.append("### 4a. One scan built by three workers as parts (issue 14)\n")
+    if p.get("skipped"):
+        out.append("Skipped: %s.\n" % p["skipped"])
+        return
+    t = p["split_timings"]["samples"]
+    parts = t.get("parts", [])
+    starts = p.get("part_starts", {})
+    killed = p.get("killed") or {}
+    w = p["whole_stages"]
+    out.append(
+        "`gen_surface` torus of %d triangles (%.0f MB PLY), fidelity off. One `scanlod run` "
+        "at 2 threads, against `scanlod run` + 2 `scanlod worker`s at 1 thread each on the "
+        "same input with `[queue] part_mb = %.1f` (the samples stage in %d parts, "
+        "docs/engine.md \"Parts\"), a third worker killed -9 while it held %s%s. "
+        "One run each; parts numbered from 1 as the log says (ticket `#part-0000` is part "
+        "1).\n" % (p["triangles"], p["ply_bytes"] / 1e6, p["part_mb"], len(parts),
+                   killed.get("part", "no part"),
+                              "" if killed.get("inside", True) else " (it had just finished it)"))
+    rows = [["one process, 2 threads", num(p["whole_seconds"], "%.0f"),
+             num(w["samples"]["seconds"], "%.1f"),
+             num(w["samples"]["peak_rss_kb"] / 1024.0, "%.0f"), "-"],
+            ["3 workers as parts, 1 killed", num(p["split_seconds"], "%.0f"),
+             "%s join + parts %s" % (num(t["seconds"], "%.1f"),
+                                     " / ".join(num(x["seconds"], "%.1f") for x in parts)),
+             "%s join, parts %s" % (num(t["peak_rss_kb"] / 1024.0, "%.0f"),
+                                    num(max([x["peak_rss_kb"] for x in parts] or [0]) / 1024.0,
+                                        "%.0f")),
+             ", ".join("%s: %d" % (k, len(v)) for k, v in sorted(starts.items(),
+                                                                 key=lambda kv: int(kv[0])))]]
+    table(out, ["build", "wall s", "samples stage s", "samples peak MB", "starts per part"],
+          rows)
+    i = p["identical"]
+    out.append("Exit codes of the run and the surviving worker: %s; a run afterwards: %s. "
+               "Byte-identical to the one process: artifacts %s (%d files), published files "
+               "%s (%d files).\n" % (", ".join(map(str, p["exit_codes"])),
+                                      p["after"]["stdout"] or p["after"]["exit"],
+                                      "yes" if i["artifacts"] else "NO",
+                                      i["artifact_files"],
+                                      "yes" if i["published"] else "NO",
+                                      i["published_files"]))
+
+
 CLUSTER_HEADING = "## 5. Clustering with bounded error (paper 2, issue 13)"
 
 
@@ -393,6 +442,7 @@ def main():
     kept("qef-notes")        # docs/lod.md's quadric vertices, measured with fidelity.py
     section_growth(out, h)
     kept("growth-notes")     # reruns of the growth inputs by hand
+    section_parts(out, results)
     section_cluster(out, results, dest)
     section_plots(out)
     # The segment method's section comes from its own benchmark (bench_segment.sh), which
