@@ -110,6 +110,10 @@ int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, 
                  * (and so logged it as failed, or not at all): adopted here, once. */
                 sl_log_event("stage_done", stage, item, -1, NULL, "\"adopted\":true");
             }
+            /* Parts left behind by a join whose owner died before it removed them. */
+            int parts = sl_engine_parts(e, s, source_rel);
+            if (parts > 1)
+                sl_engine_parts_remove(e, s, name, parts);
             e->counts.reused++;
             upstream = sl_chain_hash(upstream, rec.outputs_digest);
             continue;
