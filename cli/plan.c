@@ -121,6 +121,7 @@ static const double work_mb[2] = {1, 265}, published_mb[2] = {1.4, 110};
 
 typedef struct plan_state {
     FILE *out;
+    const sl_engine *engine;
     sl_json *json;
     sl_engine_facts facts;
     uint64_t items, errors;
@@ -213,8 +214,15 @@ static void plan_item(void *ctx, const char *rel, const char *path, const char *
     stage_costs(e, &info, p->json, &seconds, &peak, NULL);
     double work = work_mb[0] + work_mb[1] * n, published = published_mb[0] + published_mb[1] * n;
     int fits = e->memory_limit_mb <= 0 || peak <= (double)e->memory_limit_mb;
+    /* Work items below the item ([queue] part_mb): what a scheduler can spread. */
+    int samples_parts = sl_engine_stage_parts(p->engine, "samples", rel);
     if (p->json) {
         sl_json_object_end(p->json);
+        if (samples_parts > 1) {
+            sl_json_object_begin(p->json, "parts");
+            sl_json_u64(p->json, "samples", (uint64_t)samples_parts);
+            sl_json_object_end(p->json);
+        }
         sl_json_double(p->json, "peak_rss_mb", peak);
         sl_json_double(p->json, "seconds", seconds);
         sl_json_double(p->json, "work_mb", work);
@@ -222,10 +230,13 @@ static void plan_item(void *ctx, const char *rel, const char *path, const char *
         sl_json_bool(p->json, "fits_memory_limit", fits);
         sl_json_object_end(p->json);
     } else {
-        fprintf(p->out, "%-32s %12llu %-9s %9.0f %9.1f %9.0f %9.0f%s\n", rel,
+        char parts_note[48] = "";
+        if (samples_parts > 1)
+            snprintf(parts_note, sizeof parts_note, "  samples in %d parts", samples_parts);
+        fprintf(p->out, "%-32s %12llu %-9s %9.0f %9.1f %9.0f %9.0f%s%s\n", rel,
                 (unsigned long long)(points ? info.declared_vertices : info.declared_faces),
                 points ? "points" : "triangles", peak, seconds, work, published,
-                fits ? "" : "  over [run] memory_limit_mb");
+                fits ? "" : "  over [run] memory_limit_mb", parts_note);
     }
     p->total_seconds += seconds;
     p->work_mb += work;
@@ -236,7 +247,7 @@ static void plan_item(void *ctx, const char *rel, const char *path, const char *
 
 int sl_plan_print(sl_engine *engine, FILE *out, int json, uint64_t *unplanned, sl_error *err)
 {
-    plan_state p = {.out = out};
+    plan_state p = {.out = out, .engine = engine};
     sl_engine_facts_of(engine, &p.facts);
     const sl_engine_facts *e = &p.facts;
     sl_json j;

@@ -73,6 +73,10 @@ typedef void (*sl_engine_item_fn)(void *ctx, const char *rel, const char *path,
  * nothing is queued or written (`scanlod plan`). */
 int sl_engine_each_item(sl_engine *e, sl_engine_item_fn fn, void *ctx, sl_error *err);
 
+/* How many parts the stage named `stage` of the item at `source_rel` (relative to [run]
+ * input) is split into by [queue] part_mb (docs/engine.md, "Parts"); 0 when it is not. */
+int sl_engine_stage_parts(const sl_engine *e, const char *stage, const char *source_rel);
+
 /* What the engine was opened with, for commands that describe a run without running it. */
 typedef struct sl_engine_facts {
     const sl_config *cfg;

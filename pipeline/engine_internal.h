@@ -132,6 +132,17 @@ void sl_ticket_for(sl_ticket *t, const char *item, const char *source_rel, sl_ha
 int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
                         int *settled, sl_error *err); /* settled (may be NULL): 1 when the
                                                          item needs nothing more */
+/* A ticket `name` of `stage` for `key` in ready unless it is claimed,
+ * already ready under that key, or quarantined under it (then *quarantined = 1). */
+int sl_engine_ensure_ready(sl_engine *e, const char *stage, const char *name, const char *item,
+                           const char *source_rel, sl_hash key, int *quarantined,
+                           sl_error *err);
+/* Brings stage s's parts of the item in line with `key` (each part's record checked, a
+ * ready ticket for every part that is neither done, claimed nor quarantined under its
+ * key). *all_done: every part is committed; *quarantined: some part is quarantined. */
+int sl_engine_reconcile_parts(sl_engine *e, int s, const char *item, const char *source_rel,
+                              const char *ticket, sl_hash key, int parts, int *all_done,
+                              int *quarantined, sl_error *err);
 
 /* engine_parts.c: one item's stage split into parts (docs/engine.md, "Parts"). A part's
  * ticket and artifact folder are the item's ticket name + "#part-NNNN"; its key is the
@@ -145,12 +156,8 @@ int sl_part_name(const char *ticket, int part, char *out, size_t size);
 /* 1 and the item's ticket name and the part's index when `name` names a part, else 0. */
 int sl_part_parse(const char *name, char *ticket, size_t size, int *part);
 sl_hash sl_part_key(sl_hash stage_key, int part, int parts);
-/* Brings stage s's parts of the item in line with `key` (each part's record checked, a
- * ready ticket for every part that is neither done, claimed nor quarantined under its
- * key). *all_done: every part is committed; *quarantined: some part is quarantined. */
-int sl_engine_reconcile_parts(sl_engine *e, int s, const char *item, const char *source_rel,
-                              const char *ticket, sl_hash key, int parts, int *all_done,
-                              int *quarantined, sl_error *err);
+/* Whether part `part_name` of stage s is committed under `key` (its record verifies). */
+int sl_engine_part_committed(const sl_engine *e, int s, const char *part_name, sl_hash key);
 /* Whether claim `part` (-1: the join) of stage s may run now, with *key turned into the
  * part's key: a part must be one of the item's current `parts`, a join needs every part
  * committed. 0: drop the claim and reconcile the item. */
@@ -166,12 +173,6 @@ char *sl_engine_parts_stats(const sl_engine *e, int s, const char *name, const c
 /* Removes the parts' artifact folders and done tickets once their join is committed
  * (best effort: leftovers are only disk). */
 void sl_engine_parts_remove(sl_engine *e, int s, const char *ticket, int parts);
-/* engine_reconcile.c: a ticket `name` of `stage` for `key` in ready unless it is claimed,
- * already ready under that key, or quarantined under it (then *quarantined = 1). */
-int sl_engine_ensure_ready(sl_engine *e, const char *stage, const char *name, const char *item,
-                           const char *source_rel, sl_hash key, int *quarantined,
-                           sl_error *err);
-
 /* engine_admission.c: 1 when the item's expected peak memory for stage s fits the budget;
  * else 0, with the reason logged and left in e->admission (docs/engine.md). */
 int sl_engine_admitted(sl_engine *e, int s, const sl_ticket *t, const char *source);

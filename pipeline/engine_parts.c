@@ -41,6 +41,14 @@ int sl_engine_parts(const sl_engine *e, int s, const char *source_rel)
     return parts > 1 ? (int)parts : 0;
 }
 
+int sl_engine_stage_parts(const sl_engine *e, const char *stage, const char *source_rel)
+{
+    for (int s = 0; s < e->stage_count; s++)
+        if (strcmp(e->stages[s]->name, stage) == 0)
+            return sl_engine_parts(e, s, source_rel);
+    return 0;
+}
+
 int sl_part_name(const char *ticket, int part, char *out, size_t size)
 {
     int n = snprintf(out, size, "%s" SL_PART_SUFFIX "%04d", ticket, part);
@@ -80,7 +88,7 @@ sl_hash sl_part_key(sl_hash stage_key, int part, int parts)
     return sl_hash_bytes(&in, sizeof in);
 }
 
-static int part_committed(const sl_engine *e, int s, const char *part_name, sl_hash key)
+int sl_engine_part_committed(const sl_engine *e, int s, const char *part_name, sl_hash key)
 {
     char dir[PATH_MAX], record[PATH_MAX];
     if (sl_artifact_dir(e, s, part_name, dir, sizeof dir) ||
@@ -89,27 +97,6 @@ static int part_committed(const sl_engine *e, int s, const char *part_name, sl_h
     sl_error ignored;
     sl_error_init(&ignored);
     return sl_record_check(record, dir, &key, NULL, &ignored) == 0;
-}
-
-int sl_engine_reconcile_parts(sl_engine *e, int s, const char *item, const char *source_rel,
-                              const char *ticket, sl_hash key, int parts, int *all_done,
-                              int *quarantined, sl_error *err)
-{
-    *all_done = 1;
-    for (int p = 0; p < parts; p++) {
-        char name[PATH_MAX];
-        if (sl_part_name(ticket, p, name, sizeof name))
-            return sl_error_set(err, SL_E_LIMIT, 0, source_rel, "part name too long");
-        sl_hash part_key = sl_part_key(key, p, parts);
-        if (part_committed(e, s, name, part_key))
-            continue;
-        *all_done = 0;
-        int rc = sl_engine_ensure_ready(e, e->stages[s]->name, name, item, source_rel,
-                                        part_key, quarantined, err);
-        if (rc)
-            return rc;
-    }
-    return 0;
 }
 
 void sl_engine_parts_remove(sl_engine *e, int s, const char *ticket, int parts)
@@ -139,7 +126,7 @@ int sl_engine_parts_ready(const sl_engine *e, int s, const char *ticket, int par
     for (int p = 0; p < parts && parts > 1; p++) {
         char name[PATH_MAX];
         if (sl_part_name(ticket, p, name, sizeof name) ||
-            !part_committed(e, s, name, sl_part_key(*key, p, parts)))
+            !sl_engine_part_committed(e, s, name, sl_part_key(*key, p, parts)))
             return 0;
     }
     return 1;

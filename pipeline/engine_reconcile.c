@@ -70,6 +70,27 @@ int sl_engine_ensure_ready(sl_engine *e, const char *stage, const char *name, co
     return requeue(e, stage, name, state, &t, key, !same_key || state == SL_STATE_DONE, err);
 }
 
+int sl_engine_reconcile_parts(sl_engine *e, int s, const char *item, const char *source_rel,
+                              const char *ticket, sl_hash key, int parts, int *all_done,
+                              int *quarantined, sl_error *err)
+{
+    *all_done = 1;
+    for (int p = 0; p < parts; p++) {
+        char name[PATH_MAX];
+        if (sl_part_name(ticket, p, name, sizeof name))
+            return sl_error_set(err, SL_E_LIMIT, 0, source_rel, "part name too long");
+        sl_hash part_key = sl_part_key(key, p, parts);
+        if (sl_engine_part_committed(e, s, name, part_key))
+            continue;
+        *all_done = 0;
+        int rc = sl_engine_ensure_ready(e, e->stages[s]->name, name, item, source_rel,
+                                        part_key, quarantined, err);
+        if (rc)
+            return rc;
+    }
+    return 0;
+}
+
 int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, int from,
                         int *settled, sl_error *err)
 {

@@ -2,7 +2,8 @@
 # `scanlod plan CONFIG [--json]`: a pre-flight estimate per item from the PLY headers and
 # the config, nothing run or written. Asserted: the counts are the headers' counts, a bad
 # scan is named with its cause (exit 65) while the others are still planned, the memory
-# limit is checked, the work folder is not created, and the predicted peak memory of a
+# limit is checked, the parts of [queue] part_mb are counted, the work folder is not
+# created, and the predicted peak memory of a
 # real item is within 30 % of what its run then takes (issue 14's aim).
 source "$(dirname "$0")/../lib.sh"
 scans="$SCANLOD_SOURCE_DIR/tests/data/scans"
@@ -39,6 +40,16 @@ check "table: the over-limit item is said" contains "rocker_arm.ply .*over \[run
 check "table: the bad one is said" contains "broken.ply  *cannot be planned" "$out"
 run_scanlod plan "$TMP/run.ini" -s lod.method=segment --json
 check "segment method: its stages" contains '"segment"' "$out"
+# [queue] part_mb: the samples stage's parts per item (docs/engine.md, "Parts"):
+# rocker_arm (381,919 bytes) in parts of 0.1 MB is 4, cow (110,558 bytes) 2.
+run_scanlod plan "$TMP/run.ini" -s queue.part_mb=0.1 --json
+echo "$out" >"$TMP/plan.json"
+check "parts: rocker_arm's samples in 4" [ "$(field rocker_arm.ply parts)" = "{'samples': 4}" ]
+check "parts: cow's samples in 2" [ "$(field cow.ply parts)" = "{'samples': 2}" ]
+run_scanlod plan "$TMP/run.ini" -s queue.part_mb=1
+check "parts: none for inputs under one part (table)" [ "$(grep -c "in .* parts" <<<"$out")" = 0 ]
+run_scanlod plan "$TMP/run.ini" -s queue.part_mb=0.2
+check "parts: the table says them" contains "rocker_arm.ply .*samples in 2 parts" "$out"
 run_scanlod plan "$TMP/run.ini" -s no.such=1
 check "bad config key: exit 78" [ "$rc" -eq 78 ]
 
