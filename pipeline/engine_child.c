@@ -266,7 +266,8 @@ static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, s
                          o->seconds, o->result.cpu_seconds, o->result.max_rss_kb,
                          e->threads > 0 ? e->threads : omp_get_num_procs());
         /* A join's timings carry its parts' (their folders go once it is committed). */
-        char *text = sl_engine_parts_stats(e, s, name, stats, (size_t)n);
+        char *text = sl_engine_parts_stats(e, s, name, sl_engine_parts(e, s, t->source),
+                                           stats, (size_t)n);
         sl_engine_path(path, sizeof path, "%s/_stats.json", staged);
         rc = text ? sl_write_file_atomic(path, text, strlen(text), err)
                   : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");

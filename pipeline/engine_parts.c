@@ -148,36 +148,34 @@ char **sl_engine_part_dirs(const sl_engine *e, int s, const char *ticket, int pa
     return dirs;
 }
 
-char *sl_engine_parts_stats(const sl_engine *e, int s, const char *name, const char *head,
-                            size_t head_size)
+char *sl_engine_parts_stats(const sl_engine *e, int s, const char *name, int parts,
+                            const char *head, size_t head_size)
 {
     char ticket[SL_TICKET_NAME_MAX + 1], *text = NULL;
-    int part = -1, parts = 0;
+    int part = -1, listed = 0;
     size_t size = 0;
     FILE *f = open_memstream(&text, &size);
     if (!f)
         return NULL;
     fwrite(head, 1, head_size, f);
-    /* the item's source is in the join's ticket; its parts count is what sl_engine_parts
-     * gave when the parts were made: count the parts' folders that hold stats */
-    if (!sl_part_parse(name, ticket, sizeof ticket, &part))
-        for (; parts < SL_PARTS_MAX; parts++) {
+    if (!sl_part_parse(name, ticket, sizeof ticket, &part)) /* a join, not a part */
+        for (int p = 0; p < parts && parts > 1; p++) {
             char part_name[PATH_MAX], dir[PATH_MAX], path[PATH_MAX], *stats = NULL;
             size_t n = 0;
             sl_error ignored;
             sl_error_init(&ignored);
-            if (sl_part_name(name, parts, part_name, sizeof part_name) ||
+            if (sl_part_name(name, p, part_name, sizeof part_name) ||
                 sl_artifact_dir(e, s, part_name, dir, sizeof dir) ||
                 sl_engine_path(path, sizeof path, "%s/_stats.json", dir) ||
                 sl_read_file(path, 1 << 16, &stats, &n, &ignored) != 0)
-                break;
+                continue; /* diagnostics: a part without them is left out */
             while (n > 0 && (stats[n - 1] == '\n' || stats[n - 1] == ' '))
                 n--;
-            fputs(parts == 0 ? ",\"parts\":[" : ",", f);
+            fputs(listed++ == 0 ? ",\"parts\":[" : ",", f);
             fwrite(stats, 1, n, f);
             free(stats);
         }
-    if (parts > 0)
+    if (listed > 0)
         fputc(']', f);
     fputs("}\n", f);
     if (fclose(f) != 0) {
