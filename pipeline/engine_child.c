@@ -251,8 +251,8 @@ static int advance(sl_engine *e, int from, const sl_ticket *t, sl_error *err);
  * that lost its claim while it was frozen can then never empty or half-write the folder a
  * newer owner committed (at worst it swaps in a complete, identical one). */
 static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, sl_hash key,
-                          const char *staged, const char *out_dir, const child_outcome *o,
-                          int *taken_over, sl_error *err)
+                          int join_parts, const char *staged, const char *out_dir,
+                          const child_outcome *o, int *taken_over, sl_error *err)
 {
     *taken_over = 0;
     const sl_stage *stage = e->stages[s];
@@ -266,8 +266,7 @@ static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, s
                          o->seconds, o->result.cpu_seconds, o->result.max_rss_kb,
                          e->threads > 0 ? e->threads : omp_get_num_procs());
         /* A join's timings carry its parts' (their folders go once it is committed). */
-        char *text = sl_engine_parts_stats(e, s, name, sl_engine_parts(e, s, t->source),
-                                           stats, (size_t)n);
+        char *text = sl_engine_parts_stats(e, s, name, join_parts, stats, (size_t)n);
         sl_engine_path(path, sizeof path, "%s/_stats.json", staged);
         rc = text ? sl_write_file_atomic(path, text, strlen(text), err)
                   : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
@@ -308,11 +307,9 @@ static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, s
  * unfinished item always has a ready or claimed ticket somewhere, so a run that finds
  * none can call the collection finished (docs/engine.md, "When a run is finished"). */
 static int release_done(sl_engine *e, int s, const char *name, const sl_ticket *t,
-                        int *released, sl_error *err)
+                        int is_part, int *released, sl_error *err)
 {
     /* A part's next step is its own stage's: the join, once every part is committed. */
-    char ticket[SL_TICKET_NAME_MAX + 1];
-    int part, is_part = sl_part_parse(name, ticket, sizeof ticket, &part);
     int rc = advance(e, is_part ? s : s + 1, t, err);
     sl_error merr;
     sl_error_init(&merr);
@@ -478,7 +475,7 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         if (sl_engine_lease_renew(e, stage->name, name, t, &perr) == SL_E_LEASE_LOST)
             return 0; /* taken over again meanwhile: the new owner releases it */
         int released = 0;
-        rc = release_done(e, s, name, t, &released, err);
+        rc = release_done(e, s, name, t, part >= 0, &released, err);
         /* The owner that committed lost its claim before moving it to done and said
          * nothing; whoever moves it says the stage is done, once. */
         if (released && !was_done)
@@ -554,8 +551,8 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
              WEXITSTATUS(outcome.status) == 0 && !outcome.lease_lost;
     if (ok) {
         int taken_over = 0;
-        rc = commit_success(e, s, name, t, key, staged, out_dir, &outcome, &taken_over,
-                            &item_err);
+        rc = commit_success(e, s, name, t, key, part < 0 ? parts : 0, staged, out_dir,
+                            &outcome, &taken_over, &item_err);
         if (taken_over) { /* committed; the claim and what follows are the new owner's */
             e->counts.ran++;
             SL_LOG(SL_LOG_WARN, stage->name, t->item,
@@ -565,7 +562,7 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         if (rc == 0) {
             e->counts.ran++;
             int released = 0;
-            rc = release_done(e, s, name, t, &released, err);
+            rc = release_done(e, s, name, t, part >= 0, &released, err);
             /* Said only by the owner that moved the claim to done: an owner that lost
              * its lease after the commit (the record is the same either way) is silent,
              * so the log shows each stage done once. */

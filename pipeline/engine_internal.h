@@ -165,9 +165,10 @@ int sl_engine_parts_ready(const sl_engine *e, int s, const char *ticket, int par
                           sl_hash *key);
 /* The parts' artifact folders, in order (one malloc'd block; NULL when out of memory). */
 char **sl_engine_part_dirs(const sl_engine *e, int s, const char *ticket, int parts);
-/* The text of a claim's _stats.json: `head` (an open JSON object), then for the join of a
- * stage split into `parts` its parts' own stats (`"parts":[...]`), then "}\n"; malloc'd,
- * NULL when out of memory. `name` is the claim's ticket name. */
+/* The text of a claim's _stats.json: `head` (an open JSON object), then, for the join of
+ * a stage split into `parts` (0 for any other claim), its parts' own stats
+ * (`"parts":[...]`), then "}\n"; malloc'd, NULL when out of memory. `name` is the claim's
+ * ticket name. */
 char *sl_engine_parts_stats(const sl_engine *e, int s, const char *name, int parts,
                             const char *head, size_t head_size);
 /* Removes the parts' artifact folders and done tickets once their join is committed

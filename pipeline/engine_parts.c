@@ -36,8 +36,6 @@ int sl_engine_parts(const sl_engine *e, int s, const char *source_rel)
     double part_bytes = e->part_mb * 1048576.0;
     double whole = ceil((double)st.st_size / (part_bytes > 1 ? part_bytes : 1));
     uint64_t parts = whole < SL_PARTS_MAX ? (uint64_t)whole : SL_PARTS_MAX;
-    if (parts > SL_PARTS_MAX)
-        parts = SL_PARTS_MAX;
     return parts > 1 ? (int)parts : 0;
 }
 
@@ -151,30 +149,29 @@ char **sl_engine_part_dirs(const sl_engine *e, int s, const char *ticket, int pa
 char *sl_engine_parts_stats(const sl_engine *e, int s, const char *name, int parts,
                             const char *head, size_t head_size)
 {
-    char ticket[SL_TICKET_NAME_MAX + 1], *text = NULL;
-    int part = -1, listed = 0;
+    char *text = NULL;
+    int listed = 0;
     size_t size = 0;
     FILE *f = open_memstream(&text, &size);
     if (!f)
         return NULL;
     fwrite(head, 1, head_size, f);
-    if (!sl_part_parse(name, ticket, sizeof ticket, &part)) /* a join, not a part */
-        for (int p = 0; p < parts && parts > 1; p++) {
-            char part_name[PATH_MAX], dir[PATH_MAX], path[PATH_MAX], *stats = NULL;
-            size_t n = 0;
-            sl_error ignored;
-            sl_error_init(&ignored);
-            if (sl_part_name(name, p, part_name, sizeof part_name) ||
-                sl_artifact_dir(e, s, part_name, dir, sizeof dir) ||
-                sl_engine_path(path, sizeof path, "%s/_stats.json", dir) ||
-                sl_read_file(path, 1 << 16, &stats, &n, &ignored) != 0)
-                continue; /* diagnostics: a part without them is left out */
-            while (n > 0 && (stats[n - 1] == '\n' || stats[n - 1] == ' '))
-                n--;
-            fputs(listed++ == 0 ? ",\"parts\":[" : ",", f);
-            fwrite(stats, 1, n, f);
-            free(stats);
-        }
+    for (int p = 0; p < parts && parts > 1; p++) {
+        char part_name[PATH_MAX], dir[PATH_MAX], path[PATH_MAX], *stats = NULL;
+        size_t n = 0;
+        sl_error ignored;
+        sl_error_init(&ignored);
+        if (sl_part_name(name, p, part_name, sizeof part_name) ||
+            sl_artifact_dir(e, s, part_name, dir, sizeof dir) ||
+            sl_engine_path(path, sizeof path, "%s/_stats.json", dir) ||
+            sl_read_file(path, 1 << 16, &stats, &n, &ignored) != 0)
+            continue; /* diagnostics: a part without them is left out */
+        while (n > 0 && (stats[n - 1] == '\n' || stats[n - 1] == ' '))
+            n--;
+        fputs(listed++ == 0 ? ",\"parts\":[" : ",", f);
+        fwrite(stats, 1, n, f);
+        free(stats);
+    }
     if (listed > 0)
         fputc(']', f);
     fputs("}\n", f);

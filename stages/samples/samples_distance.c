@@ -181,11 +181,11 @@ static int compute_samples(const sl_samples_config *cfg, const sl_pointset *ps,
 {
     sl_kdtree *tree = NULL;
     samples_surface surface, *use_surface = NULL;
-    int closed = 0;
+    int closed = 0, joining = split && split->fill;
     double t0 = omp_get_wtime();
     int rc = SL_OK;
-    if (split && split->fill) {
-        /* the join: the parts hold the values and whether the surface is closed */
+    if (joining) {
+        /* the parts hold the values and whether the surface is closed */
     } else if (counts->triangles) {
         rc = samples_surface_build(&surface, ps, err);
         use_surface = rc == SL_OK ? &surface : NULL;
@@ -201,18 +201,16 @@ static int compute_samples(const sl_samples_config *cfg, const sl_pointset *ps,
         out->voxel_size = counts->plan.leaf_size;
         memcpy(out->origin, counts->plan.origin, sizeof out->origin);
         uint64_t first = 0, end = vertices->count;
-        if (split && split->fill)
-            rc = join_parts(split, vertices, out, &closed, &counts->sign_flips, err);
-        else if (split)
+        if (split && !joining)
             sl_samples_part_range(vertices->count, split->part, split->parts, &first, &end);
-        if (!(split && split->fill))
-            rc = eval_all(&c, first, end, progress, &counts->sign_flips);
+        rc = joining ? join_parts(split, vertices, out, &closed, &counts->sign_flips, err)
+                     : eval_all(&c, first, end, progress, &counts->sign_flips);
     }
     sl_kdtree_free(tree);
     if (use_surface)
         samples_surface_release(use_surface);
     counts->closed_surface = closed;
-    if (split && !split->fill)
+    if (split && !joining)
         return rc; /* a part: the signs are repaired and counted by the join */
     if (rc == SL_OK && closed) /* open scans have no inside: nothing to repair against */
         rc = samples_repair_signs(vertices->keys, out, counts->plan.leaf_size,

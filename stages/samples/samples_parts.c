@@ -1,23 +1,24 @@
 /* samples stage: a part's file and the join that reads them (docs/engine.md, "Parts").
  *
- * `samples.part` (native byte order, like every work file; one host's parts are joined
- * on hosts of the same kind):
- *   "SLSPART1", u32 part, u32 parts, u64 vertices (of the whole item), u64 first, u64
- *   count, u64 sign_flips, u32 flags (1: colours, 2: the surface is closed), u32 0,
+ * `samples.part`: the artifact envelope (core/artifact.h, magic "SLSPARTS", format 1),
+ * body (little-endian):
+ *   u32 part, u32 parts, u64 vertices (of the whole item), u64 first, u64 count,
+ *   u64 sign_flips, u32 flags (1: colours, 2: the surface is closed), u32 0,
  *   then count f32 samples, then (colours) count x 4 bytes RGBA.
- * The engine has checked every part's record (sizes and hashes) before the join runs;
- * the join still refuses a part that does not belong where it is read (SL_E_CORRUPT).
+ * The engine has checked every part's record (sizes and hashes) before the join runs, so
+ * the join reads each part's arrays straight into place (no second checksum pass); it
+ * still refuses a part that does not belong where it is read (SL_E_CORRUPT).
  */
-#include <errno.h>
 #include <limits.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
 
-#include "core/atomicfile.h"
+#include "core/artifact.h"
 #include "stages/samples/samples_internal.h"
 
-enum { HEADER_SIZE = 56, FLAG_COLORS = 1, FLAG_CLOSED = 2 };
-static const char MAGIC[8] = {'S', 'L', 'S', 'P', 'A', 'R', 'T', '1'};
+enum { PART_HEAD = 48, FLAG_COLORS = 1, FLAG_CLOSED = 2, PART_FORMAT = 1 };
+static const char MAGIC[8] = {'S', 'L', 'S', 'P', 'A', 'R', 'T', 'S'};
 
 typedef struct part_header {
     uint32_t part, parts;
@@ -25,57 +26,25 @@ typedef struct part_header {
     uint32_t flags;
 } part_header;
 
-static void pack(unsigned char *h, const part_header *p)
-{
-    uint32_t zero = 0;
-    memcpy(h, MAGIC, 8);
-    memcpy(h + 8, &p->part, 4);
-    memcpy(h + 12, &p->parts, 4);
-    memcpy(h + 16, &p->vertices, 8);
-    memcpy(h + 24, &p->first, 8);
-    memcpy(h + 32, &p->count, 8);
-    memcpy(h + 40, &p->flips, 8);
-    memcpy(h + 48, &p->flags, 4);
-    memcpy(h + 52, &zero, 4);
-}
-
-static int unpack(const unsigned char *h, part_header *p)
-{
-    if (memcmp(h, MAGIC, 8) != 0)
-        return 0;
-    memcpy(&p->part, h + 8, 4);
-    memcpy(&p->parts, h + 12, 4);
-    memcpy(&p->vertices, h + 16, 8);
-    memcpy(&p->first, h + 24, 8);
-    memcpy(&p->count, h + 32, 8);
-    memcpy(&p->flips, h + 40, 8);
-    memcpy(&p->flags, h + 48, 4);
-    return 1;
-}
-
 int samples_part_write(const char *path, const sl_vdb_samples *s, int part, int parts,
                        int closed, uint64_t flips, sl_error *err)
 {
     uint64_t first, end;
     sl_samples_part_range(s->count, part, parts, &first, &end);
-    part_header p = {(uint32_t)part, (uint32_t)parts, s->count, first, end - first, flips,
-                     (s->colors ? FLAG_COLORS : 0u) | (closed ? FLAG_CLOSED : 0u)};
-    unsigned char h[HEADER_SIZE];
-    pack(h, &p);
-    sl_atomic_file f;
-    int rc = sl_atomic_open(&f, path, err);
-    if (rc)
-        return rc;
-    rc = sl_atomic_write(&f, h, sizeof h, err);
-    if (rc == 0)
-        rc = sl_atomic_write(&f, s->distance + first, (size_t)p.count * sizeof *s->distance, err);
-    if (rc == 0 && s->colors)
-        rc = sl_atomic_write(&f, s->colors + 4 * first, (size_t)p.count * 4, err);
-    if (rc) {
-        sl_atomic_abort(&f);
-        return rc;
-    }
-    return sl_atomic_commit(&f, err);
+    unsigned char h[PART_HEAD] = {0};
+    sl_put_u32(h, (uint32_t)part);
+    sl_put_u32(h + 4, (uint32_t)parts);
+    sl_put_u64(h + 8, s->count);
+    sl_put_u64(h + 16, first);
+    sl_put_u64(h + 24, end - first);
+    sl_put_u64(h + 32, flips);
+    sl_put_u32(h + 40, (s->colors ? FLAG_COLORS : 0u) | (closed ? FLAG_CLOSED : 0u));
+    sl_artifact_part body[3] = {{h, sizeof h},
+                                {s->distance + first, (end - first) * sizeof *s->distance},
+                                {s->colors ? s->colors + 4 * first : NULL,
+                                 s->colors ? (end - first) * 4 : 0}};
+    return sl_artifact_write(path, MAGIC, PART_FORMAT, sl_samples_stage.version, body,
+                             s->colors ? 3 : 2, err);
 }
 
 static int bad_part(const char *path, const char *what, sl_error *err)
@@ -86,24 +55,43 @@ static int bad_part(const char *path, const char *what, sl_error *err)
 static int read_part(const char *path, int part, int parts, sl_vdb_samples *out,
                      part_header *p, sl_error *err)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return sl_error_errno(err, errno, path, "open");
-    unsigned char h[HEADER_SIZE];
+    int fd;
+    sl_artifact_info info;
+    int rc = sl_artifact_open(path, MAGIC, PART_FORMAT, PART_FORMAT, &fd, &info, err);
+    if (rc == SL_E_CORRUPT) { /* say what it is in the join's words, keep the envelope's */
+        char why[sizeof err->message];
+        snprintf(why, sizeof why, "truncated or not a part file (%.600s)", err->message);
+        sl_error_init(err); /* the first failure wins: this one replaces it */
+        return bad_part(path, why, err);
+    }
+    if (rc)
+        return rc;
+    unsigned char h[PART_HEAD];
     uint64_t first, end;
     sl_samples_part_range(out->count, part, parts, &first, &end);
-    int rc = SL_OK;
-    if (fread(h, 1, sizeof h, f) != sizeof h || !unpack(h, p))
-        rc = bad_part(path, "not a samples part file", err);
-    else if (p->part != (uint32_t)part || p->parts != (uint32_t)parts ||
-             p->vertices != out->count || p->first != first || p->count != end - first ||
-             !(p->flags & FLAG_COLORS) != !out->colors)
+    rc = info.body_size < PART_HEAD ? bad_part(path, "truncated or not a part file", err)
+                                    : sl_artifact_pread(fd, path, h, sizeof h, 0, err);
+    if (rc) {
+        close(fd);
+        return rc;
+    }
+    *p = (part_header){sl_get_u32(h), sl_get_u32(h + 4), sl_get_u64(h + 8),
+                       sl_get_u64(h + 16), sl_get_u64(h + 24), sl_get_u64(h + 32),
+                       sl_get_u32(h + 40)};
+    uint64_t count = end - first, row = sizeof *out->distance + (out->colors ? 4 : 0);
+    if (p->part != (uint32_t)part || p->parts != (uint32_t)parts ||
+        p->vertices != out->count || p->first != first || p->count != count ||
+        !(p->flags & FLAG_COLORS) != !out->colors)
         rc = bad_part(path, "from another split of the item", err);
-    else if (fread(out->distance + first, sizeof *out->distance, p->count, f) != p->count ||
-             (out->colors && fread(out->colors + 4 * first, 4, p->count, f) != p->count) ||
-             fgetc(f) != EOF)
+    else if (info.body_size != PART_HEAD + count * row)
         rc = bad_part(path, "truncated or too long", err);
-    fclose(f);
+    else
+        rc = sl_artifact_pread(fd, path, out->distance + first, count * sizeof *out->distance,
+                               PART_HEAD, err);
+    if (rc == 0 && out->colors)
+        rc = sl_artifact_pread(fd, path, out->colors + 4 * first, count * 4,
+                               PART_HEAD + count * sizeof *out->distance, err);
+    close(fd);
     return rc;
 }
 
