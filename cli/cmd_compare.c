@@ -1,5 +1,5 @@
-/* `scanlod compare A.ply B.ply [--samples N] [--seed S] [--json]`: how far B's surface
- * is from A's (docs/fidelity.md). Results go to stdout, as a table or as one JSON
+/* `scanlod compare A B [--samples N] [--seed S] [--json]`: how far B's surface is from A's
+ * (docs/fidelity.md); A and B are scans in any format sl_scan_read reads. Results go to stdout, as a table or as one JSON
  * object for the benchmark scripts; a bad file is one line `scanlod: FILE: cause` on
  * stderr and exit 65; a usage error exits 64.
  */
@@ -13,10 +13,11 @@
 #include "cli/commands.h"
 #include "core/json.h"
 #include "geometry/mesh_distance.h"
-#include "geometry/ply.h"
+#include "formats/scan_read.h"
 
 static const char compare_usage[] =
-    "usage: scanlod compare A.ply B.ply [--samples N] [--seed S] [--json]\n"
+    "usage: scanlod compare A B [--samples N] [--seed S] [--json]\n"
+    "  A and B: scans (PLY, OBJ, STL, OFF, XYZ/PTS, glTF/GLB).\n"
     "  Surface distance from B to A and back: symmetric and one-sided Hausdorff, RMS and\n"
     "  mean, as fractions of A's bounding-box diagonal; B's boundary and non-manifold\n"
     "  edges and whether B is watertight. A may be a point cloud (a scan without faces):\n"
@@ -202,7 +203,7 @@ static void print_table(const compare_args *args, const sl_mesh *a, const sl_mes
  * the distance code checks. */
 static int read_surface(const char *path, int points_allowed, sl_mesh *m, sl_error *err)
 {
-    int rc = sl_ply_read(path, NULL, m, NULL, NULL, err);
+    int rc = sl_scan_read(path, NULL, m, NULL, NULL, err);
     if (rc == SL_OK && !(points_allowed && m->triangle_count == 0))
         rc = sl_mesh_check_surface(m, path, err);
     return rc;

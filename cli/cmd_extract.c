@@ -16,6 +16,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "cli/cli_output.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "runtime/lod_io.h"
@@ -25,6 +26,14 @@
 #include "geometry/morph_target.h"
 #include "stages/export/export.h"
 
+/* A level to `path` in the format its extension names, a GLB at the [export] defaults. */
+static int write_mesh(const char *path, const sl_lod_mesh *mesh, const char *extras,
+                      sl_error *err)
+{
+    sl_export_glb glb = sl_export_default_glb();
+    return sl_export_write_mesh(path, mesh, extras, &glb, NULL, err);
+}
+
 static const char usage[] =
     "usage: scanlod extract MODEL.slod (--expansions K | --triangles N | --lod-percent P |\n"
     "                                   --max-error E) -o OUT.{ply,glb,obj} [--repeat R [--hot]]\n"
@@ -33,9 +42,9 @@ static const char usage[] =
     "       scanlod extract OCTREE.slot --level L -o OUT.{ply,glb,obj}\n"
     "Cuts one level of detail from a model built by `scanlod run` (published as\n"
     "OUTPUT/ITEM/model.slod): K expansions of the LOD array, the largest level within N\n"
-    "triangles, P percent of the LOD array's expansions that have surface (paper Table 1;\n"
-    "100 = the finest level), or the coarsest level whose\n"
-    "geometric error is at most E (world units). Prints what it wrote and how long the\n"
+    "triangles (the finest when N is above it), P percent of the LOD array's expansions\n"
+    "that have surface (paper Table 1; 100 = the finest level), or the coarsest level\n"
+    "whose geometric error is at most E (world units). Prints what it wrote and how long the\n"
     "generation took (in a fresh process: the first extraction). --repeat R then times R\n"
     "more extractions of the same level into buffers allocated once, as a viewer using\n"
     "the runtime API does, each after flushing the CPU caches (a viewer renders between\n"
@@ -229,7 +238,9 @@ static int parse(int argc, char **argv, request *r)
     if (!(r->input && r->output && r->kind && !(r->repeat && r->kind == 'l') &&
           !(r->hot && !r->repeat)))
         return -1;
-    return check_value(r) ? SL_EXIT_USAGE : check_morph(r);
+    if (check_value(r) || sl_cli_check_output("extract", "-o", r->output))
+        return SL_EXIT_USAGE;
+    return check_morph(r);
 }
 
 /* One line "scanlod: FILE: cause". The model is the user's file: failing to read it is
@@ -263,7 +274,7 @@ static int extract_level(const request *r)
     }
     sl_lod_mesh mesh;
     int rc = sl_octree_level_mesh(&tree, (uint32_t)r->count, &mesh);
-    if (rc == 0 && sl_export_write_mesh(r->output, &mesh, NULL, NULL, NULL, &err) == 0)
+    if (rc == 0 && write_mesh(r->output, &mesh, NULL, &err) == 0)
         printf("level %llu: %llu triangles, %llu vertices -> %s\n", (unsigned long long)r->count,
                (unsigned long long)mesh.triangle_count, (unsigned long long)mesh.vertex_count,
                r->output);
@@ -369,7 +380,7 @@ static int write_weighted(const request *r, const sl_lod_mesh *mesh, const sl_lo
             sl_morph_refined_interpolate_rgba(&m, mesh->colors, col);
         sl_morph_blend(m.positions, m.targets, m.vertex_count, r->weight, m.positions);
         sl_lod_mesh at = {m.vertex_count, m.triangle_count, m.positions, nrm, col, m.triangles};
-        rc = sl_export_write_mesh(r->output, &at, extras, NULL, NULL, err);
+        rc = write_mesh(r->output, &at, extras, err);
     }
     *moved = m.max_move, *added = m.triangle_count - m.level_triangles;
     free(nrm), free(col);
@@ -400,12 +411,13 @@ static int write_morph(const request *r, sl_lod_model *m, const sl_lod_mesh *mes
     double moved = 0;
     uint64_t added = 0;
     if (dot && !strcasecmp(dot, ".glb")) {
-        sl_export_glb glb = {sl_export_default_config().glb, 1.0, 0, NULL, &coarser};
+        sl_export_glb glb = sl_export_default_glb();
+        glb.morph_to = &coarser;
         rc = sl_export_write_mesh(r->output, mesh, extras, &glb, NULL, err);
         snprintf(note, note_size, ", morph target to expansions %u (%llu triangles)", k,
                  (unsigned long long)coarser.triangle_count);
     } else if (r->weight == 0) { /* the level itself, byte for byte */
-        rc = sl_export_write_mesh(r->output, mesh, extras, NULL, NULL, err);
+        rc = write_mesh(r->output, mesh, extras, err);
         snprintf(note, note_size, ", at weight 0 of the morph to expansions %u: the level", k);
     } else {
         rc = write_weighted(r, mesh, &coarser, extras, &moved, &added, err);
@@ -431,10 +443,14 @@ static int choose_k(const request *r, const sl_lod_model *m, uint32_t *k)
         *k = (uint32_t)r->count;
         return 0;
     case 't':
+        /* A budget is a ceiling: above the finest level it gets the finest, as [export]
+         * budgets do ("clamped"). It was refused (exit 64), and so was the README's own
+         * `--triangles 50000` on the demo's bunny (issue 34 item 6). */
         if (r->count > finest)
-            return bad_request("--triangles %llu exceeds the finest level (%llu triangles)",
-                               (unsigned long long)r->count, (unsigned long long)finest);
-        *k = sl_lod_expansions_for_triangles(m, r->count);
+            fprintf(stderr, "scanlod extract: --triangles %llu is above the finest level "
+                            "(%llu triangles): extracting the finest\n",
+                    (unsigned long long)r->count, (unsigned long long)finest);
+        *k = sl_lod_expansions_for_triangles(m, r->count > finest ? finest : r->count);
         return 0;
     case 'p':
         *k = sl_lod_expansions_for_percent(m, r->value);
@@ -504,7 +520,7 @@ int sl_cmd_extract(int argc, char **argv)
     int written = err.code == SL_OK ? 0 : -1;
     if (written == 0)
         written = r.morph ? write_morph(&r, cut, &mesh, extras, note, sizeof note, &err)
-                          : sl_export_write_mesh(r.output, &mesh, extras, NULL, NULL, &err);
+                          : write_mesh(r.output, &mesh, extras, &err);
     if (written == 0)
         printf("expansions %u of %u: %llu triangles, %llu vertices, max error %.6g, "
                "generated in %.7f s%s%s -> %s\n",

@@ -2,7 +2,8 @@
  *
  * Results go to stdout as `key: value` lines (stable, greppable); a failure is one line
  * `scanlod: FILE: cause` on stderr. Each file kind has one inspector in the table below,
- * chosen by suffix, with PLY as the default (a PLY is recognised by its content).
+ * chosen by suffix, with the scan readers as the default (formats/scan_read.h: a scan's
+ * format is recognised by its magic and name).
  */
 #include <math.h>
 #include <stdio.h>
@@ -10,15 +11,18 @@
 
 #include "cli/commands.h"
 #include "core/error.h"
-#include "geometry/ply.h"
+#include "formats/scan_read.h"
+#include "formats/scan_texture.h"
 #include "runtime/lod_io.h"
 
 static void usage(FILE *f)
 {
-    fputs("usage: scanlod inspect FILE.ply|MODEL.slod\n"
-          "Reads the whole file, validates it and prints what it holds. A PLY: format, elements\n"
-          "and properties, counts, normals/colours/texture coordinates/range grid, texture\n"
-          "file, viewpoint, bounding box, non-finite vertices, faces triangulated. A LOD model\n"
+    fputs("usage: scanlod inspect SCAN|MODEL.slod\n"
+          "Reads the whole file, validates it and prints what it holds. A scan (PLY, OBJ + MTL,\n"
+          "STL, OFF, XYZ/PTS, glTF/GLB): format (a PLY's elements and properties), counts,\n"
+          "normals/colours/texture coordinates/range grid, texture, units and up axis the file\n"
+          "states, viewpoint, bounding box, non-finite vertices, faces triangulated, warnings\n"
+          "(a missing MTL or image). A LOD model\n"
           "(.slod, checked as `extract` checks it): its grid, octree levels, crossings, LOD\n"
           "array, triangles and error from the coarsest to the finest cut.\n"
           "Exit status: 0 valid; 65 the file is malformed or unreadable; 75 out of memory\n"
@@ -64,14 +68,24 @@ static uint64_t grid_points(const sl_mesh *m)
     return n;
 }
 
-static void print_ply(const char *path, const sl_mesh *m, const sl_ply_info *info)
+static void print_format(const sl_mesh *m, const sl_scan_info *info)
+{
+    if (!strcmp(m->format, "ply")) {
+        printf("format: %s 1.0 (header %llu bytes)\n", format_name(info->ply.format),
+               (unsigned long long)info->ply.header_bytes);
+        printf("elements: %s\n", info->ply.elements);
+    } else {
+        printf("format: %s (%s)\n", m->format, info->detail);
+    }
+}
+
+static void print_scan(const char *path, const sl_mesh *m, const sl_scan_info *info)
 {
     double lo[3], hi[3];
+    char texture[320];
     uint64_t nonfinite = bounds(m, lo, hi);
     printf("file: %s\n", path);
-    printf("format: %s 1.0 (header %llu bytes)\n", format_name(info->format),
-           (unsigned long long)info->header_bytes);
-    printf("elements: %s\n", info->elements);
+    print_format(m, info);
     printf("vertices: %llu\n", (unsigned long long)m->vertex_count);
     printf("faces: %llu declared, %llu triangles (%llu polygons fan-triangulated, %llu faces "
            "with fewer than 3 corners dropped)\n",
@@ -86,7 +100,9 @@ static void print_ply(const char *path, const sl_mesh *m, const sl_ply_info *inf
                (unsigned long long)grid_points(m));
     else
         printf("range grid: no\n");
-    printf("texture file: %s\n", m->texture_file[0] ? m->texture_file : "none");
+    printf("texture file: %s\n", sl_scan_texture_name(m, texture, sizeof texture));
+    printf("units: %s\nup: %s\n", m->units[0] ? m->units : "not stated",
+           m->up_axis ? (m->up_axis == 'z' ? "+z" : "+y") : "not stated");
     if (m->has_viewpoint)
         printf("viewpoint: %.9g %.9g %.9g\n", m->viewpoint[0], m->viewpoint[1], m->viewpoint[2]);
     else
@@ -97,15 +113,18 @@ static void print_ply(const char *path, const sl_mesh *m, const sl_ply_info *inf
     else
         printf("bbox: none\n");
     printf("non-finite vertices: %llu\n", (unsigned long long)nonfinite);
+    int w = m->warning_count > 0;
+    printf("warnings: %u%s%s%s\n", m->warning_count, w ? " (" : "", w ? m->warnings : "",
+           w ? ")" : "");
 }
 
-static int inspect_ply(const char *path, sl_error *err)
+static int inspect_scan(const char *path, sl_error *err)
 {
     sl_mesh m;
-    sl_ply_info info;
-    int rc = sl_ply_read(path, NULL, &m, &info, NULL, err);
+    sl_scan_info info;
+    int rc = sl_scan_read(path, NULL, &m, &info, NULL, err);
     if (rc == 0)
-        print_ply(path, &m, &info);
+        print_scan(path, &m, &info);
     sl_mesh_release(&m);
     return rc;
 }
@@ -152,7 +171,7 @@ static const struct inspector {
     const char *suffix; /* NULL: the default */
     int (*inspect)(const char *path, sl_error *err);
 } inspectors[] = {
-    {NULL, inspect_ply},
+    {NULL, inspect_scan},
     {".slod", inspect_slod},
 };
 

@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "core/log.h"
 #include "core/signals.h"
+#include "formats/scan_read.h"
 #include "pipeline/engine.h"
 #include "stages/registry.h"
 
@@ -41,9 +42,10 @@ static const char *const usage_text[] = {
               "(sizes and content hashes). Exit 0 when all do, 65 otherwise.\n",
     "plan", "usage: scanlod plan CONFIG [-s section.key=value]... [--threads N] [--json]\n"
             "Before a run: per item of the collection, the expected peak memory, time and\n"
-            "disk, from each scan's PLY header and the config (a cost model fitted on this\n"
-            "project's runs; nothing is run or written). Exit 0, or 65 when a scan's\n"
-            "header cannot be read (said per item).\n",
+            "disk, from each scan's PLY header, its shape (a mesh of up to 2 M triangles is\n"
+            "read once) and the config (a cost model fitted on this project's runs; nothing\n"
+            "is run or written). Exit 0, or 65 when a scan's header cannot be read (said\n"
+            "per item).\n",
     "status", "usage: scanlod status CONFIG [-s section.key=value]...\n"
               "Per stage: ready / claimed / done / failed / quarantined, and the reasons.\n",
 };
@@ -127,7 +129,7 @@ static int open_engine(const char *command, int argc, char **argv, int open_logs
     }
     sl_engine_options opts = {a.config, a.overrides, a.override_count, command,
                               a.quiet, a.verbose, open_logs, sl_stage_registry(),
-                              sl_plan_peak_mb};
+                              sl_plan_peak_mb, sl_scan_suffixes()};
     sl_error err;
     sl_error_init(&err);
     if (sl_engine_open(e, &opts, &err) != 0) {

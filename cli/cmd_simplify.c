@@ -1,7 +1,8 @@
-/* `scanlod simplify IN.ply --method M (--triangles N | --ratio R | --max-error E)
- * [method options] -o OUT.ply`: one mesh simplified by one of the papers' methods (segment:
+/* `scanlod simplify IN --method M (--triangles N | --ratio R | --max-error E)
+ * [method options] -o OUT.ply`: one mesh (any scan format sl_scan_read reads) simplified by one
+ * of the papers' methods (segment:
  * paper 3, docs/segmentation.md; cluster: paper 2, docs/clustering.md), without a
- * collection or a work folder (ARCHITECTURE section 1).
+ * collection or a work folder (README.md, "Using it").
  *
  * The input is cleaned exactly as the range stage cleans it (welded, degenerate and
  * non-finite faces dropped, an inside-out mesh turned), so a level made here equals the
@@ -23,11 +24,12 @@
 #include <strings.h>
 #include <time.h>
 
+#include "cli/cli_output.h"
 #include "cli/commands.h"
 #include "cli/simplify.h"
 #include "core/json.h"
 #include "core/signals.h"
-#include "geometry/ply.h"
+#include "formats/scan_read.h"
 #include "stages/range/range.h"
 
 double sl_simplify_seconds_now(void)
@@ -67,10 +69,11 @@ static const simplify_method *const methods[] = {&sl_simplify_segment, &sl_simpl
 /* --- the command -------------------------------------------------------------------- */
 
 static const char simplify_usage[] =
-    "usage: scanlod simplify IN.ply --method M (--triangles N | --ratio R | --max-error E)\n"
+    "usage: scanlod simplify IN --method M (--triangles N | --ratio R | --max-error E)\n"
     "                        [method options] [-o OUT.ply] [--segment-map MAP.ply]\n"
     "                        [--strict] [--json]\n"
-    "  One mesh simplified by one method, cleaned first as the pipeline's range stage does.\n"
+    "  One mesh (PLY, OBJ, STL, OFF, glTF/GLB) simplified by one method, cleaned first as\n"
+    "  the pipeline's range stage does.\n"
     "  --method M       segment (paper 3) or cluster (paper 2)\n"
     "  --triangles N    at most N triangles, as close as the method's search gets\n"
     "  --ratio R        at most R x the input's triangles (0 < R <= 1)\n"
@@ -186,6 +189,9 @@ static int parse_args(int argc, char **argv, simplify_args *a)
     if (a->output && (!dot || strcasecmp(dot, ".ply")))
         return usage_error("-o %s: simplify writes PLY (OUT.ply); GLB levels come from a "
                            "run with [lod] method = segment or cluster", a->output);
+    if ((a->output && sl_cli_check_output("simplify", "-o", a->output)) ||
+        (a->segment_map && sl_cli_check_output("simplify", "--segment-map", a->segment_map)))
+        return SL_EXIT_USAGE;
     a->job.has_output = a->output != NULL;
     if (a->method->check(&a->job)) /* the method said what, in one line */
         return SL_EXIT_USAGE;
@@ -375,7 +381,7 @@ int sl_cmd_simplify(int argc, char **argv)
     double seconds[4] = {0, 0, 0, 0}, t = sl_simplify_seconds_now();
     sl_mesh mesh;
     sl_mesh_init(&mesh);
-    rc = sl_ply_read(a.input, NULL, &mesh, NULL, &progress, &err);
+    rc = sl_scan_read(a.input, NULL, &mesh, NULL, &progress, &err);
     if (rc) {
         sl_mesh_release(&mesh);
         return report_error(&err, a.input, 1);

@@ -4,6 +4,7 @@
 
 #include "cli/commands.h"
 #include "core/error.h"
+#include "shim/cxx_runtime.h"
 #include "shim/oiio_shim.h"
 
 typedef struct command {
@@ -35,6 +36,7 @@ static void usage(FILE *out)
 
 int main(int argc, char **argv)
 {
+    sl_cxx_terminate_install(); /* an uncaught std::bad_alloc is out of memory (exit 75) */
     if (argc < 2) {
         usage(stderr);
         return SL_EXIT_USAGE;

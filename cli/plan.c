@@ -1,33 +1,50 @@
 /* `scanlod plan`: a pre-flight estimate per item of the collection (peak memory, time,
- * disk) from each scan's PLY header and the config, so a scheduler can ask for the right
- * node before anything runs (issue 14). The engine walks the input as its scan would
+ * disk) from each scan's header (sl_scan_read_info: a PLY's or OFF's counts, a glTF's
+ * accessors, a quick count of a text format's lines) and the config, so a scheduler can ask
+ * for the right node before anything runs (issue 14). The engine walks the input as its scan would
  * (sl_engine_each_item); reading headers and costing stages is the command's business,
  * so the engine stays below geometry/ and knows no stage by name.
  *
  * The estimate is a cost model, not a trial run: every stage of the item's method costs
  * time a + b * N^e and peak memory c + d * N^f, with N the input's triangles in millions
  * (its points for a point cloud), coefficients fitted on this project's own runs at 2
- * threads (scripts/bench/plan_calibrate.py; docs/cluster.md "Asking for the right node").
+ * threads (scripts/bench/plan_calibrate.py; docs/cluster.md "Asking for the right node"),
+ * N scaled for the octree stages by what the scan's geometry says about its samples
+ * (cli/plan_shape.h: a mesh is read once, in a child process).
  * Stages are separate child processes, so the item's peak is the largest stage's and its
- * time their sum. The benchmark's growth phase prints the plan beside what the run
- * measured, so a drift of the model shows up in docs/benchmarks.md.
+ * time their sum. The benchmark's growth and shapes phases print the plan beside what the
+ * run measured, so a drift of the model shows up in docs/benchmarks.md.
  */
 #include "cli/plan.h"
+#include "cli/plan_shape.h"
 
+#include <errno.h>
 #include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "core/json.h"
-#include "geometry/ply.h"
+#include "formats/scan_read.h"
 #include "pipeline/stage.h"
 
-/* Cost of one stage, N in millions: seconds = a + b * N^e, peak RSS MB = c + d * N^f. */
+/* Cost of one stage, N in millions: seconds = a + b * N^e, peak RSS MB = c + d * N^f.
+ * An octree stage's work follows its samples, not its triangles (cli/plan_shape.h): for
+ * it N is the triangles times the shape's ratio (samples per triangle against the
+ * calibration tori's), and its memory's N that again times 1 + k * the shape's scattered
+ * share; the export's memory follows its samples for a part (the model it cuts) and its
+ * triangles for the rest (the levels it writes are capped at the input's count). */
 typedef struct stage_cost {
     const char *stage;     /* [METHOD:]STAGE[+fidelity]: +fidelity is the export measuring
                               its levels, METHOD: a method's own cost for a shared stage */
     double a, b, e, c, d, f;
+    double k;              /* octree stages: memory per sample of a soup's scattered band
+                              against a surface's, minus 1 */
+    double share;          /* the part of d that follows the samples: 0 for a stage whose
+                              work follows its input (range, other methods' stages) */
 } stage_cost;
 
 /* Octree stages: time from the growth benchmark on a quiet machine (1, 5 and 20 M
@@ -61,26 +78,41 @@ typedef struct stage_cost {
  * the build before on one machine: 0.75 / 0.73 / 0.96 at 1 / 5 / 20 M), and the crack's
  * memory when it dropped the node metrics and its layout early (251 / 1,230 / 4,828 MB);
  * their constants c set again to rocker_arm's peaks without thumbnails (merge 24, crack
- * 23 MB; 3 runs). Refit with scripts/bench/plan_calibrate.py. */
+ * 23 MB; 3 runs). Refit with scripts/bench/plan_calibrate.py.
+ * The octree stages' lines hold for surfaces of about 1.56 samples per triangle (the
+ * tori; real scans 1.2-2.2); for slivers and soups, whose samples per triangle are many
+ * times that, N is scaled by the shape (cli/plan_shape.h; issue 34: 500k slivers planned
+ * at 267 MB ran at 2,225 MiB). k and share fitted on gen_surface's slivers (--aspect 16;
+ * they cost what a torus of as many samples costs, but the export's levels stay capped at
+ * the input's count: share 0.85) and soups (--soup, 5k-80k triangles: their bands are all
+ * border, with many sign changes, so merge, priority and crack cost 1.6-2x per sample, the
+ * samples stage a third), by plan_calibrate.py --shapes; the peaks then within 0.85-1.27 of
+ * the runs at 20k-500k slivers and 5k-80k soups (docs/benchmarks.md section 4b). */
 #define IMAGES_MB 110.0
 static const stage_cost mesh_costs[] = {
-    {"range", 0.014, 0.403, 1.081, 5, 94, 0.95},
-    {"samples", 0.105, 2.42, 1.047, 15, 133, 0.95},
-    {"merge", 0.078, 2.34, 1.13, 20, 167, 0.963},
-    {"priority", 0.107, 0.65, 1.14, 7, 164, 1.0},
-    {"crack", 0.117, 3.7, 1.04, 18, 230, 1.0},
-    {"export", 0.3, 4.05, 1.062, 8, 287, 0.95},
-    {"export+fidelity", 2.5, 5.5, 1.062, 8, 287, 0.95},
+    {"range", 0.014, 0.403, 1.081, 5, 94, 0.95, 0, 0},
+    {"samples", 0.105, 2.42, 1.047, 15, 133, 0.95, -0.65, 1},
+    {"merge", 0.078, 2.34, 1.13, 20, 167, 0.963, 0.6, 1},
+    {"priority", 0.107, 0.65, 1.14, 7, 164, 1.0, 0.6, 1},
+    {"crack", 0.117, 3.7, 1.04, 18, 230, 1.0, 1.0, 1},
+    {"export", 0.3, 4.05, 1.062, 8, 287, 0.95, 0.6, 0.85},
+    {"export+fidelity", 2.5, 5.5, 1.062, 8, 287, 0.95, 0.6, 0.85},
+    /* The refine stage (every method's levels to their counts, docs/levels.md): its work
+     * follows the input's triangles (the scan's collapses and the fit's samples), not the
+     * octree's samples. plan_calibrate.py --methods best at 20k, 100k, 300k and 1 M (tori,
+     * 2 threads, a loaded machine, 2026-12-06): before this line the plan said 0.09-0.26
+     * of the measured time and 0.44 of the peak at 1 M, the refine stage's. */
+    {"refine", 5.35, 78.4, 1.0, 8, 913, 1.0, 0, 0},
     /* The segment and cluster methods: plan_calibrate.py at 30k, 100k and 200k triangles on
      * a loaded machine, memory as measured, time from CPU seconds / 1.3 (what the wall
      * time is on a quiet one); their export writes levels from a level list, not a model,
      * hence its own lines. */
-    {"segment", 1.05, 350, 1.0, 10, 318, 1.0},
-    {"cluster", 0.0, 52.1, 1.0, 6.5, 402, 1.0},
-    {"segment:export", 0.45, 3.2, 1.0, 18, 160, 1.0},
-    {"segment:export+fidelity", 2.2, 18.4, 1.0, 16, 198, 1.0},
-    {"cluster:export", 0.45, 3.2, 1.0, 18, 160, 1.0},
-    {"cluster:export+fidelity", 2.2, 18.4, 1.0, 16, 198, 1.0},
+    {"segment", 1.05, 350, 1.0, 10, 318, 1.0, 0, 0},
+    {"cluster", 0.0, 52.1, 1.0, 6.5, 402, 1.0, 0, 0},
+    {"segment:export", 0.45, 3.2, 1.0, 18, 160, 1.0, 0, 0},
+    {"segment:export+fidelity", 2.2, 18.4, 1.0, 16, 198, 1.0, 0, 0},
+    {"cluster:export", 0.45, 3.2, 1.0, 18, 160, 1.0, 0, 0},
+    {"cluster:export+fidelity", 2.2, 18.4, 1.0, 16, 198, 1.0, 0, 0},
 };
 
 static const stage_cost *find_cost(const char *key)
@@ -128,11 +160,12 @@ typedef struct plan_state {
     double total_seconds, peak_mb, work_mb, published_mb;
 } plan_state;
 
-/* The item's stages costed from its header: the sum of their times and the largest
- * peak (and which stage has it, when `peak_stage` is given); each stage into `json` when
- * it is not NULL. */
-static void stage_costs(const sl_engine_facts *e, const sl_ply_info *info, sl_json *json,
-                        double *seconds, double *peak, const char **peak_stage)
+/* The item's stages costed from its header and shape: the sum of their times and the
+ * largest peak (and which stage has it, when `peak_stage` is given); each stage into
+ * `json` when it is not NULL. */
+static void stage_costs(const sl_engine_facts *e, const sl_scan_info *info,
+                        const sl_plan_shape *shape, sl_json *json, double *seconds, double *peak,
+                        const char **peak_stage)
 {
     int points = info->declared_faces == 0;
     double n = (double)(points ? info->declared_vertices : info->declared_faces) / 1e6;
@@ -145,7 +178,10 @@ static void stage_costs(const sl_engine_facts *e, const sl_ply_info *info, sl_js
         const stage_cost *c = cost_of(e->method, name, fidelity);
         if (!c)
             continue; /* a stage the model has not been fitted for: costs nothing here */
-        double t = (c->a + c->b * pow(n, c->e)) * tf, m = c->c + c->d * pow(n, c->f);
+        double nt = c->share > 0 ? n * shape->ratio : n;
+        double nm = nt * (1 + c->k * shape->scattered);
+        double t = (c->a + c->b * pow(nt, c->e)) * tf;
+        double m = c->c + c->d * (c->share * pow(nm, c->f) + (1 - c->share) * pow(n, c->f));
         if (!strcmp(name, "export") && thumbnails)
             m += IMAGES_MB;
         *seconds += t;
@@ -161,15 +197,79 @@ static void stage_costs(const sl_engine_facts *e, const sl_ply_info *info, sl_js
     }
 }
 
+/* The item's shape, measured in a child process: a hostile file can then cost the plan
+ * (and the engine's admission, which runs in the run's own process) neither its memory
+ * nor its life; a child that fails leaves the header's estimate. */
+static void measure_shape(const sl_engine_facts *e, const char *path, const sl_scan_info *info,
+                          sl_plan_shape *out)
+{
+    memset(out, 0, sizeof *out);
+    out->ratio = 1;
+    int fds[2];
+    if (pipe(fds) != 0)
+        return;
+    fflush(NULL);
+    pid_t pid = fork();
+    if (pid == 0) {
+        close(fds[0]);
+        sl_plan_shape shape;
+        sl_plan_shape_of(path, info, e->stages, e->stage_count, e->cfg, &shape);
+        _exit(write(fds[1], &shape, sizeof shape) == (ssize_t)sizeof shape ? 0 : 1);
+    }
+    close(fds[1]);
+    sl_plan_shape shape;
+    ssize_t got = pid > 0 ? read(fds[0], &shape, sizeof shape) : -1;
+    close(fds[0]);
+    int status = 0;
+    while (pid > 0 && waitpid(pid, &status, 0) < 0 && errno == EINTR)
+        ;
+    if (got == (ssize_t)sizeof shape && WIFEXITED(status) && WEXITSTATUS(status) == 0)
+        *out = shape;
+}
+
+/* The item's shape, measured once per file version: the engine's admission asks before
+ * each of an item's stages, and measuring costs about the range stage's time. */
+#define SHAPE_CACHE 64
+static void shape_of(const sl_engine_facts *e, const char *path, const sl_scan_info *info,
+                     sl_plan_shape *out)
+{
+    static struct {
+        char path[PATH_MAX];
+        struct stat st;
+        sl_plan_shape shape;
+    } cache[SHAPE_CACHE];
+    static unsigned next;
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        measure_shape(e, path, info, out);
+        return;
+    }
+    for (int i = 0; i < SHAPE_CACHE; i++)
+        if (!strcmp(cache[i].path, path) && st.st_dev == cache[i].st.st_dev &&
+            st.st_ino == cache[i].st.st_ino && st.st_size == cache[i].st.st_size &&
+            st.st_mtim.tv_sec == cache[i].st.st_mtim.tv_sec &&
+            st.st_mtim.tv_nsec == cache[i].st.st_mtim.tv_nsec) {
+            *out = cache[i].shape;
+            return;
+        }
+    measure_shape(e, path, info, out);
+    unsigned slot = next++ % SHAPE_CACHE;
+    snprintf(cache[slot].path, sizeof cache[slot].path, "%s", path);
+    cache[slot].st = st;
+    cache[slot].shape = *out;
+}
+
 double sl_plan_peak_mb(const sl_engine_facts *facts, const char *path, const char **stage)
 {
-    sl_ply_info info;
+    sl_scan_info info;
     sl_error err;
     sl_error_init(&err);
-    if (sl_ply_read_info(path, NULL, &info, &err) != 0)
+    if (sl_scan_read_info(path, NULL, &info, &err) != 0)
         return 0; /* the range stage says what is wrong with it */
     double seconds, peak;
-    stage_costs(facts, &info, NULL, &seconds, &peak, stage);
+    sl_plan_shape shape;
+    shape_of(facts, path, &info, &shape);
+    stage_costs(facts, &info, &shape, NULL, &seconds, &peak, stage);
     return peak;
 }
 
@@ -177,14 +277,14 @@ static void plan_item(void *ctx, const char *rel, const char *path, const char *
 {
     plan_state *p = ctx;
     const sl_engine_facts *e = &p->facts;
-    sl_ply_info info;
+    sl_scan_info info;
     sl_error err;
     sl_error_init(&err);
     int rc = -1;
     if (unreadable)
         sl_error_set(&err, SL_E_BADINPUT, 0, path, "%s", unreadable);
     else
-        rc = sl_ply_read_info(path, NULL, &info, &err);
+        rc = sl_scan_read_info(path, NULL, &info, &err);
     p->items++;
     if (rc != 0) {
         char line[1400];
@@ -211,7 +311,9 @@ static void plan_item(void *ctx, const char *rel, const char *path, const char *
         sl_json_object_begin(p->json, "stages");
     }
     double seconds = 0, peak = 0;
-    stage_costs(e, &info, p->json, &seconds, &peak, NULL);
+    sl_plan_shape shape;
+    shape_of(e, path, &info, &shape);
+    stage_costs(e, &info, &shape, p->json, &seconds, &peak, NULL);
     double work = work_mb[0] + work_mb[1] * n, published = published_mb[0] + published_mb[1] * n;
     int fits = e->memory_limit_mb <= 0 || peak <= (double)e->memory_limit_mb;
     /* Work items below the item ([queue] part_mb): what a scheduler can spread. */
@@ -223,6 +325,14 @@ static void plan_item(void *ctx, const char *rel, const char *path, const char *
             sl_json_u64(p->json, "samples", (uint64_t)samples_parts);
             sl_json_object_end(p->json);
         }
+        if (shape.read) { /* what the geometry said (cli/plan_shape.h) */
+            sl_json_object_begin(p->json, "shape");
+            sl_json_double(p->json, "leaf_size", shape.leaf);
+            sl_json_double(p->json, "samples", shape.samples);
+            sl_json_double(p->json, "samples_ratio", shape.ratio);
+            sl_json_double(p->json, "scattered", shape.scattered);
+            sl_json_object_end(p->json);
+        }
         sl_json_double(p->json, "peak_rss_mb", peak);
         sl_json_double(p->json, "seconds", seconds);
         sl_json_double(p->json, "work_mb", work);
@@ -230,13 +340,17 @@ static void plan_item(void *ctx, const char *rel, const char *path, const char *
         sl_json_bool(p->json, "fits_memory_limit", fits);
         sl_json_object_end(p->json);
     } else {
-        char parts_note[48] = "";
+        char parts_note[48] = "", shape_note[80] = "";
         if (samples_parts > 1)
             snprintf(parts_note, sizeof parts_note, "  samples in %d parts", samples_parts);
-        fprintf(p->out, "%-32s %12llu %-9s %9.0f %9.1f %9.0f %9.0f%s%s\n", rel,
+        /* Why a small scan plans big: slivers, a soup (cli/plan_shape.h). */
+        if (shape.ratio >= 2)
+            snprintf(shape_note, sizeof shape_note, "  %.1fx the samples of a smooth surface",
+                     shape.ratio);
+        fprintf(p->out, "%-32s %12llu %-9s %9.0f %9.1f %9.0f %9.0f%s%s%s\n", rel,
                 (unsigned long long)(points ? info.declared_vertices : info.declared_faces),
                 points ? "points" : "triangles", peak, seconds, work, published,
-                fits ? "" : "  over [run] memory_limit_mb", parts_note);
+                fits ? "" : "  over [run] memory_limit_mb", parts_note, shape_note);
     }
     p->total_seconds += seconds;
     p->work_mb += work;

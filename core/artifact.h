@@ -1,4 +1,4 @@
-/* The envelope of every binary artifact (ARCHITECTURE section 6).
+/* The envelope of every binary artifact (docs/formats.md).
  *
  *   offset size  field
  *   0      8     magic (e.g. "SLPOINTS")
@@ -17,6 +17,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "core/error.h"
 
@@ -84,6 +85,33 @@ static inline uint64_t sl_get_u64(const unsigned char *p)
     uint64_t v = 0;
     for (int i = 0; i < 8; i++)
         v |= (uint64_t)p[i] << (8 * i);
+    return v;
+}
+
+static inline void sl_put_f64(unsigned char *p, double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, 8);
+    sl_put_u64(p, u);
+}
+static inline double sl_get_f64(const unsigned char *p)
+{
+    uint64_t u = sl_get_u64(p);
+    double v;
+    memcpy(&v, &u, 8);
+    return v;
+}
+static inline void sl_put_f32(unsigned char *p, float v)
+{
+    uint32_t u;
+    memcpy(&u, &v, 4);
+    sl_put_u32(p, u);
+}
+static inline float sl_get_f32(const unsigned char *p)
+{
+    uint32_t u = sl_get_u32(p);
+    float v;
+    memcpy(&v, &u, 4);
     return v;
 }
 

@@ -138,8 +138,8 @@ int sl_atomic_open(sl_atomic_file *f, const char *final_path, sl_error *err)
     snprintf(f->tmp_path, sizeof f->tmp_path, "%s/.%.200s.%.40s.%ld.%u.tmp", dir, base, host,
              (long)getpid(), n);
     f->fd = sl_io_open(f->tmp_path, O_WRONLY | O_CREAT | O_EXCL, 0644);
-    if (f->fd < 0)
-        return sl_error_errno(err, errno, f->tmp_path, "create");
+    if (f->fd < 0) /* said of the file asked for: the temp name means nothing to a user */
+        return sl_error_errno(err, errno, final_path, "create");
     live_add(f->tmp_path);
     f->buf = malloc(WRITE_BUFFER_SIZE);
     if (!f->buf) {

@@ -58,6 +58,24 @@ int sl_error_set(sl_error *err, int code, int sys_errno, const char *file, const
     return code;
 }
 
+int sl_error_corrupt(sl_error *err, const char *file, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    sl_error_setv(err, SL_E_CORRUPT, 0, file, fmt, ap);
+    va_end(ap);
+    return SL_E_CORRUPT;
+}
+
+int sl_error_nomem(sl_error *err, const char *file, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    sl_error_setv(err, SL_E_NOMEM, ENOMEM, file, fmt, ap);
+    va_end(ap);
+    return SL_E_NOMEM;
+}
+
 int sl_error_code_of_errno(int sys_errno)
 {
     switch (sys_errno) {

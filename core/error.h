@@ -3,7 +3,7 @@
  * so the message a user sees names the root cause, not its echo).
  *
  * Each code belongs to a failure class that decides what the engine does with the item
- * (ARCHITECTURE section 3): bad input is quarantined at once, transient failures
+ * (docs/engine.md, "Failure classes"): bad input is quarantined at once, transient failures
  * (no space, I/O error, interrupt, lost lease, out of memory) are retried later and never
  * quarantined, storage failures that need a human stop the run, internal errors are bugs.
  *
@@ -83,6 +83,15 @@ int sl_error_set(sl_error *err, int code, int sys_errno, const char *file, const
     __attribute__((format(printf, 5, 6)));
 int sl_error_setv(sl_error *err, int code, int sys_errno, const char *file, const char *fmt,
                   va_list ap);
+
+/* The two failures every reader and builder reports: an artifact or file whose bytes
+ * disagree with what its format says (SL_E_CORRUPT; the producing stage reruns), and an
+ * allocation that failed (SL_E_NOMEM, ENOMEM; the item is retried). `file` may be NULL;
+ * `fmt` says what, e.g. sl_error_corrupt(err, path, "level list: %s", "cut short"). */
+int sl_error_corrupt(sl_error *err, const char *file, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+int sl_error_nomem(sl_error *err, const char *file, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
 
 /* Maps an errno from a failed system call on `file` to the right code and class:
  * ENOSPC/EDQUOT -> NOSPACE, EIO -> IO, ENOMEM -> NOMEM, EROFS/EACCES/EPERM -> STORAGE,

@@ -1,6 +1,6 @@
 /* Content hashes (XXH3-128) for inputs, outputs and stage keys, and the input-hash cache
  * keyed by (device, inode, size, mtime, ctime) so `touch` or a copy costs a re-hash but
- * never a recompute (ARCHITECTURE section 3). */
+ * never a recompute (docs/engine.md, "Keys and commit records"). */
 #ifndef SCANLOD_CORE_HASH_H
 #define SCANLOD_CORE_HASH_H
 

@@ -296,3 +296,31 @@ int sl_io_open_regular(const char *path, struct stat *st, sl_error *err)
         return close_after(fd, err, path, "fcntl");
     return fd;
 }
+
+int sl_io_map(const char *path, size_t populate_max, void **map, size_t *size, sl_error *err)
+{
+    struct stat st;
+    *map = NULL;
+    *size = 0;
+    int fd = sl_io_open_regular(path, &st, err);
+    if (fd < 0)
+        return fd;
+    size_t n = (size_t)st.st_size;
+    void *m = NULL;
+    int populate = n <= populate_max ? MAP_POPULATE : 0;
+    if (n > 0 && (m = mmap(NULL, n, PROT_READ, MAP_PRIVATE | populate, fd, 0)) == MAP_FAILED) {
+        int e = errno;
+        close(fd);
+        return sl_error_errno(err, e, path, "mmap");
+    }
+    close(fd); /* the mapping keeps the file */
+    *map = m;
+    *size = n;
+    return 0;
+}
+
+void sl_io_unmap(void *map, size_t size)
+{
+    if (map)
+        munmap(map, size);
+}

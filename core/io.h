@@ -47,6 +47,15 @@ int sl_io_mkdir(const char *path, mode_t mode);
  * durable operations, and read-only opens are none. */
 int sl_io_open_regular(const char *path, struct stat *st, sl_error *err);
 
+/* Maps the regular file `path` read-only and privately (through sl_io_open_regular, so a
+ * FIFO or directory is refused first): *map is NULL for an empty file, *size its size.
+ * Files of at most `populate_max` bytes are prefaulted in one call (MAP_POPULATE: cheaper
+ * than a fault per 64 KiB); larger ones stream through readahead instead of being pinned
+ * whole. The mapping outlives the descriptor; release it with sl_io_unmap. A file that
+ * shrinks while mapped raises SIGBUS: inputs are not expected to change under a run. */
+int sl_io_map(const char *path, size_t populate_max, void **map, size_t *size, sl_error *err);
+void sl_io_unmap(void *map, size_t size);
+
 /* Reads SCANLOD_FAULT once; called by the engine at start, before its first fork (also
  * lazily). SCANLOD_FAULT_SCOPE = all (default) | parent | child | child:K picks the
  * processes that inject: the engine's own process, each per-item stage process, or only

@@ -16,26 +16,14 @@
  */
 #include "geometry/cdt.h"
 
+#include <assert.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "geometry/cdt_internal.h"
 #include "geometry/predicates.h"
-
-int cdt_refuse(cdt_work *w, int problem, uint32_t a, uint32_t b, uint32_t c, uint32_t d,
-               const char *fmt, ...)
-{
-    w->report->problem = problem;
-    w->report->v[0] = a, w->report->v[1] = b, w->report->v[2] = c, w->report->v[3] = d;
-    va_list ap;
-    va_start(ap, fmt);
-    sl_error_setv(w->err, SL_E_BADINPUT, 0, NULL, fmt, ap);
-    va_end(ap);
-    return SL_E_BADINPUT;
-}
 
 static int check_input(cdt_work *w, const sl_cdt_input *in)
 {
@@ -248,6 +236,11 @@ static void flip(cdt_work *w, uint32_t t, uint32_t u, int j)
 {
     cdt_tri *T = &w->tri[t], *U = &w->tri[u];
     uint32_t p = T->v[0], a = T->v[1], b = T->v[2], q = U->v[j];
+    /* Lawson flips only the diagonal of a strictly convex quadrilateral (q is in p's
+     * circumcircle of (p, a, b)): both new triangles turn counter-clockwise. */
+    assert(sl_orient2d(cdt_xy(w, p), cdt_xy(w, a), cdt_xy(w, q)) > 0);
+    assert(sl_orient2d(cdt_xy(w, p), cdt_xy(w, q), cdt_xy(w, b)) > 0);
+    assert(T->n[0] == u && U->n[j] == t); /* they are neighbours across edge a-b */
     uint32_t n_aq = U->n[(j + 1) % 3], n_qb = U->n[(j + 2) % 3];
     uint32_t n_pa = T->n[2], n_bp = T->n[1];
     T->v[0] = p, T->v[1] = a, T->v[2] = q;
@@ -284,6 +277,9 @@ static void legalize(cdt_work *w, uint32_t sp)
 static void split_triangle(cdt_work *w, uint32_t t, uint32_t p)
 {
     cdt_tri old = w->tri[t];
+    for (int k = 0; k < 3; k++) /* p is strictly inside: every new triangle has area */
+        assert(sl_orient2d(cdt_xy(w, old.v[(k + 1) % 3]), cdt_xy(w, old.v[(k + 2) % 3]),
+                           cdt_xy(w, p)) > 0);
     uint32_t id[3] = {t, w->tri_count, w->tri_count + 1};
     w->tri_count += 2;
     for (int k = 0; k < 3; k++) {

@@ -24,6 +24,7 @@
  * already inserted loop edge refuses the input (the loops intersect); so does marking an
  * edge that is already a loop edge (two loop edges share a segment).
  */
+#include <stdarg.h>
 #include <stdlib.h>
 
 #include "geometry/cdt_internal.h"
@@ -47,6 +48,20 @@ typedef struct cavity {
     uint32_t (*spike)[4];    /* spike edges seen once: lower end, upper end, triangle, slot */
     uint32_t spikes;
 } cavity;
+
+/* The one way the triangulation refuses its input (cdt_internal.h): here, with the loops
+ * that most refusals are about, so that cdt.c calls into this file and never the reverse. */
+int cdt_refuse(cdt_work *w, int problem, uint32_t a, uint32_t b, uint32_t c, uint32_t d,
+               const char *fmt, ...)
+{
+    w->report->problem = problem;
+    w->report->v[0] = a, w->report->v[1] = b, w->report->v[2] = c, w->report->v[3] = d;
+    va_list ap;
+    va_start(ap, fmt);
+    sl_error_setv(w->err, SL_E_BADINPUT, 0, NULL, fmt, ap);
+    va_end(ap);
+    return SL_E_BADINPUT;
+}
 
 static int grow_side(side *s, uint32_t cap)
 {

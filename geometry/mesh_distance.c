@@ -154,13 +154,20 @@ static void accumulate(partial *acc, double d_sq, int area_sample)
     acc->count++;
 }
 
+/* Where drawn samples go instead of being measured (sl_distance_reference's points,
+ * sl_mesh_area_samples' records): either array, written from index 0. */
+typedef struct sample_store {
+    double *points;          /* 3 per sample, or NULL */
+    sl_area_sample *records; /* 1 per sample, or NULL */
+} sample_store;
+
 /* Area samples of the triangles in one chunk. `cum` is the area before the chunk and
  * `cum_end` the area after it as the serial prefix sum has it, so the counts of all
  * chunks telescope to exactly `n` samples. With `store`, the samples are written there
  * (count in the result) instead of measured against `target`. */
 static partial sample_triangles(const sl_mesh *m, uint64_t first, uint64_t end, double cum,
                                 double cum_end, double total, uint64_t n, uint64_t seed,
-                                const sl_triangle_bvh *target, double *store)
+                                const sl_triangle_bvh *target, const sample_store *store)
 {
     partial acc = {0.0, 0.0, 0.0, 0};
     uint32_t hint = UINT32_MAX;
@@ -182,8 +189,13 @@ static partial sample_triangles(const sl_mesh *m, uint64_t first, uint64_t end, 
             double wa = 1.0 - s, wb = s * (1.0 - r), wc = s * r, p[3];
             for (int i = 0; i < 3; i++)
                 p[i] = wa * a[i] + wb * b[i] + wc * c[i];
-            if (store) { /* drawn for later queries (sl_distance_reference) */
-                memcpy(store + 3 * acc.count++, p, sizeof p);
+            if (store) { /* drawn for later queries */
+                if (store->points)
+                    memcpy(store->points + 3 * acc.count, p, sizeof p);
+                if (store->records)
+                    store->records[acc.count] = (sl_area_sample){(uint32_t)t, (float)wb,
+                                                                 (float)wc};
+                acc.count++;
                 continue;
             }
             sl_closest q;
@@ -421,6 +433,30 @@ int sl_mesh_distance_compute(const sl_mesh *a, const sl_mesh *b,
     return rc;
 }
 
+uint64_t sl_mesh_area_samples_bound(const sl_mesh *m, uint64_t samples)
+{
+    return samples + chunks_of(m->triangle_count);
+}
+
+int sl_mesh_area_samples(const sl_mesh *m, uint64_t samples, uint64_t seed,
+                         sl_area_sample *out, uint64_t *count, sl_error *err)
+{
+    uint64_t chunks = chunks_of(m->triangle_count);
+    double *cum = malloc((chunks + 1) * sizeof *cum);
+    *count = 0;
+    if (!cum)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "area sample bookkeeping");
+    prefix_areas(m, cum, chunks);
+    for (uint64_t c = 0; c < chunks; c++) { /* serial: each chunk's samples follow */
+        uint64_t end = (c + 1) * CHUNK < m->triangle_count ? (c + 1) * CHUNK : m->triangle_count;
+        sample_store store = {NULL, out + *count};
+        *count += sample_triangles(m, c * CHUNK, end, cum[c], cum[c + 1], cum[chunks],
+                                   samples, seed, NULL, &store).count;
+    }
+    free(cum);
+    return SL_OK;
+}
+
 /* --- one A, many B: the RMS alone ----------------------------------------------------- */
 
 struct sl_distance_reference {
@@ -479,9 +515,9 @@ int sl_distance_reference_build(const sl_mesh *a, const sl_mesh_distance_config 
         for (uint64_t c = 0; c < r->chunks; c++) {
             uint64_t end = (c + 1) * CHUNK < a->triangle_count ? (c + 1) * CHUNK
                                                                : a->triangle_count;
+            sample_store store = {r->points + 3 * r->chunk_start[c], NULL};
             partial got = sample_triangles(a, c * CHUNK, end, cum[c], cum[c + 1], total,
-                                           cfg->samples, cfg->seed, NULL,
-                                           r->points + 3 * r->chunk_start[c]);
+                                           cfg->samples, cfg->seed, NULL, &store);
             r->chunk_start[c + 1] = r->chunk_start[c] + got.count;
         }
         double d_sq = 0.0;

@@ -106,6 +106,24 @@ int sl_distance_reference_rms(const sl_distance_reference *ref, const sl_mesh *b
                               double *rms /* OUT */, sl_progress *progress, sl_error *err);
 void sl_distance_reference_free(sl_distance_reference *ref);
 
+/* The area samples that sl_mesh_distance_compute draws on a mesh (the same stratified
+ * counts per triangle, the same positions for the same seed), as records for a caller
+ * that needs to know where each one lies (geometry/surface_fit.h): in triangle order,
+ * a sample at b * corner 1 + c * corner 2 + (1 - b - c) * corner 0 of `triangle`. */
+typedef struct sl_area_sample {
+    uint32_t triangle; /* index in the mesh */
+    float b, c;        /* barycentric weights of corners 1 and 2 */
+} sl_area_sample;
+/* Room `out` needs for `samples` (the per-chunk rounding may give a few more). */
+uint64_t sl_mesh_area_samples_bound(const sl_mesh *m, uint64_t samples);
+/* Draws `samples` (>= 1) area samples of `m` into `out` (sl_mesh_area_samples_bound
+ * entries); OUT: *count, at most the bound. `m` must pass sl_mesh_check_surface. Serial
+ * (the positions come from a counter-based hash, the order is the triangles'). Fails
+ * only with SL_E_NOMEM. */
+int sl_mesh_area_samples(const sl_mesh *m, uint64_t samples, uint64_t seed,
+                         sl_area_sample *out /* OUT */, uint64_t *count /* OUT */,
+                         sl_error *err);
+
 /* The precondition above: at least one triangle, indices in range, finite coordinates
  * at every vertex a triangle uses, a nonzero total area. Otherwise SL_E_BADINPUT with
  * the cause as message and `file` (may be NULL) as the error's file; SL_E_NOMEM. */
@@ -114,6 +132,13 @@ int sl_mesh_check_surface(const sl_mesh *m, const char *file, sl_error *err);
 /* Edge topology of `m` (any triangle mesh; NaN positions weld only with bit-identical
  * NaNs). Fails only with SL_E_NOMEM or SL_E_LIMIT (> 2^32 - 1 vertices). */
 int sl_mesh_topology_compute(const sl_mesh *m, sl_mesh_topology *out /* OUT */, sl_error *err);
+
+/* Welds the vertices that a triangle uses by exactly equal position (-0 equals +0; NaNs
+ * only when bit-identical): weld[v] (the caller's array of vertex_count entries) = a dense
+ * id, numbered in order of each position's first vertex, or UINT32_MAX for a vertex no
+ * triangle uses. Indices must be in range. Returns the number of ids, or -1 when out of
+ * memory. */
+int64_t sl_mesh_weld_positions(const sl_mesh *m, uint32_t *weld /* OUT */);
 
 /* The connected parts of `m` (through shared welded positions, as `components` above,
  * degenerate triangles joined to the part they touch): part_of_triangle[t] (the caller's

@@ -39,9 +39,8 @@ static void position_key(const sl_mesh *m, uint32_t v, uint32_t k[3])
         k[a] = coordinate_bits(m->positions[3 * (uint64_t)v + a]);
 }
 
-/* weld[v] = dense id of v's position (ids in order of first vertex), NONE if unused.
- * Returns the number of ids, or -1 when out of memory. */
-static int64_t weld_positions(const sl_mesh *m, uint32_t *weld)
+/* Declared in mesh_distance.h (the topology's welding, shared with the simplifier). */
+int64_t sl_mesh_weld_positions(const sl_mesh *m, uint32_t *weld)
 {
     uint64_t used = 0;
     for (uint64_t v = 0; v < m->vertex_count; v++)
@@ -208,7 +207,7 @@ int sl_mesh_topology_compute(const sl_mesh *m, sl_mesh_topology *out, sl_error *
                             "%llu vertices: edge topology handles at most 2^32 - 1",
                             (unsigned long long)m->vertex_count);
     uint32_t *weld = malloc((m->vertex_count ? m->vertex_count : 1) * sizeof *weld);
-    int64_t ids = weld ? weld_positions(m, weld) : -1;
+    int64_t ids = weld ? sl_mesh_weld_positions(m, weld) : -1;
     uint64_t *start = ids >= 0 ? calloc((uint64_t)ids + 2, sizeof *start) : NULL;
     uint32_t *ends = NULL;
     if (start) {
@@ -269,7 +268,7 @@ int sl_mesh_parts(const sl_mesh *m, uint32_t *part_of_triangle, double **part_ar
                             (unsigned long long)m->vertex_count);
     uint64_t n = m->vertex_count ? m->vertex_count : 1;
     uint32_t *weld = malloc(n * sizeof *weld), *parent = NULL, *dense = NULL;
-    int64_t ids = weld ? weld_positions(m, weld) : -1;
+    int64_t ids = weld ? sl_mesh_weld_positions(m, weld) : -1;
     if (ids >= 0) {
         parent = malloc(((uint64_t)ids + 1) * sizeof *parent);
         dense = malloc(((uint64_t)ids + 1) * sizeof *dense);

@@ -19,13 +19,13 @@
 #define SCANLOD_GEOMETRY_RASTER_H
 
 #include "core/error.h"
-#include "geometry/glb.h"
+#include "geometry/mesh.h"
 
 #define SL_THUMBNAIL_MAX_SIDE 4096
 
 /* Renders `m` into `rgba` (OUT: width * height * 4 floats, sRGB-encoded in [0, 1], row 0
  * at the top, alpha 1). Sides in [1, SL_THUMBNAIL_MAX_SIDE]. Rejects what
- * sl_mesh_check_writable() (geometry/glb.h) rejects; SL_E_NOMEM when the sample buffers cannot be allocated. */
+ * sl_mesh_check_writable() (geometry/mesh.h) rejects; SL_E_NOMEM when the sample buffers cannot be allocated. */
 int sl_render_thumbnail(const sl_mesh *m, int width, int height, float *rgba,
                         sl_error *err);
 

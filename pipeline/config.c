@@ -22,6 +22,7 @@
 #include <fcntl.h>
 #include <ini.h>
 #include <limits.h>
+#include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -443,17 +444,39 @@ const char *sl_config_path(const sl_config *cfg)
     return cfg->path;
 }
 
-void sl_config_where(const sl_config *cfg, const char *section, const char *name, char *buf,
-                     size_t size)
+sl_config_origin_kind sl_config_origin(const sl_config *cfg, const char *section,
+                                       const char *name, char *buf, size_t size)
 {
     const slot *s = must_find(cfg, section, name, -1);
     const char *file = cfg->path && cfg->path[0] ? cfg->path : "(no config file)";
-    if (s->origin == FROM_FILE)
+    if (s->origin == FROM_FILE) {
         snprintf(buf, size, "%s:%d", file, s->line);
-    else if (s->origin == FROM_OVERRIDE)
+        return SL_CONFIG_FROM_FILE;
+    }
+    if (s->origin == FROM_OVERRIDE) {
         snprintf(buf, size, "-s %s.%s", section, name);
-    else
-        snprintf(buf, size, "%s", file);
+        return SL_CONFIG_FROM_OVERRIDE;
+    }
+    snprintf(buf, size, "%s", file);
+    return SL_CONFIG_FROM_DEFAULT;
+}
+
+void sl_config_where(const sl_config *cfg, const char *section, const char *name, char *buf,
+                     size_t size)
+{
+    sl_config_origin(cfg, section, name, buf, size);
+}
+
+int sl_config_key_error(sl_error *err, const sl_config *cfg, const char *section,
+                        const char *name, const char *fmt, ...)
+{
+    char where[PATH_MAX + 32], message[CAUSE_MAX];
+    sl_config_origin(cfg, section, name, where, sizeof where);
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(message, sizeof message, fmt, ap);
+    va_end(ap);
+    return sl_error_set(err, SL_E_CONFIG, 0, where, "[%s] %s: %s", section, name, message);
 }
 
 uint64_t sl_config_section_hash(const sl_config *cfg, const char *section)

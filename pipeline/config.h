@@ -83,10 +83,31 @@ int sl_config_bool(const sl_config *cfg, const char *section, const char *name);
 uint64_t sl_config_section_hash(const sl_config *cfg, const char *section);
 /* The config file it came from ("" if none). */
 const char *sl_config_path(const sl_config *cfg);
-/* Where an option's value was set, for an error about that value: "FILE:LINE", "-s
- * section.name", or the config file (a default). */
+/* Where the value of [section] name came from, for an error about it, also one that only
+ * a check across keys finds (two budgets with one name, lod_percents = 20,20, a budget
+ * named ../x): into `buf`, "FILE:LINE" when the config file set it ("museum.ini:12",
+ * FILE as given to sl_config_load), "-s section.name" when an override did (the last
+ * one for the key wins, as for the value), or FILE alone when the key is at its default
+ * ("(no config file)" without one). Returns which of these it is. The option must be
+ * declared (else abort: a bug, as for the getters). Thread-safe (reads only). */
+typedef enum sl_config_origin_kind {
+    SL_CONFIG_FROM_FILE = 1,
+    SL_CONFIG_FROM_OVERRIDE,
+    SL_CONFIG_FROM_DEFAULT
+} sl_config_origin_kind;
+sl_config_origin_kind sl_config_origin(const sl_config *cfg, const char *section,
+                                       const char *name, char *buf, size_t size);
+/* The same, its kind dropped (older name). */
 void sl_config_where(const sl_config *cfg, const char *section, const char *name, char *buf,
                      size_t size);
+/* A config error about the value of [section] name found by a check across keys:
+ * SL_E_CONFIG with the key's origin as the file and "[section] name: " before the
+ * message, so sl_error_format prints the one line a user sees, e.g.
+ * "museum.ini:12: [export] budgets: two levels named thumb" or
+ * "-s export.budgets: [export] budgets: ...". Returns SL_E_CONFIG. */
+int sl_config_key_error(sl_error *err, const sl_config *cfg, const char *section,
+                        const char *name, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
 
 /* Writes the commented reference file for `tables`: every option with its help, type,
  * range and default, grouped by section in order of first appearance. Deterministic. */

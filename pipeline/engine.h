@@ -36,6 +36,10 @@ typedef struct sl_engine_options {
      * (docs/engine.md, "Memory admission"). */
     double (*expected_peak_mb)(const struct sl_engine_facts *facts, const char *path,
                                const char **stage);
+    /* The file-name suffixes the input walk takes as items (".ply", ".obj", ...; compared
+     * without case), NULL-terminated: the formats the program reads, which the engine does
+     * not name (cli/ passes formats/scan_read.h's). NULL: ".ply" alone. */
+    const char *const *input_suffixes;
 } sl_engine_options;
 
 int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err);

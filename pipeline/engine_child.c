@@ -6,13 +6,8 @@
  * worker never leaves an orphan writing into the work dir. The parent renews the lease,
  * forwards interrupts, enforces the timeout and draws the progress bar meanwhile.
  *
- * Outcome -> ticket (ARCHITECTURE section 3, failure classes):
- *   success                       -> record committed, ticket done, next stage enqueued
- *   bad input (BADINPUT/LIMIT/..) -> quarantine at once, with the reason
- *   interrupted                   -> ready again (not the item's fault)
- *   ENOSPC, EIO, OOM, killed, lost lease -> failed (retried by the next run), never quarantined
- *   crash/abort/timeout/internal  -> ready again, until max_crashes: then quarantine as a bug
- *   storage needs a human         -> failed, and the worker stops (exit 74)
+ * What runs inside the child is engine_stage_child.c; what the end of the child means for
+ * the ticket (the failure classes) is decided in engine_outcome.c.
  */
 #include "pipeline/engine_internal.h"
 
@@ -35,163 +30,21 @@
 #include "core/io.h"
 #include "core/json.h"
 #include "core/log.h"
+#include "core/memory.h"
 #include "core/progress.h"
 
-typedef struct child_result {
-    sl_error err;
-    double cpu_seconds;
-    long max_rss_kb;
-} child_result;
-
-typedef struct shared_progress {
-    volatile double fraction;
-    char phase[32];
-} shared_progress;
-
-static void report_to_parent(void *ctx, const char *phase, double fraction)
-{
-    shared_progress *sp = ctx;
-    sp->fraction = fraction;
-    snprintf(sp->phase, sizeof sp->phase, "%s", phase ? phase : "");
-}
-
-static void write_all(int fd, const void *data, size_t size)
-{
-    const char *p = data;
-    while (size > 0) {
-        ssize_t w = write(fd, p, size);
-        if (w <= 0 && errno != EINTR)
-            return;
-        if (w > 0) {
-            p += w;
-            size -= (size_t)w;
-        }
-    }
-}
-
-/* The work of a claim: which stage of which item, and which part of it (part -1: the
- * whole stage, or the join of its `parts` parts when parts > 1). */
-typedef struct claim_work {
-    int s;
-    const char *item, *source, *in_dir, *out_dir;
-    int part, parts;
-} claim_work;
-
-static int run_stage_in_child(sl_engine *e, const claim_work *w, shared_progress *sp,
-                              sl_error *err)
-{
-    int s = w->s;
-    const char *item = w->item, *source = w->source, *in_dir = w->in_dir;
-    const char *out_dir = w->out_dir;
-    /* Every earlier stage's artifact directory, for stages that read more than the
-     * previous one (the key chain covers them all). */
-    static char dirs[SL_MAX_STAGES][PATH_MAX];
-    struct sl_stage_dir_entry upstream[SL_MAX_STAGES + 1] = {{NULL, NULL}};
-    char ticket[SL_TICKET_NAME_MAX + 1];
-    if (sl_ticket_name(item, ticket, sizeof ticket, err))
-        return err->code;
-    for (int i = 0; i < s; i++) {
-        sl_artifact_dir(e, i, ticket, dirs[i], sizeof dirs[i]);
-        upstream[i].stage = e->stages[i]->name;
-        upstream[i].dir = dirs[i];
-    }
-    const sl_stage *stage = e->stages[s];
-    void *stage_config = NULL;
-    int rc = stage->configure(e->cfg, &stage_config, err);
-    if (rc)
-        return rc;
-    sl_json report;
-    sl_json_init(&report, 1);
-    sl_json_object_begin(&report, NULL);
-    sl_progress progress;
-    memset(&progress, 0, sizeof progress);
-    progress.report = report_to_parent;
-    progress.ctx = sp;
-    progress.interrupt_flag = sl_interrupt_flag();
-    sl_stage_io io = {.item = item, .source_path = source, .in_dir = in_dir,
-                      .out_dir = out_dir, .report = &report, .progress = &progress,
-                      .threads = omp_get_max_threads(), .upstream = upstream};
-    char **part_dirs = NULL;
-    if (w->parts > 1) {
-        io.part = w->part;
-        io.parts = w->parts;
-        if (w->part < 0 && !(part_dirs = sl_engine_part_dirs(e, s, ticket, w->parts)))
-            rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-        io.part_dirs = (const char *const *)part_dirs;
-    }
-    if (rc == 0)
-        rc = w->part >= 0 ? stage->run_part(stage_config, &io, err)
-                          : stage->run(stage_config, &io, err);
-    free(part_dirs);
-    sl_json_object_end(&report);
-    if (rc == 0 && report.failed)
-        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "report too large");
-    if (rc == 0) {
-        char path[PATH_MAX];
-        sl_engine_path(path, sizeof path, "%s/report.json", out_dir);
-        rc = sl_write_file_atomic(path, report.buf, report.len, err);
-    }
-    sl_json_release(&report);
-    if (stage->release_config)
-        stage->release_config(stage_config);
-    return rc;
-}
-
-static void child_main(sl_engine *e, const claim_work *w, shared_progress *sp, int result_fd,
-                       pid_t parent)
-{
-    prctl(PR_SET_PDEATHSIG, SIGKILL);
-    if (getppid() != parent)
-        _exit(SL_EXIT_TEMPFAIL);
-    sl_io_fault_enter_child();
-#ifndef SCANLOD_SANITIZED /* ASan reserves terabytes of address space */
-    /* RLIMIT_DATA (Linux 4.7+: private writable mappings, i.e. the heap, anonymous maps
-     * and thread stacks) rather than RLIMIT_AS: the address space also counts every
-     * mapped library and reserved arena, so an address-space cap of 300 MB failed to
-     * load OpenImageIO for a 6k-triangle export whose peak RSS is 120 MB. */
-    if (e->memory_limit_mb > 0) {
-        struct rlimit rl = {(rlim_t)e->memory_limit_mb << 20, (rlim_t)e->memory_limit_mb << 20};
-        setrlimit(RLIMIT_DATA, &rl);
-    }
-#endif
-    omp_set_num_threads(e->threads > 0 ? e->threads : omp_get_num_procs());
-    child_result result;
-    memset(&result, 0, sizeof result);
-    sl_error_init(&result.err);
-    int rc = run_stage_in_child(e, w, sp, &result.err);
-    if (rc && result.err.code == SL_OK)
-        sl_error_set(&result.err, rc, 0, NULL, "%s", sl_strerror(rc));
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    result.cpu_seconds = (double)ru.ru_utime.tv_sec + ru.ru_utime.tv_usec * 1e-6 +
-                         (double)ru.ru_stime.tv_sec + ru.ru_stime.tv_usec * 1e-6;
-    result.max_rss_kb = ru.ru_maxrss;
-    write_all(result_fd, &result, sizeof result);
-    close(result_fd);
-    _exit(rc == 0 ? 0 : 1);
-}
-
-typedef struct child_outcome {
-    int have_result;
-    child_result result;
-    int status;       /* waitpid status */
-    int timed_out;
-    int interrupted;  /* we forwarded an interrupt */
-    int lease_lost;
-    double seconds;
-} child_outcome;
-
 static void supervise(sl_engine *e, int s, const char *name, sl_ticket *t, pid_t pid, int fd,
-                      shared_progress *sp, child_outcome *out)
+                      shared_progress *sp, child_result *result, sl_child_outcome *out)
 {
     double start = sl_now_seconds(), last_renew = start;
+    uint64_t oom_kills = sl_memory_oom_kills();
     size_t got = 0;
-    char *buf = (char *)&out->result;
+    char *buf = (char *)result;
     for (;;) {
         struct pollfd pfd = {fd, POLLIN, 0};
         int ready = poll(&pfd, 1, 200);
         if (ready > 0) {
-            ssize_t r = read(fd, buf + got, sizeof out->result - got);
+            ssize_t r = read(fd, buf + got, sizeof *result - got);
             if (r > 0)
                 got += (size_t)r;
             else if (r == 0 || (errno != EINTR && errno != EAGAIN))
@@ -218,30 +71,14 @@ static void supervise(sl_engine *e, int s, const char *name, sl_ticket *t, pid_t
         sl_engine_progress(e, s, t->item, sp->fraction);
     }
     close(fd);
-    while (waitpid(pid, &out->status, 0) < 0 && errno == EINTR)
+    struct rusage ru; /* wait4: the peak RSS of a child that was killed, too */
+    memset(&ru, 0, sizeof ru);
+    while (wait4(pid, &out->status, 0, &ru) < 0 && errno == EINTR)
         ;
-    out->have_result = got == sizeof out->result;
+    out->max_rss_kb = ru.ru_maxrss;
+    out->oom_killed = sl_memory_oom_kills() > oom_kills;
+    out->have_result = got == sizeof *result;
     out->seconds = sl_now_seconds() - start;
-}
-
-static int move_with_reason(sl_engine *e, int s, const char *name, sl_ticket *t, int to,
-                            const char *cls, const char *reason, sl_error *err)
-{
-    const char *stage = e->stages[s]->name;
-    snprintf(t->cls, sizeof t->cls, "%s", cls);
-    /* The error line, cut to the ticket's field (a long path makes it longer). */
-    snprintf(t->reason, sizeof t->reason, "%.*s", (int)sizeof t->reason - 1, reason);
-    if (to == SL_STATE_QUARANTINE)
-        e->items_settled++; /* nothing more to do for it until it changes */
-    sl_error werr;
-    sl_error_init(&werr);
-    /* Only a claim still ours is moved (a woken owner's late write must not recreate one
-     * another worker finished meanwhile). Without space to rewrite the ticket, the
-     * rename alone still records the state. */
-    if (sl_engine_lease_renew(e, stage, name, t, &werr) == SL_E_LEASE_LOST)
-        return 0;
-    int rc = sl_queue_move(e->work, stage, name, SL_STATE_CLAIMED, to, err);
-    return rc == SL_E_BUSY ? 0 : rc;
 }
 
 static int advance(sl_engine *e, int from, const sl_ticket *t, sl_error *err);
@@ -250,27 +87,48 @@ static int advance(sl_engine *e, int from, const sl_ticket *t, sl_error *err);
  * committed there, and the folder swapped in whole after the last fencing check: an owner
  * that lost its claim while it was frozen can then never empty or half-write the folder a
  * newer owner committed (at worst it swaps in a complete, identical one). */
+/* The head of a stage's _stats.json (its timings.json entry, unclosed): wall and CPU
+ * seconds, peak memory, threads, and the stage's own timings (`_timings.json`, which the
+ * stage's child wrote beside its artifacts: figures that differ run to run, so never part
+ * of an artifact or report.json). NULL when out of memory. */
+static char *stats_head(const char *staged, double seconds, const child_result *r, int threads)
+{
+    char path[PATH_MAX], *detail = NULL, *head = NULL;
+    size_t n = 0;
+    sl_error ignored;
+    sl_error_init(&ignored);
+    if (sl_engine_path(path, sizeof path, "%s/_timings.json", staged) == 0 &&
+        access(path, F_OK) == 0 && sl_read_file(path, 1 << 20, &detail, &n, &ignored) != 0)
+        detail = NULL; /* diagnostics: left out when unreadable */
+    if (asprintf(&head, "{\"seconds\":%.3f,\"cpu_seconds\":%.3f,\"peak_rss_kb\":%ld,"
+                        "\"threads\":%d%s%.*s",
+                 seconds, r->cpu_seconds, r->max_rss_kb, threads,
+                 detail ? ",\"detail\":" : "", detail ? (int)n : 0, detail ? detail : "") < 0)
+        head = NULL;
+    free(detail);
+    return head;
+}
+
 static int commit_success(sl_engine *e, int s, const char *name, sl_ticket *t, sl_hash key,
                           int join_parts, const char *staged, const char *out_dir,
-                          const child_outcome *o, int *taken_over, sl_error *err)
+                          const sl_child_outcome *o, const child_result *r, int *taken_over,
+                          sl_error *err)
 {
     *taken_over = 0;
     const sl_stage *stage = e->stages[s];
     int rc = sl_engine_lease_check(e, stage->name, name, t, err);
     char path[PATH_MAX];
     if (rc == 0) {
-        char stats[256];
-        int n = snprintf(stats, sizeof stats,
-                         "{\"seconds\":%.3f,\"cpu_seconds\":%.3f,\"peak_rss_kb\":%ld,"
-                         "\"threads\":%d",
-                         o->seconds, o->result.cpu_seconds, o->result.max_rss_kb,
-                         e->threads > 0 ? e->threads : omp_get_num_procs());
+        char *head = stats_head(staged, o->seconds, r,
+                                e->threads > 0 ? e->threads : omp_get_num_procs());
         /* A join's timings carry its parts' (their folders go once it is committed). */
-        char *text = sl_engine_parts_stats(e, s, name, join_parts, stats, (size_t)n);
+        char *text = head ? sl_engine_parts_stats(e, s, name, join_parts, head, strlen(head))
+                          : NULL;
         sl_engine_path(path, sizeof path, "%s/_stats.json", staged);
         rc = text ? sl_write_file_atomic(path, text, strlen(text), err)
                   : sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
         free(text);
+        free(head);
     }
     if (rc == 0) {
         sl_engine_path(path, sizeof path, "%s/%s", staged, SL_RECORD_FILE);
@@ -326,74 +184,6 @@ static int release_done(sl_engine *e, int s, const char *name, const sl_ticket *
     return moved;
 }
 
-static int classify_signal(int sig)
-{
-    switch (sig) {
-    case SIGSEGV: case SIGBUS: case SIGILL: case SIGFPE: case SIGABRT: case SIGSYS:
-        return SL_E_INTERNAL;
-    default:
-        return SL_E_IO; /* SIGKILL from the OOM killer, SIGTERM from an operator */
-    }
-}
-
-static int handle_failure(sl_engine *e, int s, const char *name, sl_ticket *t,
-                          const child_outcome *o, sl_error *item_err, sl_error *err)
-{
-    const char *stage = e->stages[s]->name;
-    int code = item_err->code;
-    char line[1500];
-    if (o->interrupted && (code == SL_E_INTERRUPTED || !o->have_result))
-        return move_with_reason(e, s, name, t, SL_STATE_READY, "", "", err);
-    if (o->lease_lost) {
-        e->counts.transient++;
-        SL_LOG(SL_LOG_WARN, stage, t->item, "lease lost: another worker owns the item now");
-        return 0;
-    }
-    if (code == SL_OK) { /* died without a word */
-        if (o->timed_out)
-            code = sl_error_set(item_err, SL_E_INTERNAL, 0, t->source,
-                                "timed out after %lld s", (long long)e->item_timeout_s);
-        else if (WIFSIGNALED(o->status))
-            code = sl_error_set(item_err, classify_signal(WTERMSIG(o->status)), 0, t->source,
-                                "killed by signal %d (%s)", WTERMSIG(o->status),
-                                strsignal(WTERMSIG(o->status)));
-        else
-            code = sl_error_set(item_err, SL_E_INTERNAL, 0, t->source,
-                                "stage process exited with status %d and no result",
-                                WEXITSTATUS(o->status));
-    }
-    sl_error_format(item_err, line, sizeof line);
-    sl_log_event("stage_failed", stage, t->item, o->seconds, item_err, NULL);
-    switch (sl_error_class_of(code)) {
-    case SL_CLASS_BADINPUT:
-        e->counts.quarantined++;
-        SL_LOG(SL_LOG_ERROR, stage, t->item, "quarantined: %s", line);
-        return move_with_reason(e, s, name, t, SL_STATE_QUARANTINE, "badinput", line, err);
-    case SL_CLASS_TRANSIENT:
-        e->counts.transient++;
-        SL_LOG(SL_LOG_ERROR, stage, t->item, "failed (will retry on the next run): %s", line);
-        return move_with_reason(e, s, name, t, SL_STATE_FAILED, "transient", line, err);
-    case SL_CLASS_STORAGE:
-    case SL_CLASS_CONFIG:
-    case SL_CLASS_USAGE:
-        e->stop = 1;
-        sl_error_merge(&e->storage_error, item_err);
-        SL_LOG(SL_LOG_ERROR, stage, t->item, "stopping: %s", line);
-        return move_with_reason(e, s, name, t, SL_STATE_FAILED, "storage", line, err);
-    default:
-        break;
-    }
-    t->crashes++;
-    if (t->crashes >= e->max_crashes) {
-        e->counts.bugs++;
-        SL_LOG(SL_LOG_ERROR, stage, t->item, "quarantined as a scanlod bug after %d crashes: %s",
-               t->crashes, line);
-        return move_with_reason(e, s, name, t, SL_STATE_QUARANTINE, "bug", line, err);
-    }
-    SL_LOG(SL_LOG_WARN, stage, t->item, "crashed, retrying once: %s", line);
-    return move_with_reason(e, s, name, t, SL_STATE_READY, "crash", line, err);
-}
-
 /* Reconciles the item from stage `from` on: after stage s committed, from = s + 1
  * enqueues the next stage or publishes the item. */
 static int advance(sl_engine *e, int from, const sl_ticket *t, sl_error *err)
@@ -428,91 +218,140 @@ static int item_paths(sl_engine *e, int s, const char *name, const char *ticket,
     return 0;
 }
 
-int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_error *err)
+/* One claim of stage s as sl_engine_process works on it. */
+typedef struct claim_ctx {
+    char source[PATH_MAX], in_dir[PATH_MAX], out_dir[PATH_MAX];
+    char ticket[SL_TICKET_NAME_MAX + 1]; /* the item's ticket (a part's is its join's) */
+    int part, parts;                      /* part -1: the item's stage whole (or the join) */
+    sl_hash key, stage_key;               /* the artifact's key (a join's chains its parts) */
+} claim_ctx;
+
+/* The claim's paths, key and split. 1: go on; 0: the claim was stale, a part of another
+ * split, or its input is gone, and has been dealt with (*rc says how that went). */
+static int resolve_claim(sl_engine *e, int s, const char *name, sl_ticket *t, claim_ctx *c,
+                         int *rc, sl_error *err)
 {
     const sl_stage *stage = e->stages[s];
-    char source[PATH_MAX], in_dir[PATH_MAX] = "", out_dir[PATH_MAX], record[PATH_MAX];
     /* A part's claim (docs/engine.md, "Parts") reads the item's upstream like its join. */
-    char ticket[SL_TICKET_NAME_MAX + 1];
-    int part = -1;
-    if (!sl_part_parse(name, ticket, sizeof ticket, &part))
-        snprintf(ticket, sizeof ticket, "%s", name);
-    int rc = item_paths(e, s, name, ticket, t, source, in_dir, out_dir, err);
-    if (rc)
-        return move_with_reason(e, s, name, t, SL_STATE_QUARANTINE, "badinput", err->message, err);
-
+    c->in_dir[0] = '\0';
+    c->part = -1;
+    if (!sl_part_parse(name, c->ticket, sizeof c->ticket, &c->part))
+        snprintf(c->ticket, sizeof c->ticket, "%s", name);
+    *rc = item_paths(e, s, name, c->ticket, t, c->source, c->in_dir, c->out_dir, err);
+    if (*rc) {
+        *rc = sl_engine_move_with_reason(e, s, name, t, SL_STATE_QUARANTINE, "badinput",
+                                         err->message, err);
+        return 0;
+    }
     /* The key from the current upstream; if the upstream is gone or changed, this ticket
      * is stale: drop it and let reconciliation decide what comes first. */
     sl_hash upstream;
     sl_error uerr;
     sl_error_init(&uerr);
-    rc = sl_upstream_chain(e, ticket, t->source, s, 1, &upstream, &uerr);
-    sl_hash key = sl_stage_key(stage->name, stage->version, e->config_hash[s], upstream);
-    int parts = sl_engine_parts(e, s, t->source);
-    if (rc == 0 && !sl_engine_parts_ready(e, s, ticket, part, parts, &key))
-        rc = SL_E_CORRUPT; /* a stale part, or a join whose parts are not all committed */
-    if (rc) {
-        char path[PATH_MAX];
-        sl_queue_path(path, sizeof path, e->work, stage->name, SL_STATE_CLAIMED, name);
-        unlink(path);
-        if (access(source, F_OK) != 0) {
-            SL_LOG(SL_LOG_WARN, stage->name, t->item, "input vanished; dropped from the queue");
-            return 0;
-        }
-        return advance(e, s, t, err);
+    int stale = sl_upstream_chain(e, c->ticket, t->source, s, 1, &upstream, &uerr) != 0;
+    c->key = c->stage_key = sl_stage_key(stage->name, stage->version,
+                                         sl_engine_stage_config_hash(e, s, t->item), upstream);
+    c->parts = sl_engine_item_parts(e, s, c->ticket, t->source, c->stage_key, name);
+    /* A part runs as a part of the item's split only (its ticket says which it is of). */
+    int other_split = !stale && c->part >= 0 &&
+                      ((t->parts >= 2 && t->parts != c->parts) || c->part >= c->parts);
+    if (!stale && !other_split &&
+        !sl_engine_parts_ready(e, s, c->ticket, c->part, c->parts, &c->key))
+        stale = 1; /* a join whose parts are not all committed */
+    if (!stale && !other_split)
+        return 1;
+    char path[PATH_MAX];
+    sl_queue_path(path, sizeof path, e->work, stage->name, SL_STATE_CLAIMED, name);
+    if (other_split)
+        sl_engine_part_drop(e, s, c->ticket, c->part, c->parts);
+    else
+        unlink(path); /* stale: reconciliation decides what comes first */
+    if (access(c->source, F_OK) != 0) {
+        SL_LOG(SL_LOG_WARN, stage->name, t->item, "input vanished; dropped from the queue");
+        *rc = 0;
+        return 0;
     }
-    sl_engine_path(record, sizeof record, "%s/%s", out_dir, SL_RECORD_FILE);
+    *rc = advance(e, s, t, err);
+    return 0;
+}
+
+/* Someone committed the claim's artifact meanwhile: the claim is released as done. 1 (and
+ * *rc) when that was so, else 0. */
+static int committed_meanwhile(sl_engine *e, int s, const char *name, sl_ticket *t,
+                               const claim_ctx *c, int *rc, sl_error *err)
+{
+    const sl_stage *stage = e->stages[s];
+    char record[PATH_MAX];
+    sl_engine_path(record, sizeof record, "%s/%s", c->out_dir, SL_RECORD_FILE);
     sl_error verr;
     sl_error_init(&verr);
-    if (sl_record_check(record, out_dir, &key, NULL, &verr) == 0) {
-        e->counts.reused++; /* someone finished it meanwhile */
-        /* Done already: the run that took this claim over (this one was frozen, say)
-         * finished the stage and said so; nobody is to say it again. */
-        int was_done = sl_queue_find(e->work, stage->name, name) == SL_STATE_DONE;
-        sl_hash_hex(key, t->key);
-        sl_error perr;
-        sl_error_init(&perr);
-        if (sl_engine_lease_renew(e, stage->name, name, t, &perr) == SL_E_LEASE_LOST)
-            return 0; /* taken over again meanwhile: the new owner releases it */
-        int released = 0;
-        rc = release_done(e, s, name, t, part >= 0, &released, err);
-        /* The owner that committed lost its claim before moving it to done and said
-         * nothing; whoever moves it says the stage is done, once. */
-        if (released && !was_done)
-            sl_log_event("stage_done", stage->name, t->item, -1, NULL, "\"adopted\":true");
-        return rc;
+    if (sl_record_check(record, c->out_dir, &c->key, NULL, &verr) != 0)
+        return 0;
+    e->counts.reused++;
+    /* Done already: the run that took this claim over (this one was frozen, say) finished
+     * the stage and said so; nobody is to say it again. */
+    int was_done = sl_queue_find(e->work, stage->name, name) == SL_STATE_DONE;
+    sl_hash_hex(c->key, t->key);
+    sl_error perr;
+    sl_error_init(&perr);
+    *rc = 0;
+    if (sl_engine_lease_renew(e, stage->name, name, t, &perr) == SL_E_LEASE_LOST)
+        return 1; /* taken over again meanwhile: the new owner releases it */
+    int released = 0;
+    *rc = release_done(e, s, name, t, c->part >= 0, &released, err);
+    /* The owner that committed lost its claim before moving it to done and said nothing;
+     * whoever moves it says the stage is done, once. */
+    if (released && !was_done)
+        sl_log_event("stage_done", stage->name, t->item, -1, NULL, "\"adopted\":true");
+    return 1;
+}
+
+/* The staging folder of the claim, fenced by its lease right before it is emptied: an
+ * owner frozen since it claimed (SIGSTOP, a Slurm suspend, an NFS stall) whose claim was
+ * taken over must not empty the folder the new owner has committed into (seen in
+ * test_liveness: the woken run wiped a committed artifact, which verify, finding no
+ * record, could not flag). 1: ready in `staged`; 0: not to run (*rc says why). */
+static int prepare_staging(sl_engine *e, int s, const char *name, sl_ticket *t,
+                           const claim_ctx *c, char staged[PATH_MAX], int *rc, sl_error *err)
+{
+    const sl_stage *stage = e->stages[s];
+    if (!sl_engine_admitted(e, s, t, c->source)) {
+        *rc = sl_engine_move_with_reason(e, s, name, t, SL_STATE_FAILED, "memory",
+                                         e->admission, err);
+        return 0;
     }
-    if (!sl_engine_admitted(e, s, t, source))
-        return move_with_reason(e, s, name, t, SL_STATE_FAILED, "memory", e->admission, err);
-    /* The claim is fenced by its lease right before the artifact folder is emptied: an
-     * owner frozen since it claimed (SIGSTOP, a Slurm suspend, an NFS stall) whose claim
-     * was taken over must not empty the folder the new owner has committed into (seen in
-     * test_liveness: the woken run wiped a committed artifact, which verify, finding no
-     * record, could not flag). */
     sl_error lerr;
     sl_error_init(&lerr);
     if (sl_engine_lease_renew(e, stage->name, name, t, &lerr) != 0) {
         e->counts.transient++;
         SL_LOG(SL_LOG_WARN, stage->name, t->item, "lease lost: another worker owns the item now");
+        *rc = 0;
         return 0;
     }
-    char staged[PATH_MAX];
-    rc = sl_engine_staged_path(e, out_dir, staged, err);
-    if (rc == 0)
-        rc = sl_mkdirs(staged, err);
-    if (rc == 0)
-        rc = sl_remove_dir_contents(staged, err);
-    if (rc) { /* cannot even prepare the artifact directory (full disk, permissions) */
+    *rc = sl_engine_staged_path(e, c->out_dir, staged, err);
+    if (*rc == 0)
+        *rc = sl_mkdirs(staged, err);
+    if (*rc == 0)
+        *rc = sl_remove_dir_contents(staged, err);
+    if (*rc) { /* cannot even prepare the artifact directory (full disk, permissions) */
         sl_error prep_err = *err;
-        child_outcome none;
+        sl_child_outcome none;
         memset(&none, 0, sizeof none);
-        handle_failure(e, s, name, t, &none, &prep_err, err);
-        return rc;
+        sl_engine_handle_failure(e, s, name, t, &none, &prep_err, err);
+        return 0;
     }
+    return 1;
+}
 
-    if (part >= 0)
-        SL_LOG(SL_LOG_INFO, stage->name, t->item, "start part %d of %d (attempt %d)", part + 1,
-               parts, t->attempt);
+/* The stage run in a child process on the claim, supervised to its end. */
+static int run_child(sl_engine *e, int s, const char *name, sl_ticket *t, const claim_ctx *c,
+                     const char *staged, sl_child_outcome *outcome, child_result *result,
+                     sl_error *err)
+{
+    const sl_stage *stage = e->stages[s];
+    if (c->part >= 0)
+        SL_LOG(SL_LOG_INFO, stage->name, t->item, "start part %d of %d (attempt %d)",
+               c->part + 1, c->parts, t->attempt);
     else
         SL_LOG(SL_LOG_INFO, stage->name, t->item, "start (attempt %d)", t->attempt);
     shared_progress *sp = mmap(NULL, sizeof *sp, PROT_READ | PROT_WRITE,
@@ -529,8 +368,9 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
     pid_t pid = fork();
     if (pid == 0) {
         close(fds[0]);
-        claim_work w = {s, t->item, source, s > 0 ? in_dir : NULL, staged, part, parts};
-        child_main(e, &w, sp, fds[1], parent);
+        claim_work w = {s, t->item, c->source, s > 0 ? c->in_dir : NULL, staged, c->part,
+                        c->parts};
+        sl_engine_child_main(e, &w, sp, fds[1], parent);
     }
     close(fds[1]);
     if (pid < 0) {
@@ -538,58 +378,88 @@ int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_er
         munmap(sp, sizeof *sp);
         return sl_error_errno(err, errno, NULL, "fork");
     }
-    child_outcome outcome;
-    memset(&outcome, 0, sizeof outcome);
-    supervise(e, s, name, t, pid, fds[0], sp, &outcome);
+    memset(outcome, 0, sizeof *outcome);
+    memset(result, 0, sizeof *result);
+    supervise(e, s, name, t, pid, fds[0], sp, result, outcome);
     munmap(sp, sizeof *sp);
+    return 0;
+}
 
+/* A stage run that succeeded: committed, released as done, said once. 1 when committed
+ * (*rc: how the release went), 0 when the commit failed (item_err says why; a lost lease
+ * marks the outcome): then it is a failure like any. */
+static int finish_success(sl_engine *e, int s, const char *name, sl_ticket *t,
+                          const claim_ctx *c, const char *staged, sl_child_outcome *outcome,
+                          const child_result *result, int *rc, sl_error *item_err,
+                          sl_error *err)
+{
+    const sl_stage *stage = e->stages[s];
+    int taken_over = 0;
+    *rc = commit_success(e, s, name, t, c->key, c->part < 0 ? c->parts : 0, staged,
+                         c->out_dir, outcome, result, &taken_over, item_err);
+    if (taken_over) { /* committed; the claim and what follows are the new owner's */
+        e->counts.ran++;
+        SL_LOG(SL_LOG_WARN, stage->name, t->item,
+               "committed, but the claim was taken over meanwhile");
+        *rc = 0;
+        return 1;
+    }
+    if (*rc) {
+        if (*rc == SL_E_LEASE_LOST)
+            outcome->lease_lost = 1;
+        return 0;
+    }
+    e->counts.ran++;
+    int released = 0;
+    *rc = release_done(e, s, name, t, c->part >= 0, &released, err);
+    /* Joined (or run whole): no part is read any more. A part committed after its stage
+     * was (another split finished first) goes too. */
+    if (c->part < 0 || sl_engine_part_committed(e, s, c->ticket, c->stage_key))
+        sl_engine_parts_prune(e, s, c->ticket, 0, sl_engine_parts(e, s, t->source));
+    /* Said only by the owner that moved the claim to done: an owner that lost its lease
+     * after the commit (the record is the same either way) is silent, so the log shows
+     * each stage done once. */
+    if (!released) {
+        SL_LOG(SL_LOG_WARN, stage->name, t->item,
+               "committed, but the claim was taken over meanwhile");
+        return 1;
+    }
+    char extra[160];
+    snprintf(extra, sizeof extra, "\"cpu_seconds\":%.3f,\"peak_rss_kb\":%ld",
+             result->cpu_seconds, result->max_rss_kb);
+    if (c->part >= 0)
+        snprintf(extra + strlen(extra), sizeof extra - strlen(extra),
+                 ",\"part\":%d,\"parts\":%d", c->part, c->parts);
+    sl_log_event("stage_done", stage->name, t->item, outcome->seconds, NULL, extra);
+    SL_LOG(SL_LOG_INFO, stage->name, t->item, "done in %.2f s, peak RSS %ld MiB",
+           outcome->seconds, result->max_rss_kb / 1024);
+    return 1;
+}
+
+int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_error *err)
+{
+    claim_ctx c;
+    char staged[PATH_MAX];
+    int rc = 0;
+    if (!resolve_claim(e, s, name, t, &c, &rc, err) ||
+        committed_meanwhile(e, s, name, t, &c, &rc, err) ||
+        !prepare_staging(e, s, name, t, &c, staged, &rc, err))
+        return rc;
+    sl_child_outcome outcome;
+    child_result result;
+    if ((rc = run_child(e, s, name, t, &c, staged, &outcome, &result, err)))
+        return rc;
     sl_error item_err;
     sl_error_init(&item_err);
     if (outcome.have_result)
-        item_err = outcome.result.err;
+        item_err = result.err;
     int ok = outcome.have_result && item_err.code == SL_OK && WIFEXITED(outcome.status) &&
              WEXITSTATUS(outcome.status) == 0 && !outcome.lease_lost;
-    if (ok) {
-        int taken_over = 0;
-        rc = commit_success(e, s, name, t, key, part < 0 ? parts : 0, staged, out_dir,
-                            &outcome, &taken_over, &item_err);
-        if (taken_over) { /* committed; the claim and what follows are the new owner's */
-            e->counts.ran++;
-            SL_LOG(SL_LOG_WARN, stage->name, t->item,
-                   "committed, but the claim was taken over meanwhile");
-            return 0;
-        }
-        if (rc == 0) {
-            e->counts.ran++;
-            int released = 0;
-            rc = release_done(e, s, name, t, part >= 0, &released, err);
-            /* Said only by the owner that moved the claim to done: an owner that lost
-             * its lease after the commit (the record is the same either way) is silent,
-             * so the log shows each stage done once. */
-            if (part < 0 && parts > 1)
-                sl_engine_parts_remove(e, s, ticket, parts); /* joined: no longer read */
-            if (released) {
-                char extra[160];
-                snprintf(extra, sizeof extra, "\"cpu_seconds\":%.3f,\"peak_rss_kb\":%ld",
-                         outcome.result.cpu_seconds, outcome.result.max_rss_kb);
-                if (part >= 0)
-                    snprintf(extra + strlen(extra), sizeof extra - strlen(extra),
-                             ",\"part\":%d,\"parts\":%d", part, parts);
-                sl_log_event("stage_done", stage->name, t->item, outcome.seconds, NULL, extra);
-                SL_LOG(SL_LOG_INFO, stage->name, t->item, "done in %.2f s, peak RSS %ld MiB",
-                       outcome.seconds, outcome.result.max_rss_kb / 1024);
-            } else {
-                SL_LOG(SL_LOG_WARN, stage->name, t->item,
-                       "committed, but the claim was taken over meanwhile");
-            }
-            return rc;
-        }
-        if (rc == SL_E_LEASE_LOST)
-            outcome.lease_lost = 1;
-    }
+    if (ok && finish_success(e, s, name, t, &c, staged, &outcome, &result, &rc, &item_err, err))
+        return rc;
     sl_error ignored;
     sl_error_init(&ignored);
     sl_remove_tree(staged, 0, &ignored); /* never committed: nothing in it is trusted */
-    sl_error_context(&item_err, stage->name, t->item);
-    return handle_failure(e, s, name, t, &outcome, &item_err, err);
+    sl_error_context(&item_err, e->stages[s]->name, t->item);
+    return sl_engine_handle_failure(e, s, name, t, &outcome, &item_err, err);
 }

@@ -4,6 +4,7 @@
 
 #include <limits.h>
 #include <stdint.h>
+#include <sys/types.h>
 
 #include "core/hash.h"
 #include "core/clock.h"
@@ -34,6 +35,8 @@ typedef struct sl_engine_counts {
     uint64_t untracked;   /* of those, failures no ticket shows (a publication, a scan
                              error): pending for the exit code all the same */
     uint64_t skipped;     /* input entries the scan did not take (hidden, links, ...) */
+    uint64_t moved_aside; /* entries in published folders that were not the publication's */
+    uint64_t manifest_unknown; /* manifest rows naming no item of the input tree */
 } sl_engine_counts;
 
 struct sl_engine {
@@ -45,6 +48,7 @@ struct sl_engine {
     int memory_check;        /* [run] memory_check: refuse items expected over the budget */
     char admission[512];     /* why the last item refused was not run */
     double (*expected_peak_mb)(const struct sl_engine_facts *, const char *, const char **);
+    const char *const *input_suffixes; /* what the input walk takes (engine.h) */
     int64_t scan_mark_expires;    /* this process's scan mark (engine_work.c); 0 = none */
     int max_crashes;
     unsigned method;         /* [lod] method (sl_lod_method bit) */
@@ -65,9 +69,13 @@ struct sl_engine {
                                   not reconciled */
     void *item_ctx;
     uint64_t item_count, item_capacity;
+    struct sl_manifest *manifest;  /* the collection manifest, or NULL (engine_manifest.c) */
+    unsigned char *manifest_seen;  /* per row: the scan found its item */
 };
 
 /* engine_lease.c: who owns what. */
+/* Start time of process `pid` in clock ticks after boot (/proc/PID/stat), 0 if unknown. */
+unsigned long long sl_process_start_time(long pid);
 void sl_identity_self(sl_identity *id);
 int sl_identity_alive(const sl_identity *self, const sl_ticket *t); /* 1 alive, 0 dead, -1 unknown */
 void sl_random_nonce(char out[33]);
@@ -126,6 +134,25 @@ sl_hash sl_chain_hash(sl_hash chain, sl_hash digest);
 /* Hash of every config section the stage reads (its own by default), in order. */
 uint64_t sl_stage_config_hash(const sl_config *cfg, const sl_stage *stage);
 
+/* engine_manifest.c: the collection manifest (docs/metadata.md). */
+/* Reads [run] manifest (or manifest.csv/.json at the input's root); SL_E_CONFIG naming
+ * FILE:LINE when it is malformed. No manifest: 0, e->manifest NULL. */
+int sl_engine_manifest_open(sl_engine *e, sl_error *err);
+void sl_engine_manifest_close(sl_engine *e);
+/* The item's row for stage s: NULL unless the stage reads metadata and the row exists. */
+const sl_item_metadata *sl_engine_item_metadata(const sl_engine *e, int s, const char *item);
+/* What stage s of `item` is keyed on besides its upstream: its config sections' hash, and
+ * for a stage that reads metadata the item's manifest row (when it has one). Every key
+ * of a stage is made with this (reconciliation and the stage's own run). */
+uint64_t sl_engine_stage_config_hash(const sl_engine *e, int s, const char *item);
+/* After a scan: the rows naming no item found, each a WARN line and an event, counted. */
+void sl_engine_manifest_check(sl_engine *e);
+/* The summary's "manifest": its file, rows and the rows that named no item. */
+struct sl_json;
+void sl_engine_manifest_summary(const sl_engine *e, struct sl_json *js);
+/* summary.html's note on the manifest: its file and rows, and those naming no item. */
+void sl_engine_manifest_note(const sl_engine *e, FILE *out);
+
 /* engine_reconcile.c: bring one item's tickets in line with its keys from stage `from`
  * on (publishing it when every stage is done). */
 void sl_ticket_for(sl_ticket *t, const char *item, const char *source_rel, sl_hash key);
@@ -135,8 +162,8 @@ int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, 
 /* A ticket `name` of `stage` for `key` in ready unless it is claimed,
  * already ready under that key, or quarantined under it (then *quarantined = 1). */
 int sl_engine_ensure_ready(sl_engine *e, const char *stage, const char *name, const char *item,
-                           const char *source_rel, sl_hash key, int *quarantined,
-                           sl_error *err);
+                           const char *source_rel, sl_hash key, int parts, int *quarantined,
+                           sl_error *err); /* parts: recorded in a part's ticket, else 0 */
 /* Brings stage s's parts of the item in line with `key` (each part's record checked, a
  * ready ticket for every part that is neither done, claimed nor quarantined under its
  * key). *all_done: every part is committed; *quarantined: some part is quarantined. */
@@ -158,6 +185,10 @@ int sl_part_parse(const char *name, char *ticket, size_t size, int *part);
 sl_hash sl_part_key(sl_hash stage_key, int part, int parts);
 /* Whether part `part_name` of stage s is committed under `key` (its record verifies). */
 int sl_engine_part_committed(const sl_engine *e, int s, const char *part_name, sl_hash key);
+/* Drops our claim on part `part` of the item's stage s, which is not of the item's split
+ * of `parts`: back to ready for reconciliation to rewrite when its index is one of the
+ * split's, else removed (with whatever lies above it, so no gap is left). */
+void sl_engine_part_drop(sl_engine *e, int s, const char *ticket, int part, int parts);
 /* Whether claim `part` (-1: the join) of stage s may run now, with *key turned into the
  * part's key: a part must be one of the item's current `parts`, a join needs every part
  * committed. 0: drop the claim and reconcile the item. */
@@ -171,9 +202,18 @@ char **sl_engine_part_dirs(const sl_engine *e, int s, const char *ticket, int pa
  * ticket name. */
 char *sl_engine_parts_stats(const sl_engine *e, int s, const char *name, int parts,
                             const char *head, size_t head_size);
-/* Removes the parts' artifact folders and done tickets once their join is committed
- * (best effort: leftovers are only disk). */
-void sl_engine_parts_remove(sl_engine *e, int s, const char *ticket, int parts);
+/* The split the item's stage s works to (0: none): the config's (sl_engine_parts), unless
+ * the parts on disk belong to another split that a live worker is running (a claim on one
+ * of its parts other than `exclude`: the claim being judged, NULL for none) or whose
+ * parts are all committed under stage key `key`. */
+int sl_engine_item_parts(const sl_engine *e, int s, const char *ticket, const char *source_rel,
+                         sl_hash key, const char *exclude);
+/* Removes the item's parts `from` and above of stage s (tickets and artifact folders),
+ * from the top down, stopping below one a live worker holds: 0 once the stage is
+ * committed, else the item's split (the parts of others). Parts below `at_least` (the
+ * config's split) are looked for even past a gap. Best effort: leftovers are only disk,
+ * and the next reconciliation tries again. */
+void sl_engine_parts_prune(sl_engine *e, int s, const char *ticket, int from, int at_least);
 /* engine_admission.c: 1 when the item's expected peak memory for stage s fits the budget;
  * else 0, with the reason logged and left in e->admission (docs/engine.md). */
 int sl_engine_admitted(sl_engine *e, int s, const sl_ticket *t, const char *source);
@@ -181,13 +221,74 @@ int sl_engine_admitted(sl_engine *e, int s, const sl_ticket *t, const char *sour
  * sibling of `out_dir` named after this process (SL_E_LIMIT when too long). */
 int sl_engine_staged_path(const sl_engine *e, const char *out_dir, char *buf, sl_error *err);
 
+/* What a stage process reports to its parent through the result pipe. */
+typedef struct child_result {
+    sl_error err;
+    double cpu_seconds;
+    long max_rss_kb;
+} child_result;
+
+/* The stage process's progress, in a shared mapping the parent draws from. */
+typedef struct shared_progress {
+    volatile double fraction;
+    char phase[32];
+} shared_progress;
+
+/* The work of a claim: which stage of which item, and which part of it (part -1: the
+ * whole stage, or the join of its `parts` parts when parts > 1). */
+typedef struct claim_work {
+    int s;
+    const char *item, *source, *in_dir, *out_dir;
+    int part, parts;
+} claim_work;
+
+/* engine_stage_child.c: the forked stage process's body; never returns (_exit). */
+void sl_engine_child_main(sl_engine *e, const claim_work *w, shared_progress *sp, int result_fd,
+                          pid_t parent);
+
 /* engine_child.c: runs stage `s` for the claimed ticket; moves the ticket on. */
 int sl_engine_process(sl_engine *e, int s, const char *name, sl_ticket *t, sl_error *err);
+
+/* How a stage process ended, as its parent saw it. */
+typedef struct sl_child_outcome {
+    int have_result;  /* the child reported its sl_error (and times) through the pipe */
+    int status;       /* waitpid status */
+    long max_rss_kb;  /* its peak RSS (wait4), also when it was killed */
+    int oom_killed;   /* the cgroup's oom_kill count rose while it ran */
+    int timed_out;    /* we killed it: [run] item_timeout_s */
+    int interrupted;  /* we forwarded an interrupt */
+    int lease_lost;   /* we killed it: the lease could not be renewed */
+    double seconds;
+} sl_child_outcome;
+
+/* engine_outcome.c: the failure classes (docs/engine.md, "Failure classes"). */
+/* Moves our claim to `to` with the class and reason written into the ticket (nothing when
+ * the claim was taken over meanwhile). */
+int sl_engine_move_with_reason(sl_engine *e, int s, const char *name, sl_ticket *t, int to,
+                               const char *cls, const char *reason, sl_error *err);
+/* The claim's stage failed (item_err; SL_OK: the process died without a word): counts it
+ * and moves the ticket where its class says. */
+int sl_engine_handle_failure(sl_engine *e, int s, const char *name, sl_ticket *t,
+                             const sl_child_outcome *o, sl_error *item_err, sl_error *err);
+/* Whether quarantined ticket `t` stays quarantined for this run: 1; 0 with the reason in
+ * `why` when it is to be retried (a class that is never quarantined, a "bug" that was
+ * out of memory, or one that crashed under a smaller [run] memory_limit_mb, or one from a
+ * build that did not record the limit). */
+int sl_engine_quarantine_holds(const sl_engine *e, const sl_ticket *t, char *why, size_t size);
 
 /* engine_publish.c */
 int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const char *source_rel,
                       int force, sl_error *err);
 int sl_engine_publish_valid(sl_engine *e, const char *item, const char *ticket);
+/* After every stage is done: a valid publication is kept (entries its record does not
+ * list moved aside: the folder is the publication's alone) and *settled set; else the
+ * item is published. */
+int sl_engine_publication_settle(sl_engine *e, const char *item, const char *ticket,
+                                 const char *source_rel, int *settled, sl_error *err);
+/* Calls fn for each entry of published folder `dir` that the record at `record_path`
+ * does not list (timings.json is the publication's too); their number. */
+int sl_engine_foreign_entries(const char *record_path, const char *dir,
+                              void (*fn)(void *ctx, const char *name), void *ctx);
 
 /* engine_summary.c: OUTPUT/summary.json and summary.md over the scanned items. */
 int sl_engine_write_summary(sl_engine *e, sl_error *err);

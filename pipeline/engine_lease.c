@@ -1,5 +1,5 @@
 /* Who owns what: this process's identity, the leases of claimed tickets and the scan's
- * announcement (ARCHITECTURE section 3, leases and epochs; docs/engine.md, "Leases and
+ * announcement (docs/engine.md, "Leases and
  * liveness"). The bottom of the engine: the worker loop, the stage runner and the scan
  * all ask it, and it asks none of them.
  *
@@ -25,7 +25,7 @@
 
 #define SCAN_QUEUE "_scan"
 
-static unsigned long long process_start_time(long pid)
+unsigned long long sl_process_start_time(long pid)
 {
     char path[64], text[1024];
     snprintf(path, sizeof path, "/proc/%ld/stat", pid);
@@ -59,7 +59,7 @@ void sl_identity_self(sl_identity *id)
         id->boot[strcspn(id->boot, "\n")] = '\0';
     }
     id->pid = (long)getpid();
-    id->pid_start = process_start_time(id->pid);
+    id->pid_start = sl_process_start_time(id->pid);
     const char *job = getenv("SLURM_JOB_ID"), *task = getenv("SLURM_ARRAY_TASK_ID"),
                *restart = getenv("SLURM_RESTART_COUNT");
     /* In an array, the task's own SLURM_JOB_ID is not what scontrol/scancel take with
@@ -82,7 +82,7 @@ int sl_identity_alive(const sl_identity *self, const sl_ticket *t)
         return 0;  /* this host rebooted since the claim */
     if (t->pid <= 0)
         return 0;
-    unsigned long long start = process_start_time(t->pid);
+    unsigned long long start = sl_process_start_time(t->pid);
     if (start == 0)
         return 0;
     return t->pid_start == 0 || start == t->pid_start;
@@ -114,6 +114,7 @@ void sl_engine_stamp_lease(const sl_engine *e, sl_ticket *t)
     t->pid = e->self.pid;
     t->pid_start = e->self.pid_start;
     t->expires = (int64_t)sl_now_seconds() + e->lease_seconds;
+    t->memory_limit_mb = e->memory_limit_mb; /* what a crash happened under */
 }
 
 /* Is the claimed ticket still ours (same nonce and epoch)? */

@@ -4,9 +4,18 @@
 
 static const sl_option run_options[] = {
     {"run", "input", SL_OPT_PATH, NULL, 0, 0, NULL,
-     "Folder tree of .ply files to convert, searched recursively; one file is one item, "
+     "Folder tree of scans to convert (every file named as a format scanlod reads: "
+     "docs/inputs.md), searched recursively; one file is one item, "
      "its id the file's path relative to this folder (published at OUTPUT/ID/). Links to "
      "folders are not followed. Never written to."},
+    {"run", "manifest", SL_OPT_STRING, "", 0, 0, NULL,
+     "The collection manifest (docs/metadata.md): per item its title, accession number, "
+     "units, up axis, credit, licence and description, for the pages, the Voyager scene and "
+     "the item's frame. Empty = manifest.csv or manifest.json at the root of input, if there "
+     "is one; none = no manifest; else the file (CSV, or JSON by its .json suffix; relative "
+     "to this config file's folder). Read once per run; a malformed manifest stops the run "
+     "before any work (exit 78), naming its file and line. Editing an item's row reruns "
+     "that item's export only."},
     {"run", "work", SL_OPT_PATH, NULL, 0, 0, NULL,
      "Work directory: queues, intermediate artifacts and their commit records. Share it "
      "between hosts to run workers on a cluster."},
@@ -34,16 +43,27 @@ static const sl_option run_options[] = {
      "as a crash: retried once, then quarantined."},
     {"run", "log_level", SL_OPT_ENUM, "info", 0, 0, "error|warn|info|debug",
      "Least severe message written to the log files."},
+    {"run", "log_keep", SL_OPT_INT, "200", 0, 1000000, NULL,
+     "Every run and worker writes two log files (RUN.log, RUN.jsonl) into [run] logs; "
+     "when one starts, the files of all but the newest this many runs there are deleted "
+     "(never those of a run still going on this host). 0 = keep every log."},
     SL_OPTION_END,
 };
 
 static const sl_option lod_options[] = {
-    {"lod", "method", SL_OPT_ENUM, "octree", 0, 0, SL_METHOD_NAMES,
-     "How the levels are made: octree = the marching-cube octree of paper 1 (any cut in "
-     "O(m) from one model file, watertight, crack-free); segment = paper 3's segmentation "
-     "(planes kept exactly, the scan's own vertices); cluster = paper 2's clustering "
-     "passes with a bounded error. Each method is its own path of stages after range; "
-     "switching reruns the stages of the new path only."},
+    {"lod", "method", SL_OPT_ENUM, "best", 0, 0, SL_METHOD_NAMES,
+     "How the levels are made (docs/levels.md): octree = the marching-cube octree of paper 1 "
+     "(any cut in O(m) from one model file, watertight, crack-free); segment = paper 3's "
+     "segmentation (planes kept exactly, the scan's own vertices); cluster = paper 2's "
+     "clustering passes with a bounded error; best = candidates from the methods in "
+     "candidates and, for a mesh, the scan itself simplified, each refined ([refine]) and "
+     "measured against the input, the most faithful published per level. Each method is "
+     "its own path of stages after range; switching reruns the stages of the new path "
+     "only."},
+    {"lod", "candidates", SL_OPT_LIST, "octree", 0, 0, SL_CANDIDATE_NAMES,
+     "method = best: the methods that build candidate levels besides the scan itself (a "
+     "point set has only these). octree also gives the item its model.slod (any level in "
+     "O(m) for viewers). segment and cluster cost more time (docs/benchmarks.md)."},
     SL_OPTION_END,
 };
 
@@ -64,6 +84,16 @@ static const sl_option queue_options[] = {
     SL_OPTION_END,
 };
 
+/* A table several stages share is listed once. */
+static void add_table(const sl_option **tables, int *n, const sl_option *table)
+{
+    for (int i = 0; table && i < *n; i++)
+        if (tables[i] == table)
+            return;
+    if (table && *n < SL_MAX_OPTION_TABLES)
+        tables[(*n)++] = table;
+}
+
 void sl_all_option_tables(const sl_stage *const *stages,
                           const sl_option *tables[SL_MAX_OPTION_TABLES + 1])
 {
@@ -71,8 +101,11 @@ void sl_all_option_tables(const sl_stage *const *stages,
     tables[n++] = run_options;
     tables[n++] = lod_options;
     tables[n++] = queue_options;
-    for (const sl_stage *const *s = stages; *s && n < SL_MAX_OPTION_TABLES; s++)
-        if ((*s)->options)
-            tables[n++] = (*s)->options;
+    /* Tables several stages share (the ladder) first: they are about the whole method. */
+    for (const sl_stage *const *s = stages; *s; s++)
+        for (const sl_option *const *t = (*s)->shared_options; t && *t; t++)
+            add_table(tables, &n, *t);
+    for (const sl_stage *const *s = stages; *s; s++)
+        add_table(tables, &n, (*s)->options);
     tables[n] = NULL;
 }

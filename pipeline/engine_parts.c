@@ -11,6 +11,17 @@
  * the stage key chained with (part, parts), so a changed input, config or [queue] part_mb
  * makes old parts stale. The join's key is the stage key: parts are scheduling, and the
  * joined result is byte-identical to the unsplit stage's.
+ *
+ * A split is a property of the item's current config: reconciliation removes the parts
+ * of any other (a changed part_mb left them in the work folder for good, issue 34 item
+ * 4), and once the stage is committed, every part. Two exceptions keep workers whose
+ * part_mb differ from undoing each other's split, and keep finished work: a split that a
+ * live worker is running (it holds a claim on one of its parts, whose tickets say how
+ * many parts it has), or whose parts are all committed, is the item's until it is joined,
+ * and every worker runs its parts and its join (byte-identical whatever the split). Parts
+ * are removed from the top down and never below one a live worker holds, so the parts on
+ * disk are always 0..k: finding them is a walk up to the first index with neither ticket
+ * nor folder.
  */
 #include "pipeline/engine_internal.h"
 
@@ -97,19 +108,99 @@ int sl_engine_part_committed(const sl_engine *e, int s, const char *part_name, s
     return sl_record_check(record, dir, &key, NULL, &ignored) == 0;
 }
 
-void sl_engine_parts_remove(sl_engine *e, int s, const char *ticket, int parts)
+/* Whether a live worker (this one too) holds a claim on ticket `name` of stage s. */
+static int held_live(const sl_engine *e, int s, const char *name)
 {
+    sl_ticket t;
+    return sl_queue_get(e->work, e->stages[s]->name, SL_STATE_CLAIMED, name, &t) == 0 &&
+           !sl_lease_owner_gone(e, &t, (int64_t)sl_now_seconds());
+}
+
+/* Whether split `parts` of the item's stage s is running (a live worker holds one of its
+ * parts, `exclude` aside) or complete (every part committed under stage key `key`). */
+static int split_in_use(const sl_engine *e, int s, const char *ticket, int parts, sl_hash key,
+                        const char *exclude)
+{
+    char name[PATH_MAX];
+    int committed = 0;
     for (int p = 0; p < parts; p++) {
+        if (sl_part_name(ticket, p, name, sizeof name))
+            return 0;
+        if (strcmp(name, exclude ? exclude : "") && held_live(e, s, name))
+            return 1;
+        committed += sl_engine_part_committed(e, s, name, sl_part_key(key, p, parts));
+    }
+    return committed == parts;
+}
+
+int sl_engine_item_parts(const sl_engine *e, int s, const char *ticket, const char *source_rel,
+                         sl_hash key, const char *exclude)
+{
+    int config = sl_engine_parts(e, s, source_rel);
+    char name[PATH_MAX];
+    sl_ticket first;
+    int state;
+    if (!e->stages[s]->run_part || sl_part_name(ticket, 0, name, sizeof name) ||
+        (state = sl_queue_find(e->work, e->stages[s]->name, name)) == SL_STATE_NONE ||
+        sl_queue_get(e->work, e->stages[s]->name, state, name, &first) != 0)
+        return config;
+    int other = first.parts;
+    if (other < 2 || other > SL_PARTS_MAX || other == config)
+        return config;
+    return split_in_use(e, s, ticket, other, key, exclude) ? other : config;
+}
+
+/* Whether part p of the item's stage s has a ticket in any state or an artifact folder. */
+static int part_exists(const sl_engine *e, int s, const char *ticket, int p)
+{
+    char name[PATH_MAX], dir[PATH_MAX];
+    struct stat st;
+    if (sl_part_name(ticket, p, name, sizeof name) || sl_artifact_dir(e, s, name, dir, sizeof dir))
+        return 0;
+    return sl_queue_find(e->work, e->stages[s]->name, name) != SL_STATE_NONE ||
+           stat(dir, &st) == 0;
+}
+
+void sl_engine_parts_prune(sl_engine *e, int s, const char *ticket, int from, int at_least)
+{
+    if (!e->stages[s]->run_part)
+        return;
+    int top = from > at_least ? from : at_least;
+    while (top < SL_PARTS_MAX && part_exists(e, s, ticket, top))
+        top++;
+    for (int p = top - 1; p >= from; p--) {
         char name[PATH_MAX], dir[PATH_MAX], path[PATH_MAX];
         if (sl_part_name(ticket, p, name, sizeof name) ||
-            sl_artifact_dir(e, s, name, dir, sizeof dir))
-            continue;
+            sl_artifact_dir(e, s, name, dir, sizeof dir) || held_live(e, s, name))
+            break; /* its owner commits it, then removes it and what is left below */
         sl_error ignored;
         sl_error_init(&ignored);
         sl_remove_tree(dir, 0, &ignored);
-        sl_queue_path(path, sizeof path, e->work, e->stages[s]->name, SL_STATE_DONE, name);
-        unlink(path);
+        for (int state = 0; state < SL_STATE_COUNT; state++)
+            if (sl_queue_path(path, sizeof path, e->work, e->stages[s]->name, state, name) == 0)
+                unlink(path);
     }
+}
+
+void sl_engine_part_drop(sl_engine *e, int s, const char *ticket, int part, int parts)
+{
+    char name[PATH_MAX];
+    sl_error ignored;
+    sl_error_init(&ignored);
+    if (sl_part_name(ticket, part, name, sizeof name))
+        return;
+    if (part < parts) { /* one of the split's indices: reconciliation rewrites it */
+        sl_queue_move(e->work, e->stages[s]->name, name, SL_STATE_CLAIMED, SL_STATE_READY,
+                      &ignored);
+        return;
+    }
+    /* Above the split: what is above it goes first, then it (no gap below a part). */
+    sl_engine_parts_prune(e, s, ticket, part + 1, 0);
+    char dir[PATH_MAX], path[PATH_MAX];
+    if (sl_artifact_dir(e, s, name, dir, sizeof dir) == 0)
+        sl_remove_tree(dir, 0, &ignored);
+    if (sl_queue_path(path, sizeof path, e->work, e->stages[s]->name, SL_STATE_CLAIMED, name) == 0)
+        unlink(path);
 }
 
 int sl_engine_parts_ready(const sl_engine *e, int s, const char *ticket, int part, int parts,

@@ -11,6 +11,14 @@
  * hard links, so a file edited in the output cannot change an artifact), and timings.json
  * (wall/CPU time and peak RSS per stage: differs between runs, so it is not in the
  * record).
+ *
+ * The publication owns the item's folder whole: an entry there that its record does not
+ * list (a notes.txt someone added) is moved aside, and so is anything that is not a
+ * folder standing where the item's folder belongs (a file, a link). Before, `verify`
+ * flagged the first on every run while `run` said "nothing to do", and the second failed
+ * every run with "rename failed: Not a directory". Moved aside, never deleted: to
+ * OUTPUT/.scanlod-aside/TICKET/NAME (a hidden folder, so never an item's path), one WARN
+ * line and a `moved_aside` event each.
  */
 #include "pipeline/engine_internal.h"
 
@@ -69,6 +77,101 @@ int sl_engine_publish_valid(sl_engine *e, const char *item, const char *ticket)
     sl_error_init(&err);
     return publish_key(e, ticket, &key, &err) == 0 &&
            sl_record_check(record, final_dir, &key, NULL, &err) == 0;
+}
+
+/* Moves `path` (an entry in or at the item's published folder) to
+ * OUTPUT/.scanlod-aside/TICKET/NAME, NAME.1, ... (the first that is free). */
+static int move_aside(sl_engine *e, const char *item, const char *path, sl_error *err)
+{
+    char ticket[SL_TICKET_NAME_MAX + 1], dir[PATH_MAX], to[PATH_MAX];
+    int rc = sl_ticket_name(item, ticket, sizeof ticket, err);
+    if (rc == 0 && sl_engine_path(dir, sizeof dir, "%s/.scanlod-aside/%s", e->output, ticket))
+        rc = sl_error_set(err, SL_E_LIMIT, 0, item, "path too long");
+    if (rc == 0)
+        rc = sl_mkdirs(dir, err);
+    const char *base = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+    for (int n = 0; rc == 0; n++) {
+        if (n > 999 || sl_engine_path(to, sizeof to, n ? "%s/%s.%d" : "%s/%s", dir, base, n))
+            return sl_error_set(err, SL_E_LIMIT, 0, path, "no free name to move it aside");
+        if (renameat2(AT_FDCWD, path, AT_FDCWD, to, RENAME_NOREPLACE) == 0)
+            break;
+        if (errno != EEXIST)
+            return sl_error_errno(err, errno, path, "moving aside");
+    }
+    if (rc)
+        return rc;
+    SL_LOG(SL_LOG_WARN, "publish", item, "moved aside: %s -> %s (not part of the publication)",
+           path, to);
+    sl_log_event("moved_aside", "publish", item, 0, NULL, NULL);
+    e->counts.moved_aside++;
+    return 0;
+}
+
+typedef struct aside_ctx {
+    sl_engine *e;
+    const char *item, *dir;
+    sl_error *err;
+    int rc;
+} aside_ctx;
+
+static void aside_entry(void *ctx, const char *name)
+{
+    aside_ctx *a = ctx;
+    char path[PATH_MAX];
+    if (a->rc == 0 && sl_engine_path(path, sizeof path, "%s/%s", a->dir, name) == 0)
+        a->rc = move_aside(a->e, a->item, path, a->err);
+}
+
+/* Makes the item's folder the publication's alone: a non-folder in its place, and the
+ * entries `record_path` does not list, are moved aside. */
+static int own_folder(sl_engine *e, const char *item, const char *final_dir,
+                      const char *record_path, sl_error *err)
+{
+    struct stat st;
+    if (lstat(final_dir, &st) != 0)
+        return 0;
+    if (!S_ISDIR(st.st_mode))
+        return move_aside(e, item, final_dir, err);
+    aside_ctx a = {e, item, final_dir, err, 0};
+    sl_engine_foreign_entries(record_path, final_dir, aside_entry, &a);
+    return a.rc;
+}
+
+int sl_engine_publication_settle(sl_engine *e, const char *item, const char *ticket,
+                                 const char *source_rel, int *settled, sl_error *err)
+{
+    if (!sl_engine_publish_valid(e, item, ticket))
+        return sl_engine_publish(e, item, ticket, source_rel, 1, err);
+    char final_dir[PATH_MAX], record_dir[PATH_MAX], record[PATH_MAX];
+    publish_paths(e, item, ticket, final_dir, record_dir);
+    sl_engine_path(record, sizeof record, "%s/%s", record_dir, SL_RECORD_FILE);
+    int rc = own_folder(e, item, final_dir, record, err);
+    if (rc == 0 && settled)
+        *settled = 1;
+    return rc;
+}
+
+/* The folders above the item's (OUTPUT/a/ for a/b.ply); a non-folder standing where one
+ * of them belongs is moved aside first. */
+static int make_parent(sl_engine *e, const char *item, const char *parent, sl_error *err)
+{
+    sl_error first;
+    sl_error_init(&first);
+    if (sl_mkdirs(parent, &first) == 0)
+        return 0;
+    char path[PATH_MAX];
+    for (const char *slash = strchr(item, '/'); slash; slash = strchr(slash + 1, '/')) {
+        struct stat st;
+        if (sl_engine_path(path, sizeof path, "%s/%.*s", e->output, (int)(slash - item), item))
+            break;
+        /* A link to a folder is a folder here (an operator may put a subtree elsewhere);
+         * a file or a dangling link is in the way. */
+        int in_the_way = stat(path, &st) == 0 ? !S_ISDIR(st.st_mode) : lstat(path, &st) == 0;
+        int rc = in_the_way ? move_aside(e, item, path, err) : 0;
+        if (rc)
+            return rc;
+    }
+    return sl_mkdirs(parent, err);
 }
 
 /* report.json: every stage's report fragment under "stages"; timings.json likewise. */
@@ -176,7 +279,7 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
     sl_hash key;
     int rc = publish_key(e, ticket, &key, err);
     if (rc == 0)
-        rc = sl_mkdirs(parent, err);
+        rc = make_parent(e, item, parent, err);
     if (rc == 0) {
         sl_error ignored;
         sl_error_init(&ignored);
@@ -193,9 +296,13 @@ int sl_engine_publish(sl_engine *e, const char *item, const char *ticket, const 
     published[published_count] = NULL;
     if (rc == 0)
         rc = sl_fsync_dir(staged, err);
-    /* The old record must not vouch for the new files, even for a moment. */
+    /* What is in the old folder and not the old publication's goes aside, not away with
+     * it; a non-folder in its place goes aside too (a rename onto it would fail). */
     char record[PATH_MAX];
     sl_engine_path(record, sizeof record, "%s/%s", record_dir, SL_RECORD_FILE);
+    if (rc == 0)
+        rc = own_folder(e, item, final_dir, record, err);
+    /* The old record must not vouch for the new files, even for a moment. */
     if (rc == 0 && unlink(record) == 0)
         rc = sl_fsync_dir(record_dir, err);
     if (rc == 0)

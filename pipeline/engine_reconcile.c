@@ -28,6 +28,7 @@ static int requeue(sl_engine *e, const char *stage, const char *name, int from, 
                    sl_hash key, int reset, sl_error *err)
 {
     sl_hash_hex(key, t->key);
+    t->run[0] = '\0'; /* no longer a failure of some run */
     if (reset) {
         t->attempt = 0;
         t->crashes = 0;
@@ -40,7 +41,7 @@ static int requeue(sl_engine *e, const char *stage, const char *name, int from, 
 }
 
 int sl_engine_ensure_ready(sl_engine *e, const char *stage, const char *name, const char *item,
-                           const char *source_rel, sl_hash key, int *quarantined,
+                           const char *source_rel, sl_hash key, int parts, int *quarantined,
                            sl_error *err)
 {
     sl_ticket t;
@@ -49,6 +50,7 @@ int sl_engine_ensure_ready(sl_engine *e, const char *stage, const char *name, co
         return 0; /* a worker holds it; its lease decides */
     if (state == SL_STATE_NONE) {
         sl_ticket_for(&t, item, source_rel, key);
+        t.parts = parts;
         return sl_queue_put(e->work, stage, SL_STATE_READY, name, &t, err);
     }
     char ticket_path[PATH_MAX];
@@ -61,11 +63,22 @@ int sl_engine_ensure_ready(sl_engine *e, const char *stage, const char *name, co
     sl_hash_hex(key, key_hex);
     int same_key = strcmp(t.key, key_hex) == 0;
     snprintf(t.source, sizeof t.source, "%s", source_rel);
+    t.parts = parts; /* a part of another split gets another key, so it is rewritten */
+    char why[256];
     if (state == SL_STATE_QUARANTINE && same_key) {
-        *quarantined = 1;
-        return 0; /* stays quarantined until its input, config or code changes */
+        if (sl_engine_quarantine_holds(e, &t, why, sizeof why)) {
+            *quarantined = 1;
+            return 0; /* stays quarantined until its input, config or code changes */
+        }
+        SL_LOG(SL_LOG_WARN, stage, item, "retried: %s (it said: %s)", why, t.reason);
+        return requeue(e, stage, name, state, &t, key, 1, err);
     }
     if (state == SL_STATE_READY && same_key)
+        return 0;
+    /* A failure of this run waits for the next, as its log line said ("will retry on the
+     * next run"): without this, a part that failed was requeued by its siblings' commits
+     * and ran again in the same run, an out-of-memory part as often as they committed. */
+    if (state == SL_STATE_FAILED && same_key && t.run[0] && !strcmp(t.run, sl_log_run_id()))
         return 0;
     return requeue(e, stage, name, state, &t, key, !same_key || state == SL_STATE_DONE, err);
 }
@@ -84,7 +97,7 @@ int sl_engine_reconcile_parts(sl_engine *e, int s, const char *item, const char 
             continue;
         *all_done = 0;
         int rc = sl_engine_ensure_ready(e, e->stages[s]->name, name, item, source_rel,
-                                        part_key, quarantined, err);
+                                        part_key, parts, quarantined, err);
         if (rc)
             return rc;
     }
@@ -106,7 +119,8 @@ int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, 
         return rc;
     for (int s = from; s < e->stage_count; s++) {
         const char *stage = e->stages[s]->name;
-        sl_hash key = sl_stage_key(stage, e->stages[s]->version, e->config_hash[s], upstream);
+        sl_hash key = sl_stage_key(stage, e->stages[s]->version,
+                                   sl_engine_stage_config_hash(e, s, item), upstream);
         int state = sl_queue_find(e->work, stage, name);
         if (state == SL_STATE_CLAIMED)
             return 0; /* a worker holds it; its lease decides */
@@ -131,15 +145,16 @@ int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, 
                  * (and so logged it as failed, or not at all): adopted here, once. */
                 sl_log_event("stage_done", stage, item, -1, NULL, "\"adopted\":true");
             }
-            /* Parts left behind by a join whose owner died before it removed them. */
-            int parts = sl_engine_parts(e, s, source_rel);
-            if (parts > 1)
-                sl_engine_parts_remove(e, s, name, parts);
+            /* Parts left behind by a join whose owner died before it removed them, or
+             * of a split the stage's last config did not make (it ran unsplit). */
+            sl_engine_parts_prune(e, s, name, 0, sl_engine_parts(e, s, source_rel));
             e->counts.reused++;
             upstream = sl_chain_hash(upstream, rec.outputs_digest);
             continue;
         }
-        int parts = sl_engine_parts(e, s, source_rel), quarantined = 0;
+        int parts = sl_engine_item_parts(e, s, name, source_rel, key, NULL), quarantined = 0;
+        sl_engine_parts_prune(e, s, name, parts > 1 ? parts : 0, /* other splits' */
+                              sl_engine_parts(e, s, source_rel));
         if (parts > 1) { /* the join's ticket waits until every part is committed */
             int all_done = 0;
             rc = sl_engine_reconcile_parts(e, s, item, source_rel, name, key, parts,
@@ -150,15 +165,10 @@ int sl_engine_reconcile(sl_engine *e, const char *item, const char *source_rel, 
                 return rc;
             }
         }
-        rc = sl_engine_ensure_ready(e, stage, name, item, source_rel, key, &quarantined, err);
+        rc = sl_engine_ensure_ready(e, stage, name, item, source_rel, key, 0, &quarantined, err);
         if (quarantined && settled)
             *settled = 1;
         return rc;
     }
-    if (sl_engine_publish_valid(e, item, name)) {
-        if (settled)
-            *settled = 1;
-        return 0;
-    }
-    return sl_engine_publish(e, item, name, source_rel, 1, err);
+    return sl_engine_publication_settle(e, item, name, source_rel, settled, err);
 }

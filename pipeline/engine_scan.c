@@ -19,10 +19,16 @@
 
 /* ---- input tree walk ------------------------------------------------------------- */
 
-static int has_ply_suffix(const char *name)
+/* Whether `name` ends in one of the scan suffixes the program reads (and is more than it). */
+static int is_scan_name(const sl_engine *e, const char *name)
 {
     size_t n = strlen(name);
-    return n > 4 && strcasecmp(name + n - 4, ".ply") == 0;
+    for (const char *const *s = e->input_suffixes; *s; s++) {
+        size_t k = strlen(*s);
+        if (n > k && strcasecmp(name + n - k, *s) == 0)
+            return 1;
+    }
+    return 0;
 }
 
 static int compare_strings(const void *a, const void *b)
@@ -38,7 +44,7 @@ static void skip(sl_engine *e, const char *rel, const char *why)
     sl_log_event("scan_skip", "scan", rel, 0, NULL, NULL);
 }
 
-/* A ".ply" name that cannot be read as a scan (a dangling link, a FIFO, a device): the
+/* A scan's name that cannot be read as a scan (a dangling link, a FIFO, a device): the
  * item is quarantined at once with the reason, under a key made of that reason, so it
  * stays there until the entry changes and is listed by `status` and the summary. */
 static int quarantine_unreadable(sl_engine *e, const char *item, const char *why,
@@ -116,7 +122,7 @@ static int scan_item(sl_engine *e, const char *rel, const char *unreadable, sl_e
     return 0; /* one bad item never stops the scan */
 }
 
-/* Why a ".ply" entry that is not a directory cannot be a scan, or NULL if it can:
+/* Why a scan-named entry that is not a directory cannot be a scan, or NULL if it can:
  * `st` is its lstat, `target` the stat of what a link points to (errno if dangling). */
 static const char *unreadable_reason(const struct stat *st, const struct stat *target,
                                      int target_errno, char *buf, size_t size)
@@ -137,8 +143,9 @@ static const char *unreadable_reason(const struct stat *st, const struct stat *t
 static int walk(sl_engine *e, const char *rel_dir, int depth, sl_error *err);
 
 /* One entry of a directory: a folder is walked (never through a link: a link to a
- * folder could lead out of the tree or back into it), a ".ply" file is an item, and
- * anything else that looks like a scan is skipped or quarantined with its reason. */
+ * folder could lead out of the tree or back into it), a file with a scan suffix
+ * (sl_engine_options.input_suffixes) is an item, and anything else that looks like a scan
+ * is skipped or quarantined with its reason. */
 static int scan_entry(sl_engine *e, const char *rel, const char *base, int depth, sl_error *err)
 {
     char full[PATH_MAX];
@@ -151,8 +158,8 @@ static int scan_entry(sl_engine *e, const char *rel, const char *base, int depth
         return 0; /* gone since the directory was read */
     if (base[0] == '.') {
         /* Hidden: never an item. Said for what could hold scans; a .DS_Store or an
-         * editor's backup is noise, like any file that is not a .ply. */
-        if (S_ISDIR(st.st_mode) || has_ply_suffix(base))
+         * editor's backup is noise, like any file that is not a scan. */
+        if (S_ISDIR(st.st_mode) || is_scan_name(e, base))
             skip(e, rel, "hidden name");
         return 0;
     }
@@ -165,8 +172,8 @@ static int scan_entry(sl_engine *e, const char *rel, const char *base, int depth
         skip(e, rel, "symbolic link to a folder (not followed)");
         return 0;
     }
-    if (!has_ply_suffix(base))
-        return 0; /* textures, notes: not items */
+    if (!is_scan_name(e, base))
+        return 0; /* textures, MTL files, glTF buffers, notes: not items */
     char why[160];
     return scan_item(e, rel, unreadable_reason(&st, &target, target_errno, why, sizeof why),
                      err);
@@ -249,6 +256,7 @@ int sl_engine_scan(sl_engine *e, sl_error *err)
     e->items_settled = 0;
     int rc = walk(e, "", 0, err);
     e->items_total = e->counts.items;
+    sl_engine_manifest_check(e);
     e->work_start = sl_now_seconds();
     e->settled_at_start = e->items_settled;
     if (rc == 0 && !*sl_interrupt_flag())

@@ -70,29 +70,44 @@ int sl_engine_finish(sl_engine *e)
                sl_error_format(&serr, line, sizeof line));
     }
     const sl_engine_counts *k = &e->counts;
-    char skipped[64] = "";
+    char skipped[256] = "";
     if (k->skipped)
         snprintf(skipped, sizeof skipped, ", %llu input entries skipped (see the log)",
                  (unsigned long long)k->skipped);
-    if (k->ran == 0 && k->published == 0 && k->quarantined == 0 && pending == 0 && !e->stop)
+    if (k->moved_aside)
+        snprintf(skipped + strlen(skipped), sizeof skipped - strlen(skipped),
+                 ", %llu entries in the output moved aside (see the log)",
+                 (unsigned long long)k->moved_aside);
+    if (k->manifest_unknown)
+        snprintf(skipped + strlen(skipped), sizeof skipped - strlen(skipped),
+                 ", %llu manifest rows name no item (see the log)",
+                 (unsigned long long)k->manifest_unknown);
+    /* An item quarantined as a bug is newly quarantined too (the line said 0 of them). */
+    uint64_t quarantined_new = k->quarantined + k->bugs;
+    char bugs[48] = "";
+    if (k->bugs)
+        snprintf(bugs, sizeof bugs, " (%llu as scanlod bugs)", (unsigned long long)k->bugs);
+    if (k->ran == 0 && k->published == 0 && quarantined_new == 0 && pending == 0 &&
+        k->moved_aside == 0 && !e->stop)
         printf("nothing to do: %llu items up to date (%llu quarantined)%s\n",
                (unsigned long long)k->items, (unsigned long long)quarantined, skipped);
     else
         printf("%llu items: %llu stage runs, %llu reused, %llu published, %llu newly "
-               "quarantined, %llu failed transiently, %llu pending%s; exit %d\n",
+               "quarantined%s, %llu failed transiently, %llu pending%s; exit %d\n",
                (unsigned long long)k->items, (unsigned long long)k->ran,
                (unsigned long long)k->reused, (unsigned long long)k->published,
-               (unsigned long long)k->quarantined, (unsigned long long)k->transient,
+               (unsigned long long)quarantined_new, bugs, (unsigned long long)k->transient,
                (unsigned long long)pending, skipped, exit_code);
     fflush(stdout);
     char extra[512];
     snprintf(extra, sizeof extra,
              "\"items\":%llu,\"ran\":%llu,\"reused\":%llu,\"published\":%llu,"
-             "\"quarantined_new\":%llu,\"quarantined_total\":%llu,\"transient\":%llu,"
-             "\"pending\":%llu,\"skipped\":%llu,\"exit\":%d",
+             "\"quarantined_new\":%llu,\"bugs_new\":%llu,\"quarantined_total\":%llu,"
+             "\"transient\":%llu,\"pending\":%llu,\"skipped\":%llu,\"exit\":%d",
              (unsigned long long)k->items, (unsigned long long)k->ran,
              (unsigned long long)k->reused, (unsigned long long)k->published,
-             (unsigned long long)k->quarantined, (unsigned long long)quarantined,
+             (unsigned long long)quarantined_new, (unsigned long long)k->bugs,
+             (unsigned long long)quarantined,
              (unsigned long long)k->transient, (unsigned long long)pending,
              (unsigned long long)k->skipped, exit_code);
     sl_log_event("run_end", NULL, NULL, 0, e->stop ? &e->storage_error : NULL, extra);

@@ -102,13 +102,14 @@ static void html_begin(sl_engine *e, FILE *out)
     fprintf(out, "<h1>scanlod collection summary</h1>\n<p>%llu items in <code>",
             (unsigned long long)e->item_count);
     sl_html_text(out, e->input);
-    fputs("</code>.</p>\n<p>Per item, its levels as in Table 1 of the paper (k = expansions of "
-          "the LOD array; RMS and Hausdorff distance to the input in % of its bounding-box "
-          "diagonal, symmetric), the Voyager quality each serves (<code>scene.svx.json</code>), "
-          "its files, thumbnails and a 3D view. Everything per level: "
-          "<code>ITEM/report.json</code>; each item's own page: <code>ITEM/index.html</code>."
-          "</p>\n<h2>Items</h2>\n",
+    fputs("</code>.</p>\n<p>Per item: its title, accession number, credit and licence from "
+          "the collection manifest, and its levels for the web as Smithsonian Voyager names "
+          "them (Thumb to Highest), each with its triangles, file size and largest distance "
+          "from the scan in millimetres. Click a picture to turn the item in 3D; its title "
+          "opens its own page. Every figure per level: <code>ITEM/report.json</code>.</p>\n",
           out);
+    sl_engine_manifest_note(e, out);
+    fputs("<h2>Items</h2>\n", out);
 }
 
 /* OUTPUT/scanlod-viewer.js from the first published item that has one; 0 when none has. */
@@ -126,33 +127,12 @@ static int copy_viewer(sl_engine *e, sl_error *err)
     return 0;
 }
 
-int sl_engine_write_summary(sl_engine *e, sl_error *err)
+/* Each published item's report into `js`'s "items", its sections into the Markdown and
+ * the HTML page; returns how many were published. */
+static uint64_t summary_items(sl_engine *e, FILE *out, FILE *page, sl_json *js)
 {
-    sl_json js;
-    sl_json_init(&js, 1);
-    char *md = NULL;
-    size_t md_size = 0;
-    char *html = NULL;
-    size_t html_size = 0;
-    FILE *out = open_memstream(&md, &md_size);
-    FILE *page = out ? open_memstream(&html, &html_size) : NULL;
-    if (!page) {
-        if (out)
-            fclose(out);
-        free(md);
-        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory");
-    }
-    html_begin(e, page);
-    fprintf(out, "# scanlod collection summary\n\n%llu items in `%s`.\n\n",
-            (unsigned long long)e->item_count, e->input);
-    fprintf(out, "Per item, its levels as in Table 1 of the paper (k = expansions of the LOD "
-                 "array; RMS and Hausdorff distance to the input in %% of its bounding-box "
-                 "diagonal, symmetric) and their thumbnails. Everything per level: "
-                 "`ITEM/report.json`; timings and memory: `ITEM/timings.json`.\n\n"
-                 "## Items\n\n");
-    sl_json_object_begin(&js, NULL);
-    sl_json_array_begin(&js, "items");
     uint64_t published = 0;
+    sl_json_array_begin(js, "items");
     for (uint64_t i = 0; i < e->item_count; i++) {
         char path[PATH_MAX];
         sl_engine_path(path, sizeof path, "%s/%s/report.json", e->output, e->items[i]);
@@ -160,7 +140,7 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
         if (!report)
             continue;
         published++;
-        sl_json_raw(&js, NULL, report);
+        sl_json_raw(js, NULL, report);
         free(report);
         sl_ticket t;
         int stale = quarantined(e, e->items[i], &t);
@@ -173,22 +153,31 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
         put_section(page, section, "</h2>\n", e->items[i], stale ? &t : NULL, 1);
         free(section);
     }
-    sl_json_array_end(&js);
+    sl_json_array_end(js);
     if (!published) {
         fprintf(out, "None published.\n\n");
         fputs("<p>None published.</p>\n", page);
     }
+    return published;
+}
+
+/* The quarantined items, each with its class and reason, in all three; *stale counts
+ * those whose previous version stays published. Returns how many there are. */
+static uint64_t summary_quarantined(sl_engine *e, FILE *out, FILE *page, sl_json *js,
+                                    uint64_t *stale)
+{
     fprintf(out, "## Quarantined\n\n");
     fputs("<h2>Quarantined</h2>\n<ul>\n", page);
-    sl_json_array_begin(&js, "quarantined");
-    uint64_t bad = 0, stale = 0;
+    sl_json_array_begin(js, "quarantined");
+    uint64_t bad = 0;
+    *stale = 0;
     for (uint64_t i = 0; i < e->item_count; i++) {
         sl_ticket t;
         if (!quarantined(e, e->items[i], &t))
             continue;
         bad++;
         int previous = sl_engine_item_published(e, e->items[i]);
-        stale += (uint64_t)previous;
+        *stale += (uint64_t)previous;
         const char *kept = previous ? "; the previous version's levels stay published, "
                                       "marked stale"
                                     : "";
@@ -202,36 +191,73 @@ int sl_engine_write_summary(sl_engine *e, sl_error *err)
         fprintf(page, " (%s): ", t.cls);
         sl_html_text(page, t.reason);
         fprintf(page, "%s</li>\n", kept);
-        sl_json_object_begin(&js, NULL);
-        sl_json_string(&js, "item", e->items[i]);
-        sl_json_string(&js, "class", t.cls);
-        sl_json_string(&js, "reason", t.reason);
-        sl_json_raw(&js, "stale_publication", previous ? "true" : "false");
-        sl_json_object_end(&js);
+        sl_json_object_begin(js, NULL);
+        sl_json_string(js, "item", e->items[i]);
+        sl_json_string(js, "class", t.cls);
+        sl_json_string(js, "reason", t.reason);
+        sl_json_raw(js, "stale_publication", previous ? "true" : "false");
+        sl_json_object_end(js);
     }
     if (!bad)
         fprintf(out, "None.\n");
     fputs(bad ? "</ul>\n" : "<li>None.</li>\n</ul>\n", page);
-    sl_json_array_end(&js);
+    sl_json_array_end(js);
+    return bad;
+}
+
+/* summary.json, summary.md and summary.html, each written whole. */
+static int summary_write(sl_engine *e, const sl_json *js, const char *md, size_t md_size,
+                         const char *html, size_t html_size, sl_error *err)
+{
+    char path[PATH_MAX];
+    int rc = 0;
+    if (js->failed || !md || !html)
+        rc = sl_error_nomem(err, NULL, "out of memory");
+    if (rc == 0 && sl_engine_path(path, sizeof path, "%s/summary.json", e->output) == 0)
+        rc = sl_write_file_atomic(path, js->buf, js->len, err);
+    if (rc == 0 && sl_engine_path(path, sizeof path, "%s/summary.md", e->output) == 0)
+        rc = sl_write_file_atomic(path, md, md_size, err);
+    if (rc == 0 && sl_engine_path(path, sizeof path, "%s/summary.html", e->output) == 0)
+        rc = sl_write_file_atomic(path, html, html_size, err);
+    return rc;
+}
+
+int sl_engine_write_summary(sl_engine *e, sl_error *err)
+{
+    sl_json js;
+    sl_json_init(&js, 1);
+    char *md = NULL, *html = NULL;
+    size_t md_size = 0, html_size = 0;
+    FILE *out = open_memstream(&md, &md_size);
+    FILE *page = out ? open_memstream(&html, &html_size) : NULL;
+    if (!page) {
+        if (out)
+            fclose(out);
+        free(md);
+        return sl_error_nomem(err, NULL, "out of memory");
+    }
+    html_begin(e, page);
+    fprintf(out, "# scanlod collection summary\n\n%llu items in `%s`.\n\n",
+            (unsigned long long)e->item_count, e->input);
+    fprintf(out, "Per item, its levels (k = expansions of the octree's LOD array; RMS and "
+                 "Hausdorff distance to the input in %% of its bounding-box diagonal, "
+                 "symmetric) and their thumbnails. Everything per level: "
+                 "`ITEM/report.json`; timings and memory: `ITEM/timings.json`.\n\n"
+                 "## Items\n\n");
+    sl_json_object_begin(&js, NULL);
+    uint64_t published = summary_items(e, out, page, &js), stale;
+    uint64_t bad = summary_quarantined(e, out, page, &js, &stale);
     sl_json_u64(&js, "items_total", e->item_count);
     sl_json_u64(&js, "items_published", published);
     sl_json_u64(&js, "items_quarantined", bad);
     sl_json_u64(&js, "items_stale", stale);
+    sl_engine_manifest_summary(e, &js);
     sl_json_object_end(&js);
     fclose(out);
     int viewer = copy_viewer(e, err);
     sl_html_page_end(page, viewer > 0 ? VIEWER_FILE : NULL);
     fclose(page);
-    char path[PATH_MAX];
-    int rc = viewer < 0 ? viewer : 0;
-    if (rc == 0 && (js.failed || !md || !html))
-        rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory");
-    if (rc == 0 && sl_engine_path(path, sizeof path, "%s/summary.json", e->output) == 0)
-        rc = sl_write_file_atomic(path, js.buf, js.len, err);
-    if (rc == 0 && sl_engine_path(path, sizeof path, "%s/summary.md", e->output) == 0)
-        rc = sl_write_file_atomic(path, md, md_size, err);
-    if (rc == 0 && sl_engine_path(path, sizeof path, "%s/summary.html", e->output) == 0)
-        rc = sl_write_file_atomic(path, html, html_size, err);
+    int rc = viewer < 0 ? viewer : summary_write(e, &js, md, md_size, html, html_size, err);
     sl_json_release(&js);
     free(md);
     free(html);

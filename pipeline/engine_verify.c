@@ -10,6 +10,36 @@
 #include <string.h>
 #include <unistd.h>
 
+int sl_engine_foreign_entries(const char *record_path, const char *dir,
+                              void (*fn)(void *ctx, const char *name), void *ctx)
+{
+    sl_record *rec = malloc(sizeof *rec);
+    sl_error err;
+    sl_error_init(&err);
+    DIR *d = rec && sl_record_read(record_path, rec, &err) == 0 ? opendir(dir) : NULL;
+    if (!d) {
+        free(rec);
+        return 0; /* no record to judge by (or no folder): nothing is foreign */
+    }
+    int found = 0;
+    struct dirent *de;
+    while ((de = readdir(d))) {
+        if (!strcmp(de->d_name, ".") || !strcmp(de->d_name, "..") ||
+            !strcmp(de->d_name, "timings.json"))
+            continue;
+        int listed = 0;
+        for (int i = 0; i < rec->output_count && !listed; i++)
+            listed = strcmp(rec->outputs[i].name, de->d_name) == 0;
+        if (!listed) {
+            found++;
+            fn(ctx, de->d_name);
+        }
+    }
+    closedir(d);
+    free(rec);
+    return found;
+}
+
 static int verify_one(const char *record, const char *dir, FILE *out)
 {
     sl_error err;
@@ -21,36 +51,24 @@ static int verify_one(const char *record, const char *dir, FILE *out)
     return 1;
 }
 
+typedef struct foreign_ctx {
+    FILE *out;
+    const char *dir;
+} foreign_ctx;
+
+static void say_foreign(void *ctx, const char *name)
+{
+    foreign_ctx *f = ctx;
+    fprintf(f->out, "%s/%s: not part of the publication (no record lists it; the next run "
+                    "moves it aside)\n", f->dir, name);
+}
+
 /* A published folder holds what its record lists and timings.json, nothing else: a file
  * someone added (or left) there is not vouched for by anything. */
 static int foreign_files(const char *record_path, const char *dir, FILE *out)
 {
-    sl_record *rec = malloc(sizeof *rec);
-    sl_error err;
-    sl_error_init(&err);
-    DIR *d = rec && sl_record_read(record_path, rec, &err) == 0 ? opendir(dir) : NULL;
-    if (!d) {
-        free(rec);
-        return 0; /* verify_one has said what is wrong */
-    }
-    int bad = 0;
-    struct dirent *de;
-    while ((de = readdir(d))) {
-        if (!strcmp(de->d_name, ".") || !strcmp(de->d_name, "..") ||
-            !strcmp(de->d_name, "timings.json"))
-            continue;
-        int listed = 0;
-        for (int i = 0; i < rec->output_count && !listed; i++)
-            listed = strcmp(rec->outputs[i].name, de->d_name) == 0;
-        if (!listed) {
-            fprintf(out, "%s/%s: not part of the publication (no record lists it)\n", dir,
-                    de->d_name);
-            bad = 1;
-        }
-    }
-    closedir(d);
-    free(rec);
-    return bad;
+    foreign_ctx f = {out, dir};
+    return sl_engine_foreign_entries(record_path, dir, say_foreign, &f) > 0;
 }
 
 /* Items whose last stage is done must be published: a done item without a publish

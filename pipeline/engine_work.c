@@ -1,5 +1,5 @@
 /* The worker loop: claim ready tickets by rename, hold a lease while the item runs,
- * reclaim tickets whose owner is gone (ARCHITECTURE section 3, leases and epochs).
+ * reclaim tickets whose owner is gone (docs/engine.md, "Leases and liveness").
  *
  * Liveness: a claim whose lease expired is reclaimed, on any host: a live pid is not a
  * live owner once it stopped renewing (SIGSTOP, a Slurm suspend, a process stuck in

@@ -1,6 +1,7 @@
 /* Directory-per-state queues (see queue.h). */
 #include "pipeline/queue.h"
 
+#include <assert.h>
 #include <dirent.h>
 #include <errno.h>
 #include <inttypes.h>
@@ -27,6 +28,7 @@ const char *sl_queue_state_name(int state)
 void sl_ticket_init(sl_ticket *t)
 {
     memset(t, 0, sizeof *t);
+    t->memory_limit_mb = -1;
 }
 
 int sl_ticket_name(const char *item, char *name, size_t size, sl_error *err)
@@ -83,9 +85,29 @@ int sl_queue_find(const char *work, const char *stage, const char *name)
     return SL_STATE_NONE;
 }
 
+#ifndef NDEBUG
+/* The life of a ticket (docs/engine.md, "Queues and the life of an item"): ready is
+ * claimed; a claim ends done, failed, quarantined or back in ready (interrupted, lost,
+ * stale); reconciliation returns any ended state to ready. Nothing else moves a ticket. */
+static int legal_move(int from, int to)
+{
+    switch (from) {
+    case SL_STATE_READY: return to == SL_STATE_CLAIMED;
+    case SL_STATE_CLAIMED:
+        return to == SL_STATE_READY || to == SL_STATE_DONE || to == SL_STATE_FAILED ||
+               to == SL_STATE_QUARANTINE;
+    case SL_STATE_DONE:
+    case SL_STATE_FAILED:
+    case SL_STATE_QUARANTINE: return to == SL_STATE_READY;
+    default: return 0;
+    }
+}
+#endif
+
 int sl_queue_move(const char *work, const char *stage, const char *name, int from, int to,
                   sl_error *err)
 {
+    assert(legal_move(from, to));
     char src[PATH_MAX], dst[PATH_MAX];
     if (sl_queue_path(src, sizeof src, work, stage, from, name) ||
         sl_queue_path(dst, sizeof dst, work, stage, to, name))
@@ -187,6 +209,9 @@ int sl_ticket_read(const char *path, sl_ticket *t, sl_error *err)
         else if (!strcmp(k, "expires")) t->expires = strtoll(v, NULL, 10);
         else if (!strcmp(k, "class")) field(t->cls, sizeof t->cls, v);
         else if (!strcmp(k, "reason")) field(t->reason, sizeof t->reason, v);
+        else if (!strcmp(k, "limit_mb")) t->memory_limit_mb = strtoll(v, NULL, 10);
+        else if (!strcmp(k, "run")) field(t->run, sizeof t->run, v);
+        else if (!strcmp(k, "parts")) t->parts = atoi(v);
     }
     free(text);
     if (!complete || !t->item[0])
@@ -214,10 +239,11 @@ int sl_ticket_write(const char *path, const sl_ticket *t, sl_error *err)
     int n = snprintf(text, sizeof text,
                      "item=%s\nsource=%s\nkey=%s\nattempt=%d\ncrashes=%d\nepoch=%" PRIu64
                      "\nhost=%s\nboot=%s\npid=%ld\npid_start=%llu\njob=%s\nnonce=%s\n"
-                     "expires=%" PRId64 "\nclass=%s\nreason=%s\nend\n",
+                     "expires=%" PRId64 "\nclass=%s\nreason=%s\nlimit_mb=%" PRId64
+                     "\nrun=%s\nparts=%d\nend\n",
                      item, source, t->key, t->attempt, t->crashes, t->epoch, t->host,
                      t->boot, t->pid, t->pid_start, t->job, t->nonce, t->expires, t->cls,
-                     reason);
+                     reason, t->memory_limit_mb, t->run, t->parts);
     if (n < 0 || (size_t)n >= sizeof text)
         return sl_error_set(err, SL_E_INTERNAL, 0, path, "ticket too large");
     return sl_write_file_atomic(path, text, (size_t)n, err);

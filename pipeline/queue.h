@@ -1,4 +1,4 @@
-/* On-disk queues (ARCHITECTURE section 3): one queue per stage under the work dir,
+/* On-disk queues (docs/engine.md, "Queues and the life of an item"): one queue per stage under the work dir,
  *   WORK/queue/<stage>/{ready,claimed,done,failed,quarantine}/<ticket>
  * a state is a directory, a transition is one rename followed by an fsync of both
  * directories (Maildir). One small text ticket per item per stage. The ticket of a claimed
@@ -47,10 +47,18 @@ typedef struct sl_ticket {
     char job[96];         /* Slurm job/array/restart ids, "" outside Slurm */
     char nonce[33];       /* per-claim random id */
     int64_t expires;      /* lease expiry, unix seconds; 0 = none */
-    char cls[16];         /* failed/quarantine: badinput, transient, bug */
+    char cls[16];         /* failed/quarantine: badinput, transient, memory, storage, bug */
     char reason[768];     /* failed/quarantine: the error line */
+    int64_t memory_limit_mb; /* [run] memory_limit_mb of the owner that wrote it last: a
+                                crash under a limit may have been a library out of memory
+                                (docs/engine.md, "Failure classes"); -1 = not recorded
+                                (tickets of builds before issue 34) */
+    char run[96];         /* failed: the run it failed in (log run id); another retries it */
+    int parts;            /* a part's ticket: how many parts its split has (0: not a part,
+                             or not recorded) */
 } sl_ticket;
 
+/* An empty ticket (memory_limit_mb -1: not recorded). */
 void sl_ticket_init(sl_ticket *t);
 int sl_ticket_read(const char *path, sl_ticket *t, sl_error *err);
 int sl_ticket_write(const char *path, const sl_ticket *t, sl_error *err); /* atomic */

@@ -1,5 +1,5 @@
 /* Commit records: an artifact is trusted only through its record, written last
- * (ARCHITECTURE section 3). The record names the stage, its version, the item, the stage
+ * (docs/engine.md, "Keys and commit records"). The record names the stage, its version, the item, the stage
  * key (hash of stage name + version + config-section hash + upstream digest) and every
  * output file with its size and XXH3-128 hash; `outputs_digest` (hash of those lines) is
  * what the next stage's key chains on, so identical outputs never trigger downstream work.
@@ -35,7 +35,7 @@ typedef struct sl_record {
     sl_record_output outputs[SL_RECORD_MAX_OUTPUTS];
 } sl_record;
 
-/* The stage key of ARCHITECTURE section 3. */
+/* The stage key (docs/engine.md, "Keys and commit records"). */
 sl_hash sl_stage_key(const char *stage, uint32_t stage_version, uint64_t config_hash,
                      sl_hash upstream);
 
@@ -58,7 +58,7 @@ int sl_record_verify(const char *record_path, const char *dir, const sl_hash *ke
  * full verification: a `_verified` file beside the record holds the identity (dev, inode,
  * size, mtime, ctime: sl_stat_identity) of the record and of each output as they were
  * when their hashes last matched; while every identity is still the same, the hashes are
- * trusted (ARCHITECTURE section 3: content hashes cached against the stat identity).
+ * trusted (docs/engine.md, "Keys and commit records": content hashes cached against the stat identity).
  * Anything else is verified in full, and the cache rewritten. For the scan and the stage
  * runner, which ask every night of every artifact; a corruption that keeps a file's
  * identity (bit rot under the file system) is `scanlod verify`'s to find. */

@@ -33,7 +33,11 @@ int sl_stage_step(const sl_stage_io *io, const char *phase, double fraction, sl_
 
 void sl_stage_default_config(const sl_stage *stage, void *out, size_t size)
 {
-    const sl_option *tables[2] = {stage->options, NULL};
+    const sl_option *tables[8] = {stage->options};
+    int n = 1;
+    for (const sl_option *const *t = stage->shared_options; t && *t && n < 7; t++)
+        tables[n++] = *t;
+    tables[n] = NULL;
     sl_config *cfg = NULL;
     void *config = NULL;
     sl_error err;

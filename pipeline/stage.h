@@ -1,4 +1,4 @@
-/* The contract of a stage (ARCHITECTURE section 2).
+/* The contract of a stage (docs/adding-a-stage.md; docs/architecture.md, "The flow").
  *
  * A stage is a pure function of (its input artifacts, its config section, its code
  * version): the same inputs give byte-identical outputs whatever the thread count. The
@@ -30,12 +30,26 @@
 #include "core/progress.h"
 #include "pipeline/config.h"
 
+/* An item's row of the collection manifest (docs/metadata.md): what a museum says about the
+ * object, read by the engine once per run from [run] input/manifest.csv or .json (or [run]
+ * manifest). Every field is a NUL-terminated UTF-8 text, "" when the manifest leaves it
+ * empty; `units` is "", "mm", "cm", "m", "in" or "ft" and `up` "", "y" or "z" (the manifest
+ * reader refuses anything else). Owned by the engine; valid while the stage runs. */
+typedef struct sl_item_metadata {
+    const char *title, *accession, *units, *up, *credit, *licence, *description;
+    const char *where; /* "manifest.csv:12": the row's file and line, for messages only
+                          (not hashed: moving a row does not rerun anything) */
+} sl_item_metadata;
+
 typedef struct sl_stage_io {
     const char *item;        /* item id: input path relative to [run] input, suffix kept */
     const char *source_path; /* the item's input file */
     const char *in_dir;      /* upstream stage's artifact directory; NULL for the first */
     const char *out_dir;     /* this stage's artifact directory (exists and is empty) */
     sl_json *report;         /* open object: this stage's section of the item report */
+    /* Open object, or NULL: the stage's own timings (wall seconds of its steps), which
+     * differ run to run and so go to timings.json ("detail"), never to an artifact. */
+    sl_json *timings;
     sl_progress *progress;
     int threads;             /* OpenMP threads for this item (already set) */
     /* Every earlier stage's artifact directory, in pipeline order, ended by {NULL, NULL};
@@ -49,6 +63,9 @@ typedef struct sl_stage_io {
      * artifacts in part_dirs[p]. parts = 0 (and part_dirs NULL): not split. */
     int part, parts;
     const char *const *part_dirs;
+    /* The item's manifest row, for a stage that declares `reads_metadata` (its key then
+     * hashes the row); NULL for other stages and for an item the manifest has no row for. */
+    const sl_item_metadata *metadata;
 } sl_stage_io;
 
 /* The artifact directory of the earlier stage `name` for this item, or NULL. */
@@ -62,20 +79,26 @@ int sl_stage_path(char path[PATH_MAX], const char *dir, const char *name, sl_err
  * set) when the run has been asked to stop, else 0. */
 int sl_stage_step(const sl_stage_io *io, const char *phase, double fraction, sl_error *err);
 
-/* The LOD methods (ARCHITECTURE section 2): each is a path of stages from the range stage
- * to the export stage, picked per run by `[lod] method`; a stage names the methods whose
- * path it is on. The engine runs the registry's stages of the chosen method, in order.
- *   octree  (paper 1): range -> samples -> merge -> priority -> crack -> export
- *   segment (paper 3): range -> segment -> export
- *   cluster (paper 2): range -> cluster -> export */
+/* The LOD methods (docs/architecture.md, "The flow"): each is a path of stages from the
+ * range stage to the export stage, picked per run by `[lod] method`; a stage names the
+ * methods whose path it is on. The engine runs the registry's stages of the chosen method,
+ * in order.
+ *   octree  (paper 1): range -> samples -> merge -> priority -> crack -> refine -> export
+ *   segment (paper 3): range -> segment -> refine -> export
+ *   cluster (paper 2): range -> cluster -> refine -> export
+ *   best             : range -> the stages of each method in [lod] candidates -> refine ->
+ *                      export (refine publishes the most faithful candidate per level) */
 enum sl_lod_method {
     SL_METHOD_OCTREE = 1 << 0,
     SL_METHOD_SEGMENT = 1 << 1,
     SL_METHOD_CLUSTER = 1 << 2,
+    SL_METHOD_BEST = 1 << 3,
 };
-#define SL_METHODS_ALL (SL_METHOD_OCTREE | SL_METHOD_SEGMENT | SL_METHOD_CLUSTER)
-/* "octree|segment|cluster": the [lod] method choices, in bit order. */
-#define SL_METHOD_NAMES "octree|segment|cluster"
+#define SL_METHODS_ALL (SL_METHOD_OCTREE | SL_METHOD_SEGMENT | SL_METHOD_CLUSTER | SL_METHOD_BEST)
+/* "octree|segment|cluster|best": the [lod] method choices, in bit order. */
+#define SL_METHOD_NAMES "octree|segment|cluster|best"
+/* The methods `best` may build candidates with ([lod] candidates), in bit order. */
+#define SL_CANDIDATE_NAMES "octree|segment|cluster"
 
 typedef struct sl_stage {
     const char *name;         /* also the config section */
@@ -83,6 +106,9 @@ typedef struct sl_stage {
     const char *description;  /* one line, for --help and docs */
     uint32_t version;         /* bump when the output for the same input changes */
     const sl_option *options; /* the options this stage declares (usually section == name) */
+    /* NULL, or more option tables the stage reads, NULL-terminated, declared once
+     * elsewhere and shared by several stages (levels/ladder.h's [levels]). */
+    const sl_option *const *shared_options;
     /* Config sections the stage reads, NULL-terminated; NULL = just its own. The stage key
      * hashes exactly these, so a key of another section never reruns this stage. */
     const char *const *sections;
@@ -96,6 +122,10 @@ typedef struct sl_stage {
     /* Nonzero: the stage's output files (all but its report.json) are published with the
      * item under [run] output/ITEM/. */
     int publish;
+    /* Nonzero: the stage reads the item's manifest row (io->metadata). Its key then also
+     * hashes that row, so editing one item's row reruns this stage of that item only, and
+     * stages that do not declare it never rerun for a manifest edit. */
+    int reads_metadata;
 } sl_stage;
 
 /* Fills `out` (`size` bytes: the stage's flat config struct) with the stage's config at

@@ -5,11 +5,12 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "runtime/lod_io.h"
 #include "runtime/lod_model.h"
 
-static int corrupt(sl_error *err, const char *path, const char *what)
+int sl_lod_corrupt(sl_error *err, const char *path, const char *what)
 {
-    return sl_error_set(err, SL_E_CORRUPT, 0, path, "invalid LOD model: %s", what);
+    return sl_error_corrupt(err, path, "invalid LOD model: %s", what);
 }
 
 /* The LOD array must be a valid expansion order, the tables in range. */
@@ -25,7 +26,7 @@ static int validate(const sl_lod_model *m, const char *path, sl_error *err)
         uint32_t node = m->lod_array[i];
         if (node >= n || seen[node] || !t->nodes[node].child_mask ||
             (t->nodes[node].parent != SL_OCTREE_NONE && !seen[t->nodes[node].parent]))
-            rc = corrupt(err, path, "the LOD array is not an expansion order");
+            rc = sl_lod_corrupt(err, path, "the LOD array is not an expansion order");
         else
             seen[node] = 1;
     }
@@ -34,7 +35,7 @@ static int validate(const sl_lod_model *m, const char *path, sl_error *err)
      * allocates from this table stay bounded whatever the file says. */
     for (uint32_t i = 0; i <= m->expansion_count && !rc; i++)
         if (m->accumulation[i] > (uint64_t)SL_MC_MAX_TRIANGLES * (1 + 7 * (uint64_t)i))
-            rc = corrupt(err, path, "accumulation table out of range");
+            rc = sl_lod_corrupt(err, path, "accumulation table out of range");
     /* Records must not overlap: loading rewrites their crossing ids in place, and one
      * record's ids read as another's header would change its length. */
     uint8_t *used = calloc(m->transitions.count ? m->transitions.count : 1, 1);
@@ -44,35 +45,35 @@ static int validate(const sl_lod_model *m, const char *path, sl_error *err)
         uint32_t mask = m->neighbours.mask[i];
         if (mask >> 27 || (mask >> 13 & 1) ||
             (uint64_t)m->neighbours.base[i] + (uint64_t)__builtin_popcount(mask) > m->neighbours.count)
-            rc = corrupt(err, path, "neighbour table out of range");
+            rc = sl_lod_corrupt(err, path, "neighbour table out of range");
         uint32_t tb = m->transitions.base[i];
         if (!rc && tb != SL_OCTREE_NONE) {
             if ((uint64_t)tb + 3 > m->transitions.count)
-                rc = corrupt(err, path, "transition record out of range");
+                rc = sl_lod_corrupt(err, path, "transition record out of range");
             else {
                 const uint32_t *w = m->transitions.words + tb;
                 uint64_t ids = (uint64_t)__builtin_popcount(w[1] & 0xffffff) +
                                (uint64_t)__builtin_popcount(w[2] & 0xffffff);
                 if ((uint64_t)tb + 3 + ids > m->transitions.count)
-                    rc = corrupt(err, path, "transition record out of range");
+                    rc = sl_lod_corrupt(err, path, "transition record out of range");
                 for (uint64_t j = 0; !rc && j < ids; j++)
                     if (w[3 + j] >= t->crossing_count)
-                        rc = corrupt(err, path, "transition crossing out of range");
+                        rc = sl_lod_corrupt(err, path, "transition crossing out of range");
                 for (uint64_t j = 0; !rc && j < 3 + ids; j++)
                     if (used[tb + j]++)
-                        rc = corrupt(err, path, "transition records overlap");
+                        rc = sl_lod_corrupt(err, path, "transition records overlap");
             }
         } else if (!rc && t->nodes[i].level > 0) {
-            rc = corrupt(err, path, "internal node without a transition record");
+            rc = sl_lod_corrupt(err, path, "internal node without a transition record");
         }
     }
     free(used);
     for (uint64_t i = 0; i < m->neighbours.count && !rc; i++)
         if (m->neighbours.index[i] >= n)
-            rc = corrupt(err, path, "neighbour index out of range");
+            rc = sl_lod_corrupt(err, path, "neighbour index out of range");
     for (uint32_t i = 0; i <= m->expansion_count && !rc; i++)
         if (!isfinite(m->error_after[i]))
-            rc = corrupt(err, path, "non-finite error");
+            rc = sl_lod_corrupt(err, path, "non-finite error");
     return rc;
 }
 
@@ -91,7 +92,7 @@ static int check_lod(sl_lod_model *m, int stored, uint64_t declared, const char 
         if (!m->cuts_only)
             all = m->neighbours.count;
         if (declared != UINT64_MAX && all != declared)
-            return corrupt(err, path, "neighbour count differs from the octree's");
+            return sl_lod_corrupt(err, path, "neighbour count differs from the octree's");
         if (declared == UINT64_MAX)
             declared = all;
     }

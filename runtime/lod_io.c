@@ -31,11 +31,6 @@ int sl_lod_model_write(const char *path, const sl_lod_model *m, uint32_t stage_v
     return rc;
 }
 
-static int corrupt(sl_error *err, const char *path, const char *what)
-{
-    return sl_error_set(err, SL_E_CORRUPT, 0, path, "invalid LOD model: %s", what);
-}
-
 static void *take(const unsigned char **at, uint64_t bytes)
 {
     void *p = malloc(bytes ? bytes : 1);
@@ -51,7 +46,7 @@ static int parse_lod(sl_lod_model *m, const unsigned char *p, uint64_t size, int
                      const char *path, sl_error *err)
 {
     if (size < LOD_HEADER_SIZE)
-        return corrupt(err, path, "truncated LOD header");
+        return sl_lod_corrupt(err, path, "truncated LOD header");
     uint64_t e = sl_get_u32(p), n = sl_get_u32(p + 4);
     uint64_t neighbours = sl_get_u64(p + 8);
     m->transitions.count = sl_get_u64(p + 16);
@@ -59,7 +54,7 @@ static int parse_lod(sl_lod_model *m, const unsigned char *p, uint64_t size, int
         m->transitions.count > 51 * n ||
         size != LOD_HEADER_SIZE + 4 * e + 8 * (e + 1) + 4 * (e + 1) + 4 * n +
                     (stored ? 8 * n + 4 * neighbours : 0) + 4 * m->transitions.count)
-        return corrupt(err, path, "LOD section sizes do not match the file");
+        return sl_lod_corrupt(err, path, "LOD section sizes do not match the file");
     m->expansion_count = (uint32_t)e;
     const unsigned char *at = p + LOD_HEADER_SIZE;
     m->lod_array = take(&at, 4 * e);
@@ -145,10 +140,10 @@ static int read_model(const char *path, int cuts_only, sl_lod_model *out, sl_err
                                        &version, err);
     int packed = rc == 0 && sl_pack_is_packed(body, size);
     if (rc == 0 && packed != (version >= 3))
-        rc = corrupt(err, path, version >= 3 ? "format 3 without packed parts"
+        rc = sl_lod_corrupt(err, path, version >= 3 ? "format 3 without packed parts"
                                              : "packed parts in a format 2 file");
     else if (rc == 0 && packed && (sl_get_u32(body) == SL_PACK_MAGIC_CHECKED) != (version >= 5))
-        rc = corrupt(err, path, version >= 5 ? "format 5 without checked pieces"
+        rc = sl_lod_corrupt(err, path, version >= 5 ? "format 5 without checked pieces"
                                              : "checked pieces in a format 3 or 4 file");
     out->cuts_only = cuts_only;
     if (rc == 0)

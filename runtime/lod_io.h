@@ -28,6 +28,9 @@
  * and areas (a flag in its header; read from 3 and 4 alike). 5: every section in LOD
  * order, in checked pieces of 1 MiB, with the bounds and surface counts stored
  * (lod_order.h), so a cut reads a prefix (lod_prefix.h). */
+/* The LOD model's file name in a stage's artifacts and an item's publication. */
+#define SL_MODEL_FILE "model.slod"
+
 #define SL_LOD_FORMAT_VERSION 5u
 #define SL_LOD_OLDEST_VERSION 2u
 
@@ -46,5 +49,8 @@ int sl_lod_model_open(const char *path, sl_lod_model *out, sl_error *err);
  * `name` is used in messages. On failure `out` holds nothing. */
 int sl_lod_model_parse(const void *body, uint64_t size, const char *name, sl_lod_model *out,
                        sl_error *err);
+
+/* SL_E_CORRUPT "invalid LOD model: WHAT" naming `path`: every model reader's refusal. */
+int sl_lod_corrupt(sl_error *err, const char *path, const char *what);
 
 #endif

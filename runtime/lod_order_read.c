@@ -7,11 +7,7 @@
 #include <string.h>
 
 #include "core/artifact.h"
-
-static int corrupt(sl_error *err, const char *name, const char *what)
-{
-    return sl_error_set(err, SL_E_CORRUPT, 0, name, "invalid LOD model: %s", what);
-}
+#include "runtime/lod_io.h"
 
 static void *copy_of(const void *src, size_t bytes)
 {
@@ -208,7 +204,7 @@ int sl_lod_raw_build(const sl_lod_raw *raw, int cuts_only, const char *name, sl_
     out->cuts_only = cuts_only;
     uint32_t f = raw->nodes, e = raw->expansions;
     if (f == 0 || e >= f)
-        return corrupt(err, name, "LOD section sizes do not match the file");
+        return sl_lod_corrupt(err, name, "LOD section sizes do not match the file");
     uint8_t *expanded = calloc(f, 1);
     uint32_t *level = malloc((size_t)f * sizeof *level);
     uint32_t *index_of = malloc((size_t)f * sizeof *index_of);
@@ -242,7 +238,7 @@ int sl_lod_raw_build(const sl_lod_raw *raw, int cuts_only, const char *name, sl_
     if (rc) {
         sl_lod_model_release(out);
         return rc < 0 ? sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory")
-                      : corrupt(err, name, why);
+                      : sl_lod_corrupt(err, name, why);
     }
     rc = sl_octree_check(&out->tree, name, err);
     if (rc == 0)
@@ -251,7 +247,7 @@ int sl_lod_raw_build(const sl_lod_raw *raw, int cuts_only, const char *name, sl_
      * it says; a prefix cannot see the surface below its last level, so it takes them. */
     for (uint32_t i = 0; rc == 0 && i <= e; i++) {
         if (raw->whole && out->surface_before[i] != raw->surface_before[i])
-            rc = corrupt(err, name, "surface counts differ from the octree's");
+            rc = sl_lod_corrupt(err, name, "surface counts differ from the octree's");
         out->surface_before[i] = raw->surface_before[i];
     }
     if (rc)
@@ -351,7 +347,7 @@ int sl_lod_order_sections(const sl_octree *head, const sl_octree_layout *layout,
 {
     memset(out, 0, sizeof *out);
     if (!(layout->flags & SL_OCTREE_FLAG_LOD_ORDER) || layout->metrics)
-        return corrupt(err, name, "format 5 octree not in LOD order or with node metrics");
+        return sl_lod_corrupt(err, name, "format 5 octree not in LOD order or with node metrics");
     uint64_t e = sl_get_u32(lod_header), n = sl_get_u32(lod_header + 4);
     out->expansions = (uint32_t)e;
     out->nodes = (uint32_t)n;
@@ -363,7 +359,7 @@ int sl_lod_order_sections(const sl_octree *head, const sl_octree_layout *layout,
         out->root[a] = (int32_t)sl_get_u32(lod_header + 48 + 4 * a);
     if (n != head->node_count || e >= n || out->links > 26 * n || out->words > 51 * n ||
         sl_get_u32(lod_header + 60) != 0)
-        return corrupt(err, name, "LOD section sizes do not match the file");
+        return sl_lod_corrupt(err, name, "LOD section sizes do not match the file");
     const uint64_t size[SL_SEC_COUNT] = {
         SL_OCTREE_HEADER_SIZE, SL_LOD_ORDER_NODE * n, layout->ids, layout->positions, layout->colors,
         layout->vertex_first, layout->vertices, layout->vertex_colors, SL_LOD_ORDER_HEADER,
@@ -375,7 +371,7 @@ int sl_lod_order_sections(const sl_octree *head, const sl_octree_layout *layout,
         at += size[s];
     }
     if (at != plain_size)
-        return corrupt(err, name, "LOD section sizes do not match the file");
+        return sl_lod_corrupt(err, name, "LOD section sizes do not match the file");
     return 0;
 }
 
@@ -389,7 +385,7 @@ int sl_lod_order_parse(const unsigned char *plain, uint64_t size, int cuts_only,
     int rc = sl_octree_parse_header(plain, size, name, &raw.head, &raw.layout, err);
     uint64_t lod_at = rc ? 0 : sl_lod_order_octree_size(&raw.layout, raw.head.node_count);
     if (rc == 0 && size < lod_at + SL_LOD_ORDER_HEADER)
-        rc = corrupt(err, name, "truncated LOD header");
+        rc = sl_lod_corrupt(err, name, "truncated LOD header");
     if (rc == 0)
         rc = sl_lod_order_sections(&raw.head, &raw.layout, plain + lod_at, size, name, &sec, err);
     if (rc)
@@ -405,14 +401,14 @@ int sl_lod_order_parse(const unsigned char *plain, uint64_t size, int cuts_only,
                                (const uint32_t *)AT(SL_SEC_TRANSITION_BASE),
                                (const uint32_t *)AT(SL_SEC_TRANSITION_WORDS), sec.words, &named) ||
         named > raw.head.crossing_count)
-        return corrupt(err, name, "crossing ids out of range");
+        return sl_lod_corrupt(err, name, "crossing ids out of range");
     raw.crossings = raw.head.crossing_count;
     raw.crossing_position = (const float *)AT(SL_SEC_POSITIONS);
     raw.crossing_color = raw.layout.has_color ? AT(SL_SEC_COLORS) : NULL;
     if (raw.layout.vertex_first) {
         raw.vertex_first = (const uint32_t *)AT(SL_SEC_VERTEX_FIRST);
         if (raw.vertex_first[0] != 0 || raw.vertex_first[sec.nodes] != raw.layout.vertex_count)
-            return corrupt(err, name, "vertex ranges do not cover the vertex table");
+            return sl_lod_corrupt(err, name, "vertex ranges do not cover the vertex table");
         raw.vertex_position = (const float *)AT(SL_SEC_VERTICES);
         raw.vertex_color = raw.layout.has_color ? AT(SL_SEC_VERTEX_COLORS) : NULL;
     }

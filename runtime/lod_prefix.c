@@ -39,16 +39,6 @@ struct sl_lod_file {
     uint32_t reached;
 };
 
-static int corrupt(const sl_lod_file *f, sl_error *err, const char *what)
-{
-    return sl_error_set(err, SL_E_CORRUPT, 0, f->path, "invalid LOD model: %s", what);
-}
-
-static int nomem(const sl_lod_file *f, sl_error *err)
-{
-    return sl_error_set(err, SL_E_NOMEM, ENOMEM, f->path, "out of memory");
-}
-
 /* Pieces first .. first + count - 1 unpacked into dest: their stored bytes are one
  * stretch of the file. */
 static int unpack_pieces(sl_lod_file *f, uint64_t first, uint64_t count, unsigned char *dest,
@@ -60,7 +50,7 @@ static int unpack_pieces(sl_lod_file *f, uint64_t first, uint64_t count, unsigne
     uint64_t span = b->stored_at + b->stored_size - a->stored_at;
     unsigned char *stored = malloc(span ? span : 1);
     const unsigned char **at = malloc(count * sizeof *at);
-    int rc = stored && at ? 0 : nomem(f, err);
+    int rc = stored && at ? 0 : sl_error_nomem(err, f->path, "out of memory");
     if (!rc)
         rc = sl_artifact_pread(f->fd, f->path, stored, span, a->stored_at, err);
     for (uint64_t i = 0; !rc && i < count; i++)
@@ -91,7 +81,7 @@ static int ensure(sl_lod_file *f, int s, uint64_t bytes, sl_error *err)
 {
     section_cache *c = &f->cache[s];
     if (bytes > f->sec.size[s])
-        return corrupt(f, err, "a prefix beyond its section");
+        return sl_lod_corrupt(err, f->path, "a prefix beyond its section");
     if (c->have >= bytes)
         return 0;
     uint64_t first = c->next_piece, last = first, got = c->have;
@@ -99,7 +89,7 @@ static int ensure(sl_lod_file *f, int s, uint64_t bytes, sl_error *err)
         got += f->ix.pieces[last++].plain_size;
     unsigned char *grown = realloc(c->data, got ? got : 1);
     if (!grown)
-        return nomem(f, err);
+        return sl_error_nomem(err, f->path, "out of memory");
     c->data = grown;
     int rc = unpack_pieces(f, first, last - first, c->data + c->have, err);
     if (rc)
@@ -129,7 +119,7 @@ static void *take_section(sl_lod_file *f, int s, sl_error *err)
     f->cache[s].have = 0;
     f->cache[s].next_piece = f->first_piece[s];
     if (!p)
-        nomem(f, err);
+        sl_error_nomem(err, f->path, "out of memory");
     return p;
 }
 
@@ -137,12 +127,12 @@ static void *take_section(sl_lod_file *f, int s, sl_error *err)
 static int open_ordered(sl_lod_file *f, uint64_t body_size, sl_error *err)
 {
     unsigned char head[8], octree_header[SL_OCTREE_HEADER_SIZE], lod_header[SL_LOD_ORDER_HEADER];
-    int rc = body_size < 8 ? corrupt(f, err, "truncated packed body")
+    int rc = body_size < 8 ? sl_lod_corrupt(err, f->path, "truncated packed body")
                            : sl_artifact_pread(f->fd, f->path, head, 8, 0, err);
     if (rc)
         return rc;
     if (sl_get_u32(head) != SL_PACK_MAGIC_CHECKED)
-        return corrupt(f, err, "format 5 without checked pieces");
+        return sl_lod_corrupt(err, f->path, "format 5 without checked pieces");
     uint64_t table_size = sl_pack_table_size(head);
     if (table_size > body_size)
         return sl_error_set(err, SL_E_CORRUPT, 0, f->path,
@@ -151,7 +141,7 @@ static int open_ordered(sl_lod_file *f, uint64_t body_size, sl_error *err)
                             (unsigned long long)body_size);
     unsigned char *table = malloc(table_size);
     if (!table)
-        return nomem(f, err);
+        return sl_error_nomem(err, f->path, "out of memory");
     rc = sl_artifact_pread(f->fd, f->path, table, table_size, 0, err);
     if (!rc)
         rc = sl_pack_index_parse(table, table_size, body_size, PLAIN_LIMIT, f->path, &f->ix, err);
@@ -161,7 +151,7 @@ static int open_ordered(sl_lod_file *f, uint64_t body_size, sl_error *err)
     /* The octree header is the first piece, the LOD header the one at the octree's end. */
     const sl_pack_index *ix = &f->ix;
     if (!ix->count || ix->pieces[0].plain_size != SL_OCTREE_HEADER_SIZE)
-        return corrupt(f, err, "no octree header piece");
+        return sl_lod_corrupt(err, f->path, "no octree header piece");
     rc = unpack_pieces(f, 0, 1, octree_header, err);
     if (!rc)
         rc = sl_octree_parse_header(octree_header, sizeof octree_header, f->path, &f->head,
@@ -170,7 +160,7 @@ static int open_ordered(sl_lod_file *f, uint64_t body_size, sl_error *err)
         return rc;
     uint64_t lod_piece = piece_at(ix, sl_lod_order_octree_size(&f->layout, f->head.node_count));
     if (lod_piece == ix->count || ix->pieces[lod_piece].plain_size != SL_LOD_ORDER_HEADER)
-        return corrupt(f, err, "no LOD header piece");
+        return sl_lod_corrupt(err, f->path, "no LOD header piece");
     rc = unpack_pieces(f, lod_piece, 1, lod_header, err);
     if (!rc)
         rc = sl_lod_order_sections(&f->head, &f->layout, lod_header, ix->plain_total, f->path,
@@ -178,7 +168,7 @@ static int open_ordered(sl_lod_file *f, uint64_t body_size, sl_error *err)
     for (int s = 0; !rc && s < SL_SEC_COUNT; s++) {
         f->first_piece[s] = f->sec.size[s] ? piece_at(ix, f->sec.at[s]) : ix->count;
         if (f->sec.size[s] && f->first_piece[s] == ix->count)
-            rc = corrupt(f, err, "a section that does not start a piece");
+            rc = sl_lod_corrupt(err, f->path, "a section that does not start a piece");
         f->cache[s].next_piece = f->first_piece[s];
     }
     return rc;
@@ -194,16 +184,16 @@ static int read_levels(sl_lod_file *f, sl_error *err)
     l->error_after = l->accumulation ? take_section(f, SL_SEC_ERROR_AFTER, err) : NULL;
     l->surface_before = l->error_after ? take_section(f, SL_SEC_SURFACE, err) : NULL;
     if (!l->surface_before)
-        return err->code ? err->code : nomem(f, err);
+        return err->code ? err->code : sl_error_nomem(err, f->path, "out of memory");
     if (l->surface_before[0] != 0)
-        return corrupt(f, err, "surface counts out of order");
+        return sl_lod_corrupt(err, f->path, "surface counts out of order");
     for (uint32_t i = 0; i <= e; i++) {
         if (l->accumulation[i] > (uint64_t)SL_MC_MAX_TRIANGLES * (1 + 7 * (uint64_t)i))
-            return corrupt(f, err, "accumulation table out of range");
+            return sl_lod_corrupt(err, f->path, "accumulation table out of range");
         if (!isfinite(l->error_after[i]))
-            return corrupt(f, err, "non-finite error");
+            return sl_lod_corrupt(err, f->path, "non-finite error");
         if (i && l->surface_before[i] - l->surface_before[i - 1] > 1)
-            return corrupt(f, err, "surface counts out of order");
+            return sl_lod_corrupt(err, f->path, "surface counts out of order");
     }
     memcpy(f->bounds, f->sec.bounds, sizeof f->bounds);
     return 0;
@@ -296,10 +286,10 @@ static int reached_nodes(sl_lod_file *f, uint32_t k, uint32_t *nodes, sl_error *
     uint64_t reached = 1;
     for (uint32_t i = 0; i < k; i++) {
         if (lod[i] >= reached)
-            return corrupt(f, err, "the LOD array is not an expansion order");
+            return sl_lod_corrupt(err, f->path, "the LOD array is not an expansion order");
         reached += (uint64_t)__builtin_popcount(node[SL_LOD_ORDER_NODE * (size_t)lod[i] + 1]);
         if (reached > bound)
-            return corrupt(f, err, "nodes in LOD order are not one tree");
+            return sl_lod_corrupt(err, f->path, "nodes in LOD order are not one tree");
     }
     *nodes = (uint32_t)reached;
     return 0;
@@ -314,7 +304,7 @@ static int read_pools(sl_lod_file *f, sl_lod_raw *raw, sl_error *err)
     for (uint32_t p = 0; p < nodes; p++)
         ids += (uint64_t)__builtin_popcount(sl_octree_edge_mask(raw->node[SL_LOD_ORDER_NODE * (size_t)p]));
     if (ids > f->head.node_crossing_count)
-        return corrupt(f, err, "crossing ids beyond their table");
+        return sl_lod_corrupt(err, f->path, "crossing ids beyond their table");
     int rc = ensure(f, SL_SEC_IDS, 4 * ids, err);
     if (!rc)
         rc = ensure(f, SL_SEC_TRANSITION_BASE, 4 * (uint64_t)nodes, err);
@@ -325,7 +315,7 @@ static int read_pools(sl_lod_file *f, sl_lod_raw *raw, sl_error *err)
         if (base[p] != SL_OCTREE_NONE && (uint64_t)base[p] + 3 > words)
             words = (uint64_t)base[p] + 3;
     if (words > f->sec.words)
-        return corrupt(f, err, "transition record out of range");
+        return sl_lod_corrupt(err, f->path, "transition record out of range");
     if ((rc = ensure(f, SL_SEC_TRANSITION_WORDS, 4 * words, err)))
         return rc;
     const uint32_t *w = (const uint32_t *)f->cache[SL_SEC_TRANSITION_WORDS].data;
@@ -334,14 +324,14 @@ static int read_pools(sl_lod_file *f, sl_lod_raw *raw, sl_error *err)
         if (base[p] != SL_OCTREE_NONE && (uint64_t)base[p] + sl_transition_record_words(w + base[p]) > need)
             need = (uint64_t)base[p] + sl_transition_record_words(w + base[p]);
     if (need > f->sec.words)
-        return corrupt(f, err, "transition record out of range");
+        return sl_lod_corrupt(err, f->path, "transition record out of range");
     if ((rc = ensure(f, SL_SEC_TRANSITION_WORDS, 4 * need, err)))
         return rc;
     const uint32_t *id = (const uint32_t *)f->cache[SL_SEC_IDS].data;
     const uint32_t *words_read = (const uint32_t *)f->cache[SL_SEC_TRANSITION_WORDS].data;
     if (sl_lod_order_count_new(raw->node, nodes, id, ids, base, words_read, need, &crossings) ||
         crossings > f->head.crossing_count)
-        return corrupt(f, err, "crossing ids out of range");
+        return sl_lod_corrupt(err, f->path, "crossing ids out of range");
     rc = ensure(f, SL_SEC_POSITIONS, 12 * crossings, err);
     if (!rc && f->layout.has_color)
         rc = ensure(f, SL_SEC_COLORS, 4 * crossings, err);
@@ -368,7 +358,7 @@ static int read_vertices(sl_lod_file *f, sl_lod_raw *raw, sl_error *err)
     const uint32_t *first = (const uint32_t *)f->cache[SL_SEC_VERTEX_FIRST].data;
     uint64_t v = first[raw->nodes];
     if (first[0] != 0 || v > f->layout.vertex_count)
-        return corrupt(f, err, "vertex ranges do not cover the vertex table");
+        return sl_lod_corrupt(err, f->path, "vertex ranges do not cover the vertex table");
     rc = ensure(f, SL_SEC_VERTICES, 12 * v, err);
     if (!rc && f->layout.has_color)
         rc = ensure(f, SL_SEC_VERTEX_COLORS, 4 * v, err);

@@ -22,21 +22,6 @@ _Static_assert(sizeof(sl_octree_node) == 32, "sl_octree_node is stored as 32 byt
 #define NO_NODE_METRICS 2u
 #define LOD_ORDER SL_OCTREE_FLAG_LOD_ORDER
 
-static void put_f64(unsigned char *p, double v)
-{
-    uint64_t bits;
-    memcpy(&bits, &v, 8);
-    sl_put_u64(p, bits);
-}
-
-static double get_f64(const unsigned char *p)
-{
-    uint64_t bits = sl_get_u64(p);
-    double v;
-    memcpy(&v, &bits, 8);
-    return v;
-}
-
 int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_part *parts,
                     uint32_t extra_flags)
 {
@@ -46,9 +31,9 @@ int sl_octree_parts(const sl_octree *t, unsigned char header[512], sl_artifact_p
     sl_put_u32(p + 8, t->crossing_count);
     sl_put_u32(p + 12, t->crossing_color != NULL);
     sl_put_u64(p + 16, t->node_crossing_count);
-    put_f64(p + 24, t->leaf_size);
+    sl_put_f64(p + 24, t->leaf_size);
     for (int a = 0; a < 3; a++)
-        put_f64(p + 32 + 8 * a, t->origin[a]);
+        sl_put_f64(p + 32 + 8 * a, t->origin[a]);
     p += 56;
     for (int l = 0; l < SL_OCTREE_MAX_LEVELS; l++, p += 8) {
         sl_put_u32(p, t->level_first[l]);
@@ -328,9 +313,9 @@ int sl_octree_parse_header(const unsigned char *body, uint64_t size, const char 
     out->crossing_count = sl_get_u32(p + 8);
     uint32_t has_color = sl_get_u32(p + 12);
     out->node_crossing_count = sl_get_u64(p + 16);
-    out->leaf_size = get_f64(p + 24);
+    out->leaf_size = sl_get_f64(p + 24);
     for (int a = 0; a < 3; a++)
-        out->origin[a] = get_f64(p + 32 + 8 * a);
+        out->origin[a] = sl_get_f64(p + 32 + 8 * a);
     p += 56;
     for (int l = 0; l < SL_OCTREE_MAX_LEVELS; l++, p += 8) {
         out->level_first[l] = sl_get_u32(p);

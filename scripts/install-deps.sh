@@ -9,6 +9,8 @@ packages=(
   libopenvdb-dev libboost-iostreams-dev libtbb-dev
   libopenimageio-dev libinih-dev libxxhash-dev libzstd-dev libmeshoptimizer-dev libdraco-dev
   zlib1g-dev time gnuplot-nox
+  # scripts/test.sh: line and branch coverage of the test suite
+  gcovr
   # scripts/bench/peers/vsa_lod.cpp: CGAL's Variational Shape Approximation (issue 12)
   libcgal-dev
   # tests/export/test_glb_render.sh: three.js in headless Chromium
@@ -56,4 +58,14 @@ if [ ! -f "$root/scripts/viewer/node_modules/.package-lock.json" ] ||
    ! cmp -s "$root/scripts/viewer/package-lock.json" "$root/scripts/viewer/node_modules/.package-lock.json.ci" 2>/dev/null; then
   npm ci --prefix "$root/scripts/viewer" --no-audit --no-fund --loglevel=error
   cp "$root/scripts/viewer/package-lock.json" "$root/scripts/viewer/node_modules/.package-lock.json.ci"
+fi
+
+# The benchmark's npm peers (scripts/bench/peers/npm/package-lock.json): meshoptimizer's
+# JavaScript simplifier, the fidelity anchor (peers/meshopt_js.mjs, tests/bench/test_peers.sh),
+# and gltfpack and glTF-Transform (bench_glb_size.sh).
+peers=$root/scripts/bench/peers/npm
+if [ ! -f "$peers/node_modules/.package-lock.json" ] ||
+   ! cmp -s "$peers/package-lock.json" "$peers/node_modules/.package-lock.json.ci" 2>/dev/null; then
+  npm ci --prefix "$peers" --no-audit --no-fund --loglevel=error
+  cp "$peers/package-lock.json" "$peers/node_modules/.package-lock.json.ci"
 fi

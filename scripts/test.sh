@@ -29,9 +29,14 @@ export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 # The unoptimised sanitizer build checks memory safety on small data: its tests get
 # SCANLOD_LIGHT=1 (tests/CMakeLists.txt); the large inputs and every K are the first pass's.
+# It is also the coverage build: gcov counts every line and branch the tests run.
 "$root/scripts/build.sh" "$root/build-asan" -DSCANLOD_SANITIZE=ON -DSCANLOD_BENCH=OFF \
-  -DCMAKE_BUILD_TYPE=Debug
+  -DCMAKE_BUILD_TYPE=Debug -DSCANLOD_COVERAGE=ON
+find "$root/build-asan" -name '*.gcda' -delete
 # Tests labelled release-only (a Slurm cluster of their own) run in the first pass only.
 (cd "$root/build-asan" && ctest --output-on-failure -j "$jobs" -LE release-only)
 sanitizer=$((SECONDS - start - release))
 echo "test.sh: sanitizer pass (build, ctest) $((sanitizer / 60)) min $((sanitizer % 60)) s"
+# Coverage of the production code by the sanitizer pass (tests, scripts and the benchmark
+# peers left out): the figures docs/testing.md quotes.
+"$root/scripts/coverage.sh" "$root/build-asan"

@@ -31,15 +31,38 @@ draco::GeometryAttribute::Type semantic_type(int s)
     }
 }
 
+const struct {
+    int type;
+    draco::DataType draco;
+    int size;
+} types[] = {
+    {SL_DRACO_F32, draco::DT_FLOAT32, 4}, {SL_DRACO_U8, draco::DT_UINT8, 1},
+    {SL_DRACO_U16, draco::DT_UINT16, 2},  {SL_DRACO_I8, draco::DT_INT8, 1},
+    {SL_DRACO_I16, draco::DT_INT16, 2},   {SL_DRACO_U32, draco::DT_UINT32, 4},
+};
+
 draco::DataType data_type(int t)
 {
-    return t == SL_DRACO_F32 ? draco::DT_FLOAT32 : t == SL_DRACO_U8 ? draco::DT_UINT8
-                                                                     : draco::DT_UINT16;
+    for (const auto &k : types)
+        if (k.type == t)
+            return k.draco;
+    return draco::DT_INVALID;
+}
+
+int type_of(draco::DataType d)
+{
+    for (const auto &k : types)
+        if (k.draco == d)
+            return k.type;
+    return SL_DRACO_ANY;
 }
 
 int type_size(int t)
 {
-    return t == SL_DRACO_F32 ? 4 : t == SL_DRACO_U8 ? 1 : 2;
+    for (const auto &k : types)
+        if (k.type == t)
+            return k.size;
+    return 0;
 }
 
 int encode(sl_draco_mesh *m, int speed, void **out, size_t *out_size, sl_error *err)
@@ -110,8 +133,14 @@ int decode(const void *data, size_t size, sl_draco_mesh *out, sl_error *err)
     for (int a = 0; a < out->attribute_count; a++) {
         sl_draco_attribute *at = &out->attributes[a];
         const draco::PointAttribute *pa = mesh->GetAttributeByUniqueId((uint32_t)at->unique_id);
-        if (!pa || pa->data_type() != data_type(at->type) ||
-            pa->num_components() != at->components)
+        if (pa && at->type == SL_DRACO_ANY)
+            at->type = type_of(pa->data_type());
+        if (pa && at->components == 0)
+            at->components = pa->num_components();
+        if (pa)
+            at->normalized = pa->normalized();
+        if (!pa || at->type == SL_DRACO_ANY || pa->data_type() != data_type(at->type) ||
+            pa->num_components() != at->components || at->components < 1 || at->components > 4)
             return sl_error_set(err, SL_E_CORRUPT, 0, nullptr,
                                 "Draco: attribute %d missing or of another type", at->unique_id);
         const size_t stride = (size_t)at->components * type_size(at->type);
@@ -119,8 +148,14 @@ int decode(const void *data, size_t size, sl_draco_mesh *out, sl_error *err)
         if (!dst)
             return sl_error_set(err, SL_E_NOMEM, 0, nullptr, "Draco: out of memory");
         at->data = dst;
-        for (uint32_t p = 0; p < mesh->num_points(); p++)
+        for (uint32_t p = 0; p < mesh->num_points(); p++) {
+            // A stream's point -> value map is data too: checked before it is followed.
+            if (pa->mapped_index(draco::PointIndex(p)).value() >= pa->size())
+                return sl_error_set(err, SL_E_CORRUPT, 0, nullptr,
+                                    "Draco: attribute %d maps point %u to no value",
+                                    at->unique_id, p);
             pa->GetMappedValue(draco::PointIndex(p), dst + p * stride);
+        }
     }
     return SL_OK;
 }

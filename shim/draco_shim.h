@@ -23,7 +23,11 @@ extern "C" {
 #endif
 
 enum sl_draco_semantic { SL_DRACO_POSITION, SL_DRACO_NORMAL, SL_DRACO_COLOR, SL_DRACO_TEXCOORD };
-enum sl_draco_type { SL_DRACO_F32, SL_DRACO_U8, SL_DRACO_U16 };
+enum sl_draco_type {
+    SL_DRACO_F32, SL_DRACO_U8, SL_DRACO_U16,
+    SL_DRACO_I8, SL_DRACO_I16, SL_DRACO_U32, /* what a file's stream may hold (decoding) */
+    SL_DRACO_ANY = -1 /* decoding: the attribute's own type, set by sl_draco_decode */
+};
 
 #define SL_DRACO_MAX_ATTRIBUTES 4
 
@@ -51,8 +55,10 @@ int sl_draco_encode(sl_draco_mesh *m, int speed, void **out, size_t *out_size, s
 
 /* Decodes `data` into `out` (OUT): the attributes named by out->attributes[i].unique_id,
  * type and components (the caller fills those and attribute_count before the call; data
- * is allocated here). SL_E_CORRUPT when the bytes are not a Draco mesh or an attribute is
- * missing or of another type. Release with sl_draco_mesh_release. */
+ * is allocated here). A type of SL_DRACO_ANY or 0 components take the stream's own (set
+ * on return; a type outside enum sl_draco_type is refused), and `normalized` is set from
+ * the stream. SL_E_CORRUPT when the bytes are not a Draco mesh or an attribute is missing
+ * or of another type. Release with sl_draco_mesh_release. */
 int sl_draco_decode(const void *data, size_t size, sl_draco_mesh *out, sl_error *err);
 
 /* Frees what sl_draco_decode allocated (triangles and attribute data). */

@@ -11,13 +11,15 @@
 
 #include "shim/oiio_shim.h"
 
-#define SL_OIIO_MODULE_VERSION 1
+#define SL_OIIO_MODULE_VERSION 2
 #define SL_OIIO_MODULE_SYMBOL "sl_oiio_module_api"
 
 typedef struct sl_oiio_api {
     int version;                 /* SL_OIIO_MODULE_VERSION */
     const char *library_version; /* OpenImageIO's, e.g. "2.4.7" */
     int (*read)(const char *path, uint64_t max_pixels, sl_image *out, sl_error *err);
+    int (*read_memory)(const void *data, size_t size, const char *mime_type, const char *name,
+                       uint64_t max_pixels, sl_image *out, sl_error *err);
     int (*write)(const char *path, int width, int height, int channels, const float *pixels,
                  sl_error *err);
     int (*encode)(const char *format, int width, int height, int channels, const float *pixels,

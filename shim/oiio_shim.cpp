@@ -118,12 +118,11 @@ int write_image(const char *path, int width, int height, int channels, const flo
     return fsync_path(directory_of(final_path), O_RDONLY | O_DIRECTORY, err, "open directory");
 }
 
-int read_image(const char *path, uint64_t max_pixels, sl_image *out, sl_error *err)
+// Reads an opened image whole as float; `path` names it in messages.
+int read_opened(OIIO::ImageInput &in, const char *path, uint64_t max_pixels, sl_image *out,
+                sl_error *err)
 {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in)
-        return fail(err, SL_E_BADINPUT, path, "cannot read image: " + OIIO::geterror());
-    const OIIO::ImageSpec &spec = in->spec();
+    const OIIO::ImageSpec &spec = in.spec();
     uint64_t w = spec.width > 0 ? (uint64_t)spec.width : 0;
     uint64_t h = spec.height > 0 ? (uint64_t)spec.height : 0;
     int ch = spec.nchannels;
@@ -136,15 +135,56 @@ int read_image(const char *path, uint64_t max_pixels, sl_image *out, sl_error *e
     float *pixels = (float *)std::malloc(w * h * (uint64_t)ch * sizeof(float));
     if (!pixels)
         return sl_error_set(err, SL_E_NOMEM, 0, path, "out of memory for the image");
-    if (!in->read_image(0, 0, 0, ch, OIIO::TypeDesc::FLOAT, pixels)) {
+    if (!in.read_image(0, 0, 0, ch, OIIO::TypeDesc::FLOAT, pixels)) {
         std::free(pixels);
-        return fail(err, SL_E_BADINPUT, path, "cannot decode image: " + in->geterror());
+        return fail(err, SL_E_BADINPUT, path, "cannot decode image: " + in.geterror());
     }
     out->width = (int)w;
     out->height = (int)h;
     out->channels = ch;
     out->pixels = pixels;
     return SL_OK;
+}
+
+int read_image(const char *path, uint64_t max_pixels, sl_image *out, sl_error *err)
+{
+    auto in = OIIO::ImageInput::open(path);
+    if (!in)
+        return fail(err, SL_E_BADINPUT, path, "cannot read image: " + OIIO::geterror());
+    return read_opened(*in, path, max_pixels, out, err);
+}
+
+// The file extension OpenImageIO picks a decoder by, from a MIME type or else the bytes'
+// signature; "" when neither names one it has.
+std::string extension_for(const char *mime, const unsigned char *p, size_t size)
+{
+    static const struct { const char *mime, *ext; } types[] = {
+        {"image/jpeg", ".jpg"}, {"image/png", ".png"}, {"image/webp", ".webp"},
+        {"image/bmp", ".bmp"},  {"image/gif", ".gif"}, {"image/tiff", ".tif"}};
+    for (const auto &t : types)
+        if (mime && !std::strcmp(mime, t.mime))
+            return t.ext;
+    if (size >= 3 && p[0] == 0xFF && p[1] == 0xD8 && p[2] == 0xFF)
+        return ".jpg";
+    if (size >= 8 && !std::memcmp(p, "\x89PNG\r\n\x1a\n", 8))
+        return ".png";
+    if (size >= 12 && !std::memcmp(p, "RIFF", 4) && !std::memcmp(p + 8, "WEBP", 4))
+        return ".webp";
+    return "";
+}
+
+int read_memory_image(const void *data, size_t size, const char *mime, const char *name,
+                      uint64_t max_pixels, sl_image *out, sl_error *err)
+{
+    std::string ext = extension_for(mime, static_cast<const unsigned char *>(data), size);
+    if (ext.empty())
+        return sl_error_set(err, SL_E_UNSUPPORTED, 0, name, "an embedded image of type '%s' "
+                            "OpenImageIO cannot decode from memory", mime && *mime ? mime : "?");
+    OIIO::Filesystem::IOMemReader proxy(data, size);
+    auto in = OIIO::ImageInput::open("embedded" + ext, nullptr, &proxy);
+    if (!in)
+        return fail(err, SL_E_BADINPUT, name, "cannot read the embedded image: " + OIIO::geterror());
+    return read_opened(*in, name, max_pixels, out, err);
 }
 
 } // namespace
@@ -172,6 +212,14 @@ static int image_read(const char *path, uint64_t max_pixels, sl_image *out, sl_e
     // *out is cleared by the caller (oiio_loader.c), which fails without the module too.
     return guarded(path, SL_E_BADINPUT, err,
                    [&] { return read_image(path, max_pixels, out, err); });
+}
+
+static int image_read_memory(const void *data, size_t size, const char *mime, const char *name,
+                             uint64_t max_pixels, sl_image *out, sl_error *err)
+{
+    return guarded(name, SL_E_BADINPUT, err, [&] {
+        return read_memory_image(data, size, mime, name, max_pixels, out, err);
+    });
 }
 
 static int image_write(const char *path, int width, int height, int channels,
@@ -229,6 +277,6 @@ static int image_encode(const char *format, int width, int height, int channels,
 extern "C" __attribute__((visibility("default"))) const sl_oiio_api *sl_oiio_module_api(void)
 {
     static const sl_oiio_api api = {SL_OIIO_MODULE_VERSION, OIIO_VERSION_STRING, image_read,
-                                    image_write, image_encode};
+                                    image_read_memory, image_write, image_encode};
     return &api;
 }

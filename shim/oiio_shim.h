@@ -32,6 +32,13 @@ const char *sl_oiio_module_info(const char **path, const char **version);
  * (SL_E_LIMIT beyond; checked from the header before reading). */
 int sl_image_read(const char *path, uint64_t max_pixels, sl_image *out, sl_error *err);
 
+/* The same from an encoded image in memory (a texture embedded in a glTF/GLB): `mime_type`
+ * ("image/jpeg", "image/png", ...; NULL or "" to guess from the bytes' signature) picks
+ * the decoder, `name` (may be NULL) names the image in messages. SL_E_UNSUPPORTED for a
+ * type OpenImageIO cannot decode from memory. */
+int sl_image_read_memory(const void *data, size_t size, const char *mime_type, const char *name,
+                         uint64_t max_pixels, sl_image *out, sl_error *err);
+
 /* Writes `pixels` (float, width*height*channels) to `path`; the format follows the
  * extension (.exr as half/float, .png as 8-bit). Written to a temp name in the same
  * directory, fsynced and renamed (nothing partial is ever visible). */

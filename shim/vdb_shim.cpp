@@ -97,7 +97,7 @@ bool header_looks_right(const std::string &bytes)
 // "simplify" it through an affine matrix and lose the last bit of the voxel size.
 openvdb::math::Transform::Ptr make_transform(const sl_vdb_samples *s)
 {
-    openvdb::math::Transform::Ptr t = openvdb::math::Transform::createLinearTransform(s->voxel_size);
+    openvdb::math::Transform::Ptr t = openvdb::math::Transform::createLinearTransform(s->leaf_size);
     t->postTranslate(openvdb::Vec3d(s->origin[0], s->origin[1], s->origin[2]));
     return t;
 }
@@ -109,9 +109,9 @@ openvdb::Coord coord_at(const sl_vdb_samples *s, uint64_t i)
 
 int check_samples(const char *path, const sl_vdb_samples *s, sl_error *err)
 {
-    if (!(std::isfinite(s->voxel_size) && s->voxel_size > 0.0))
+    if (!(std::isfinite(s->leaf_size) && s->leaf_size > 0.0))
         return sl_error_set(err, SL_E_INTERNAL, 0, path, "samples: voxel size %g is not positive",
-                            s->voxel_size);
+                            s->leaf_size);
     for (int k = 0; k < 3; k++)
         if (!std::isfinite(s->origin[k]))
             return sl_error_set(err, SL_E_INTERNAL, 0, path, "samples: non-finite origin");
@@ -350,7 +350,7 @@ int read_samples(const char *path, uint64_t max_count, sl_vdb_samples *out, sl_e
             unpack_rgba(packed, s.colors + 4 * i);
     }
     const openvdb::math::Transform &t = distance->transform();
-    s.voxel_size = t.voxelSize()[0];
+    s.leaf_size = t.voxelSize()[0];
     openvdb::Vec3d o = t.indexToWorld(openvdb::Vec3d(0.0, 0.0, 0.0));
     for (int k = 0; k < 3; k++)
         s.origin[k] = o[k];

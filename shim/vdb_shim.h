@@ -7,8 +7,9 @@
  *     units (> 0 outside, < 0 inside); background 0, inactive voxels carry no meaning;
  *   - Int32Grid "color" (only when the samples have colours): the same active voxels,
  *     value = RGBA packed little-endian (R in bits 0-7 ... A in bits 24-31);
- *   - both with the transform index -> world: world = origin + voxel_size * index, so a
- *     sample's index coordinate is its grid vertex and index (0,0,0) sits at `origin`;
+ *   - both with the transform index -> world: world = origin + leaf_size * index (the
+ *     grid's voxel size is the leaf size), so a sample's index coordinate is its grid
+ *     vertex and index (0,0,0) sits at `origin`;
  *   - file metadata "scanlod_samples_version" (int32) = SL_VDB_SAMPLES_VERSION.
  * No grid statistics metadata and no timestamps are written. OpenVDB's header carries a
  * random 36-character UUID; the writer replaces it by the XXH3-128 of the whole file
@@ -44,7 +45,7 @@ typedef struct sl_vdb_samples {
                           (x, y, z) lexicographically, no duplicates */
     float *distance;   /* count signed distances in world units: > 0 outside, < 0 inside */
     uint8_t *colors;   /* 4 * count RGBA, or NULL */
-    double voxel_size; /* = leaf_size, world units; > 0 */
+    double leaf_size; /* the leaf cubes' edge, world units; > 0 */
     double origin[3];  /* world position of index (0,0,0) */
 } sl_vdb_samples;
 

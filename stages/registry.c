@@ -1,4 +1,4 @@
-/* The stage registry: every stage, in pipeline order (ARCHITECTURE section 2).
+/* The stage registry: every stage, in pipeline order (docs/architecture.md, "The flow").
  * Adding a stage: docs/adding-a-stage.md. */
 #include <string.h>
 
@@ -8,6 +8,7 @@
 #include "stages/merge/merge.h"
 #include "stages/priority/priority.h"
 #include "stages/range/range.h"
+#include "stages/refine/refine.h"
 #include "stages/registry.h"
 #include "stages/samples/samples.h"
 #include "stages/segment/segment.h"
@@ -20,6 +21,7 @@ static const sl_stage *const registry[] = {
     &sl_crack_stage,
     &sl_segment_stage,
     &sl_cluster_stage,
+    &sl_refine_stage,
     &sl_export_stage,
     NULL,
 };

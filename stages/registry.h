@@ -1,4 +1,4 @@
-/* The stage registry: every stage, in pipeline order (ARCHITECTURE section 2). The
+/* The stage registry: every stage, in pipeline order (docs/architecture.md, "The flow"). The
  * program hands this list to the engine (sl_engine_options.stages); the engine itself
  * names no stage. Adding a stage: docs/adding-a-stage.md. */
 #ifndef SCANLOD_STAGES_REGISTRY_H

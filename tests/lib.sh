@@ -43,21 +43,57 @@ finish() {
 }
 
 # write_config FILE INPUT WORK OUTPUT [extra lines...]
-# Unless the extra lines configure [export] themselves, the export stage is kept light
-# (one level, PLY only, no fidelity or thumbnails): these tests are about the engine, and
-# they also run under the sanitizers.
+# Unless the extra lines configure [levels] or [export] themselves, the ladder is one level
+# and the export stage is kept light (PLY only, no fidelity or thumbnails): these tests are
+# about the engine, and they also run under the sanitizers.
 write_config() {
   local file=$1 input=$2 work=$3 output=$4; shift 4
   # No pipe into `grep -q` here: under pipefail, grep's early exit can kill the printf
   # with SIGPIPE on a busy machine, the test reads as "no [export]", and a second
   # [export] section makes a duplicate key (seen in test_lod_pipeline at load 11).
-  local line own_export=0
-  for line in "$@"; do [ "$line" = "[export]" ] && own_export=1; done
+  local line own_export=0 own_levels=0 own_refine=0
+  for line in "$@"; do
+    [ "$line" = "[export]" ] && own_export=1
+    [ "$line" = "[levels]" ] && own_levels=1
+    [ "$line" = "[refine]" ] && own_refine=1
+  done
   { echo "[run]"; echo "input = $input"; echo "work = $work"; echo "output = $output"
     echo "logs = $TMP/logs"; printf '%s\n' "$@"
+    if [ "$own_levels" -eq 0 ]; then
+      printf '[levels]\npercents = 50\nbudgets =\n'
+      # The sanitizer pass: the light ladder's level refined without the fit (the fit is
+      # most of a light run's CPU under ASan); tests that measure levels set their ladder.
+      if light && [ "$own_refine" -eq 0 ]; then printf '[refine]\nfit = false\n'; fi
+    fi
     if [ "$own_export" -eq 0 ]; then
-      printf '[export]\nlod_percents = 50\nbudgets =\nformats = ply\nthumbnail_size = 0\nfidelity = false\n'
+      printf '[export]\nformats = ply\nthumbnail_size = 0\nfidelity = false\n'
     fi; } >"$file"
+}
+
+# stopped_child PID: waits (up to 30 s) for a child of PID that stopped itself (a stage
+# process under SCANLOD_FAULT=OP:N:stop) and prints its pid; prints nothing if none did.
+stopped_child() {
+  local p _
+  for _ in $(seq 1 600); do
+    for p in $(pgrep -P "$1" || true); do
+      if [ "$(ps -o stat= -p "$p" | cut -c1)" = T ]; then echo "$p"; return 0; fi
+    done
+    sleep 0.05
+  done
+}
+
+# run_killing_child SCOPE CONFIG: `scanlod run CONFIG -q` whose stage process SCOPE
+# (SCANLOD_FAULT_SCOPE: child = the first, child:K = the K-th) stops itself at its first
+# write and is killed -9 by the test, as the kernel's OOM killer would kill it. Sets $rc,
+# $err, $runner (the run's pid) and $child (empty when no stage process stopped).
+run_killing_child() {
+  SCANLOD_FAULT=write:1:stop SCANLOD_FAULT_SCOPE="$1" "$SCANLOD" run "$2" -q \
+    >"$TMP/killing.out" 2>"$TMP/killing.err" &
+  runner=$!
+  child=$(stopped_child "$runner")
+  if [ -n "$child" ]; then kill -9 "$child"; fi
+  set +e; wait "$runner"; rc=$?; set -e
+  err=$(cat "$TMP/killing.err")
 }
 
 # run_scanlod CMD CONFIG [args...]: sets $rc and $out (stdout), $err (stderr file)

@@ -26,9 +26,10 @@ input = $W/in
 work = $W/work-$which
 output = $W/out-$which
 logs = $W/logs
-[export]
-lod_percents = 30,60,100
+[levels]
+percents = 30,60,100
 budgets =
+[export]
 formats = ply,glb
 thumbnail_size = 0
 fidelity = false

@@ -14,7 +14,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "stages/cluster/cluster.h"
 #include "stages/range/range.h"
 

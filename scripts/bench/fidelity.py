@@ -15,8 +15,9 @@ export stage published (report.json: triangles, parts, the largest part's area s
 and the build's stage table (wall seconds, peak RSS from timings.json).
 
 Prints one table per input and the medians; --json writes everything. Meant for
-iterating on one change at a time (a few minutes for the 7 benchmark inputs on 2 cores);
-lib/fidelity.py runs the same measurement as a phase of run.sh.
+iterating on one change at a time (a few minutes for the 7 benchmark inputs on 2 cores).
+The benchmark's phase fidelity (lib/fidelity.py, `run.sh --phases fidelity`) measures the
+published budget levels instead, against meshoptimizer 1.3 (the anchor, docs/fidelity.md).
 """
 import argparse
 import json

@@ -3,6 +3,7 @@
 
     scripts/bench/plan_calibrate.py [--build build] [--sizes 100000,300000,1000000]
                                     [--methods octree,cluster,segment] [--out DIR]
+                                    [--shapes 200000,20000]
 
 For every method and size: a gen_surface torus of that many triangles, one `scanlod run`
 at 2 threads with fidelity off and one with fidelity on (the export stage's cost differs),
@@ -11,7 +12,14 @@ published bytes. Then per stage a least-squares line seconds = a + b * N/1e6 and
 MB = c + d * N/1e6 (N = triangles), printed as the C table cli/plan.c holds, with each
 run's plan/measured ratio under the fitted model. Copy the table in by hand: the model is
 source, reviewed like code. Takes about 10 minutes at the default sizes on 2 cores.
+
+--shapes SLIVERS,SOUP (issue 34): instead, the octree stages' k and share (cli/plan.c):
+one run each of gen_surface --aspect 16 at SLIVERS triangles and --soup at SOUP, and per
+stage the share of d that follows the samples (from the slivers, whose scattered share is
+about 0) and k (from the soup, about 1) that would make the plan's current line meet the
+measured peak, beside the plan's own ratio. About 5 minutes at 200000,20000.
 """
+import re
 import argparse
 import json
 import os
@@ -54,10 +62,13 @@ def main():
     ap.add_argument("--sizes", default="100000,300000,1000000")
     ap.add_argument("--methods", default="octree,cluster,segment")
     ap.add_argument("--out", default=None, help="scratch folder (default BUILD/plan-calibrate)")
+    ap.add_argument("--shapes", default=None, help="SLIVERS,SOUP triangles: fit k and share")
     args = ap.parse_args()
     scanlod = os.path.abspath(os.path.join(args.build, "cli", "scanlod"))
     gen = os.path.abspath(os.path.join(args.build, "scripts", "bench", "gen_surface"))
     root = os.path.abspath(args.out or os.path.join(args.build, "plan-calibrate"))
+    if args.shapes:
+        return fit_shapes(scanlod, gen, root, [int(x) for x in args.shapes.split(",")])
     sizes = [int(s) for s in args.sizes.split(",")]
     samples = {}   # stage key -> [(N/1e6, seconds, MB)]
     disk = []      # (N/1e6, work MB, published MB)
@@ -104,8 +115,9 @@ def main():
         a, b = fit(xs, [r[1] for r in rows])
         c, dd = fit(xs, [r[2] for r in rows])
         qa, qb = fit(xs, [r[3] / QUIET_SPEEDUP for r in rows])
-        print('    {"%s", %.3g, %.3g, 1, %.3g, %.3g, 1},  /* from CPU: %.3g, %.3g */'
+        print('    {"%s", %.3g, %.3g, 1, %.3g, %.3g, 1, K, SHARE},  /* from CPU: %.3g, %.3g */'
               % (key, a, b, c, dd, qa, qb))
+    print("/* K and SHARE: keep the current ones, or refit them with --shapes */")
     print("};")
     xs = [r[0] for r in disk]
     wa, wb = fit(xs, [r[1] for r in disk])
@@ -118,6 +130,58 @@ def main():
         peak = max(t["peak_rss_kb"] for t in stages.values()) / 1024.0
         print("  %-8s %9d fidelity %-5s  memory %.2f  time %.2f" %
               (method, tris, fidelity, plan["peak_rss_mb"] / peak, plan["seconds"] / secs))
+
+
+def plan_lines(repo):
+    """cli/plan.c's lines: {stage: (c, d, f, k, share)}, and IMAGES_MB."""
+    with open(os.path.join(repo, "cli", "plan.c")) as f:
+        text = f.read()
+    images = float(re.search(r"#define IMAGES_MB ([0-9.]+)", text).group(1))
+    lines = {}
+    for m in re.finditer(r'\{"([a-z+:]+)", ([^}]*)\}', text):
+        v = [float(x) for x in m.group(2).split(",")]
+        if len(v) == 8:
+            lines[m.group(1)] = (v[3], v[4], v[5], v[6], v[7])
+    return lines, images
+
+
+def fit_shapes(scanlod, gen, root, sizes):
+    """Per octree stage, the share (slivers) and k (soup) that meet the measured peaks."""
+    lines, images = plan_lines(os.path.dirname(os.path.dirname(os.path.dirname(
+        os.path.abspath(__file__)))))
+    for name, args, tris in (("slivers", ["--aspect", "16"], sizes[0]),
+                             ("soup", ["--soup"], sizes[1])):
+        d = os.path.join(root, name)
+        shutil.rmtree(d, ignore_errors=True)
+        os.makedirs(os.path.join(d, "in"))
+        run([gen, "--triangles", tris, "-o", os.path.join(d, "in", name + ".ply")] + args)
+        with open(os.path.join(d, "run.ini"), "w") as f:
+            f.write("[run]\ninput = in\nwork = work\noutput = out\nlogs = logs\n"
+                    "memory_check = false\n[export]\nfidelity = false\n")
+        plan = json.loads(run([scanlod, "plan", os.path.join(d, "run.ini"), "--threads", "2",
+                               "--json"]))["items"][0]
+        sys.stderr.write("plan_calibrate: %s, %d triangles\n" % (name, tris))
+        run([scanlod, "run", os.path.join(d, "run.ini"), "--threads", "2", "-q"])
+        with open(os.path.join(d, "out", name + ".ply", "timings.json")) as f:
+            stages = json.load(f)["stages"]
+        n, r = plan["triangles"] / 1e6, plan["shape"]["samples_ratio"]
+        sigma = plan["shape"]["scattered"]
+        print("%s: samples ratio %.2f, scattered %.3f" % (name, r, sigma))
+        for stage, t in stages.items():
+            c, dd, f, k, share = lines.get(stage, (0, 0, 1, 0, 0))
+            mem = t["peak_rss_kb"] / 1024.0 - (images if stage == "export" else 0)
+            y = (mem - c) / dd if dd else 0
+            if share <= 0 or y <= 0:
+                continue
+            if name == "slivers":
+                fitted = (y - n ** f) / ((n * r) ** f - n ** f)
+                what = "share %.2f (now %.2f)" % (fitted, share)
+            else:
+                nm = max((y - (1 - share) * n ** f) / share, 1e-9) ** (1 / f)
+                what = "k %.2f (now %.2f)" % ((nm / (n * r) - 1) / max(sigma, 1e-9), k)
+            print("  %-9s measured %6.0f MB, plan %6.0f MB: %s" %
+                  (stage, t["peak_rss_kb"] / 1024.0, plan["stages"][stage]["peak_rss_mb"], what))
+        shutil.rmtree(d, ignore_errors=True)
 
 
 if __name__ == "__main__":

@@ -17,7 +17,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "geometry/ply.h"
+#include "formats/ply.h"
 
 #define MAX_RUNS 101
 

@@ -4,6 +4,8 @@
 #   scripts/bench/run.sh [--quick] [--build DIR] [--docs DIR] [--minutes N] [--keep]
 #   scripts/bench/run.sh --report-only RESULTS_DIR [--docs DIR]
 #   scripts/bench/run.sh --resume RESULTS_DIR --phases "lod growth"   (after a --keep run)
+#   scripts/bench/run.sh --phases fidelity [--inputs a,b] [--budgets 1,10]
+#                        [--methods default,octree,segment,cluster] [--reuse-peers] [--timeout MIN]
 #
 # Builds Release (DIR, default build-bench/ in the repository), then runs the phases in
 # scripts/bench/lib/ on the same inputs (../shared/data next to the repository, or
@@ -14,8 +16,16 @@
 #   lod     equal-count fidelity vs meshoptimizer and OpenVDB adaptive; extraction cost
 #   growth  synthetic surfaces (gen_surface) of growing size: time, memory, fitted slope
 #   parts   the largest surface built by 3 local workers as parts, one killed -9 in a part
+#   fidelity  the published budget levels (1..50 % of 9 inputs) against the fidelity anchor,
+#           meshoptimizer 1.3 simplifyWithUpdate at the same counts (and simplify, and 0.18);
+#           --methods: each method alone too ("default" = the default config); --inputs,
+#           --budgets: a subset (its table goes to RESULTS/fidelity.md, the docs stay);
+#           --reuse-peers: the anchors' figures from BUILD/bench-results/fidelity-peers.json
+#           where they are (same count, else within 1 %); --timeout: minutes per scanlod run
+#   shapes  `scanlod plan` against the run on 500k thin slivers and a 20k-triangle soup
 # and writes docs/benchmarks.md and the gnuplot PNGs in docs/bench/. Raw figures stay in
-# DIR/bench-results/STAMP/*.json (--report-only regenerates the docs from them).
+# DIR/bench-results/STAMP/*.json (--report-only regenerates the docs from them). A run of
+# the fidelity phase alone replaces section 3a and its headline lines only.
 # --quick: bun_zipper, fandisk, rocker_arm, 3 repetitions, 0.2M and 1M triangles once,
 # the depth sweep once on fandisk, extraction timings x3 (a few minutes on 2 cores).
 # Full: 5 inputs, 5 repetitions, 1M/5M/20M triangles; sizes that would overrun the
@@ -28,10 +38,16 @@ root=$(cd "$here/../.." && pwd)
 lib=$here/lib
 
 quick=0 build=$root/build-bench docs=$root/docs minutes="" keep=0 report_only="" resume=""
-phases="models stages octree lod growth parts"
+phases="models stages octree lod fidelity growth parts shapes"
+fid_inputs="" fid_budgets="" fid_methods="" reuse_peers="" fid_timeout=""
 while [ $# -gt 0 ]; do
   case $1 in
     --quick) quick=1 ;;
+    --inputs) fid_inputs=$2; shift ;;
+    --budgets) fid_budgets=$2; shift ;;
+    --methods) fid_methods=$2; shift ;;
+    --reuse-peers) reuse_peers=1 ;;
+    --timeout) fid_timeout=$2; shift ;;
     --build) build=$2; shift ;;
     --docs) docs=$2; shift ;;
     --minutes) minutes=$2; shift ;;
@@ -39,7 +55,7 @@ while [ $# -gt 0 ]; do
     --report-only) report_only=$2; shift ;;
     --resume) resume=$2; shift ;;
     --phases) phases=$2; shift ;;
-    -h|--help) sed -n '2,24p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,34p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "run.sh: unknown argument $1 (see --help)" >&2; exit 64 ;;
   esac
   shift
@@ -47,9 +63,45 @@ done
 
 render() { # render RESULTS_DIR: docs/benchmarks.md and docs/bench/*.png
   mkdir -p "$docs/bench"
+  if [ ! -f "$1/models.json" ] && [ -f "$1/fidelity.json" ]; then
+    # the fidelity phase alone: its section and headline lines, the rest of the page kept
+    python3 "$lib/report.py" --fidelity "$1" "$docs/benchmarks.md"
+    [ ! -f "$1/fidelity.md" ] || cat "$1/fidelity.md"
+    return
+  fi
   python3 "$lib/plots.py" "$1" "$docs/bench"
   python3 "$lib/report.py" "$1" "$docs/benchmarks.md"
   echo "bench: wrote $docs/benchmarks.md and $docs/bench/*.png from $1"
+}
+fidelity_settings() { # fidelity_settings CONTEXT.json: the fidelity phase's options into it
+  FID_INPUTS=$fid_inputs FID_BUDGETS=$fid_budgets FID_METHODS=$fid_methods \
+  REUSE_PEERS=$reuse_peers FID_TIMEOUT=$fid_timeout \
+  python3 - "$1" <<'EOF3'
+import json, os, sys
+path, e = sys.argv[1], os.environ
+c = json.load(open(path))
+items = lambda k: [x for x in e[k].replace(",", " ").split() if x]
+num = lambda x: int(float(x)) if float(x) == int(float(x)) else float(x)
+if e["FID_INPUTS"] or "fidelity_inputs" not in c:   # [] = lib/fidelity.py's nine
+    c["fidelity_inputs"] = items("FID_INPUTS") or (c["models"] if c.get("quick") else [])
+if e["FID_BUDGETS"] or "fidelity_budgets" not in c:
+    c["fidelity_budgets"] = [num(x) for x in items("FID_BUDGETS")] or \
+        ([1, 10] if c.get("quick") else [])
+if e["FID_METHODS"] or "fidelity_methods" not in c:
+    c["fidelity_methods"] = items("FID_METHODS") or ["default"]
+if e["FID_TIMEOUT"] or "fidelity_timeout" not in c:
+    c["fidelity_timeout"] = int(60 * float(e["FID_TIMEOUT"] or 30))
+c["reuse_peers"] = e["REUSE_PEERS"] == "1"
+c["peer_cache"] = os.path.join(os.path.dirname(c["results"]), "fidelity-peers.json")
+json.dump(c, open(path, "w"), indent=1)
+EOF3
+}
+peers_ready() { # the fidelity phase's npm peer, installed on first use
+  case " $phases " in *" fidelity "*) ;; *) return 0 ;; esac
+  command -v node >/dev/null || { echo "run.sh: node missing (scripts/install-deps.sh)" >&2; exit 64; }
+  local npm_peers=$here/peers/npm
+  [ -f "$npm_peers/node_modules/meshoptimizer/package.json" ] ||
+    npm ci --prefix "$npm_peers" --no-audit --no-fund --loglevel=error
 }
 run_phases() { # run_phases RESULTS_DIR [rerun]: the phases named by $phases, then the docs
   local t0 start
@@ -78,6 +130,8 @@ build_bench() { # the Release tree every phase runs
 }
 if [ -n "$resume" ]; then   # rebuilt from the current tree, a fresh time budget from now
   build_bench
+  peers_ready
+  fidelity_settings "$resume/context.json"
   python3 - "$resume/context.json" "$resume/reruns.json" "$phases" "$root" <<'EOF2'
 import datetime, json, os, subprocess, sys, time
 ctx_path, reruns_path, phases, root = sys.argv[1:5]
@@ -106,6 +160,7 @@ command -v python3 >/dev/null || { echo "run.sh: python3 missing" >&2; exit 64; 
 
 # --- build (Release) -------------------------------------------------------------------
 build_bench
+peers_ready
 
 # --- settings ----------------------------------------------------------------------------
 if [ "$quick" = 1 ]; then
@@ -151,6 +206,8 @@ print(json.dumps({
     "minutes": int(e["MINUTES"]), "deadline": time.time() + 60 * int(e["MINUTES"]),
 }, indent=1))
 EOF
+
+fidelity_settings "$results/context.json"
 
 echo "bench: $stamp run, results in $results"
 python3 "$lib/machine.py" "$results/context.json"

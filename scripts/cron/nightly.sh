@@ -3,7 +3,7 @@
 #   15 1 * * *  /opt/scanlod/scripts/cron/nightly.sh /srv/collections/museum.ini
 # One instance per config on this host (flock on a lock file next to the config; a second
 # start while the first still runs exits 75 at once -- overlapping runs on other hosts
-# cooperate through the queues anyway). Keeps the last 30 days of logs. The exit code is
+# cooperate through the queues anyway). Old logs go by [run] log_keep. The exit code is
 # scanlod's (docs/exit-codes.md), so cron mails a summary of non-zero runs.
 set -uo pipefail
 config=${1:?usage: nightly.sh CONFIG}
@@ -18,7 +18,6 @@ if ! flock -n 9; then
   echo "scanlod nightly: a run for $config is still going on this host; exiting 75" >&2
   exit 75
 fi
-find "$logs" -type f \( -name '*.log' -o -name '*.jsonl' \) -mtime +30 -delete 2>/dev/null
 "$scanlod" run "$config" -s "run.logs=$logs" -q
 status=$?
 [ "$status" -eq 0 ] || "$scanlod" status "$config" -s "run.logs=$logs"

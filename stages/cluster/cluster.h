@@ -166,47 +166,11 @@ int sl_cluster_simplify(const sl_cluster_config *cfg, const sl_cluster_input *in
 void sl_cluster_level_release(sl_cluster_level *level);
 
 /* --- the stage ([lod] method = cluster) ----------------------------------------------- *
- * Reads the range stage's welded mesh, builds the export ladder's levels ([export]
- * lod_percents: at most P% of the input's triangles; [export] budgets), each from the next
- * finer one, and writes them with their bounds (and [cluster] intermediates models between
- * consecutive levels) to SL_CLUSTER_LEVELS_FILE; docs/formats.md has the format. */
+ * Reads the range stage's welded mesh, builds a level per rung of the ladder ([levels]: a
+ * share P % = at most P % of the input's triangles), each from the next finer one, and
+ * writes them with their bounds (and [cluster] intermediates models between consecutive
+ * levels) as a level list (levels/level.h); docs/formats.md has the format. */
 
 extern const sl_stage sl_cluster_stage;
-
-#define SL_CLUSTER_LEVELS_FILE "levels.sllev"
-
-/* One mesh of the level list: a level or an intermediate model. */
-typedef struct sl_cluster_list_mesh {
-    char name[32];            /* file stem: the export level's name; an intermediate's is
-                                 "LEVEL.morphJ" (J = 1..m, from the finer level; LEVEL cut
-                                 to 22 characters) */
-    char from[32];            /* the finer level it was simplified from ("" for the input) */
-    int intermediate;         /* 1 for an intermediate model */
-    int by_percent;           /* the level was asked as lod_percents (else a budget) */
-    double percent;           /* by_percent: P */
-    uint64_t budget;          /* the triangle budget it was built for */
-    int reached;              /* the budget was met */
-    int clamped;              /* the budget was at or above the input's triangles */
-    double bound;             /* world: Hausdorff bound to the input */
-    double bound_fraction;    /* of the input's bounding-box diagonal */
-    uint64_t vertex_count;
-    float *positions;         /* 3 * vertex_count, world */
-    uint32_t *source;         /* vertex_count: the range point each vertex is (colours) */
-    uint64_t triangle_count;
-    uint32_t *triangles;      /* 3 * triangle_count, into positions */
-} sl_cluster_list_mesh;
-
-typedef struct sl_cluster_list {
-    uint64_t input_triangles; /* the range stage's triangles */
-    double diagonal;          /* world */
-    uint32_t count;
-    sl_cluster_list_mesh *meshes; /* the export ladder's order; intermediates follow the
-                                     level they lead to */
-} sl_cluster_list;
-
-int sl_cluster_list_write(const char *path, const sl_cluster_list *list, sl_error *err);
-/* Validates magic, version, checksum and every count against the file's size. */
-int sl_cluster_list_read(const char *path, sl_cluster_list *out, sl_error *err);
-void sl_cluster_list_release(sl_cluster_list *list);
 
 #endif

@@ -17,9 +17,8 @@
 
 #include "core/error.h"
 #include "pipeline/stage.h"
+#include "runtime/lod_io.h"
 #include "runtime/lod_model.h"
-
-#define SL_MODEL_FILE "model.slod"
 
 extern const sl_stage sl_crack_stage;
 

@@ -1,13 +1,12 @@
-/* export stage (paper 1, section 3; ARCHITECTURE section 1): the LOD model -> what users
- * take away, per item: the chosen levels as welded meshes (PLY, GLB with meshoptimizer's
- * vertex order), a thumbnail per level (PNG), the model itself (`model.slod`), and the
- * levels' fidelity against the input surface (RMS and Hausdorff as fractions of the bbox
- * diagonal, from the project's own `compare`) with watertightness, in the report.
- *
- * Levels: every `[export] lod_percents` (paper Table 1: k = P% of the LOD array) and every
- * named triangle budget `[export] budgets` (name:triangles; a budget above the finest level
- * gives the finest, marked "clamped"). Levels whose meshes are identical (a clamped budget
- * and lod100) are published once, under one of their names (docs/formats.md).
+/* export stage (paper 1, section 3; docs/levels.md): the published levels -> what users
+ * take away, per item: each level of the level list the refine stage made (levels/level.h,
+ * found by the artifact, not by a stage's name) as a welded mesh (PLY, GLB with
+ * meshoptimizer's vertex order), a thumbnail per level (PNG), the LOD model `model.slod`
+ * when an earlier stage made one (any cut in O(m) for viewers), and the levels' fidelity
+ * against the input surface (RMS and Hausdorff as fractions of the bbox diagonal, from the
+ * project's own `compare`) with watertightness, in the report. Levels whose meshes are
+ * identical (the scan at the top asked by a percent and a budget) are published once,
+ * under one of their names (docs/formats.md).
  *
  * Also per item: `scene.svx.json` (a Smithsonian Voyager scene of the GLBs, mapped to
  * Voyager's qualities by triangle count) and `index.html` (the item's page with a 3D view
@@ -19,7 +18,7 @@
 #include <stdint.h>
 
 #include "core/error.h"
-#include "geometry/glb.h"
+#include "formats/glb.h"
 #include "pipeline/stage.h"
 #include "runtime/lod_mesh.h"
 
@@ -27,12 +26,14 @@ extern const sl_stage sl_export_stage;
 
 #define SL_EXPORT_MAX_LEVELS 32
 
-/* One level to cut and write. */
+/* One published level as the pages and the manifest name it. */
 typedef struct sl_export_level {
-    char name[32];  /* its file names: "lod20" for 20 %, the budget's name ("medium") */
-    int by_percent; /* cut by LOD percent (paper Table 1), else by triangle budget */
+    char name[32];  /* its file names: "lod20", the budget's name ("medium") */
+    char method[16]; /* what made it: scan, octree, segment, cluster */
+    int by_percent; /* asked as a share (lodP) or a share of expansions (kP) */
     double percent; /* by_percent: in [0, 100] */
-    uint64_t budget; /* else: the largest level with at most this many triangles */
+    uint64_t budget; /* the triangles it was asked for (0: an expansions level) */
+    int scan;        /* the scan itself, unchanged (no error to show) */
 } sl_export_level;
 
 /* How a level's GLB is written (docs/glb.md): the encoding, and the map from the input's
@@ -47,9 +48,17 @@ typedef struct sl_export_glb {
     const sl_lod_mesh *morph_to;
 } sl_export_glb;
 
+/* [export] texture: none; bake every level's atlas; keep (default): a level with the
+ * input's texture coordinates keeps them and the input's image, the others are baked. */
+enum sl_export_texture_mode {
+    SL_EXPORT_TEXTURE_NONE = 0,
+    SL_EXPORT_TEXTURE_BAKE = 1,
+    SL_EXPORT_TEXTURE_KEEP = 2
+};
+
 /* The resolved [export] section (options: stages/export/export_stage.c). */
 typedef struct sl_export_config {
-    int level_count;                            /* lod_percents, then budgets */
+    int level_count;                            /* the published levels, once read */
     sl_export_level levels[SL_EXPORT_MAX_LEVELS];
     int write_ply, write_glb, write_obj;        /* [export] formats */
     int thumbnail_size;                         /* PNG edge in pixels; 0 = none */
@@ -59,26 +68,25 @@ typedef struct sl_export_config {
     double units_to_metres;                     /* [export] units; 0 = auto (the header) */
     char units[8];                              /* its name: "auto", "mm", ... */
     char up;                                    /* [export] up: 'y', 'z', or 0 = auto */
-    int texture;                                /* [export] texture = auto: bake atlases */
+    int texture;                                /* [export] texture: enum sl_export_texture_mode */
     int texture_png;                            /* texture_format png, else jpeg */
     int texture_quality;                        /* JPEG quality */
     int texture_size;                           /* atlas edge of levels not listed below */
     char texture_sizes[256];                    /* "name:edge,..." */
     int viewer; /* index.html gets a 3D view per level: viewer bundle + NAME.glb.js copies */
     int morph;  /* each published level's GLB morphs to the next coarser published level */
-    double min_part_area; /* coarser octree levels drop parts below this share of their area */
-    double shard_reach;   /* ... that lie within this many mean edges of the rest */
-    int cap_at_input;     /* no octree level above the input mesh's triangle count */
 } sl_export_config;
 
 /* The section at its option table's defaults (sl_stage_default_config). */
 sl_export_config sl_export_default_config(void);
+/* How a GLB is written at the [export] defaults, the input taken as metres, +Y up. */
+sl_export_glb sl_export_default_glb(void);
 
 /* Writes `mesh` to `path` in the format its extension names (.ply, .glb, .obj).
- * `extras_json` (may be NULL) goes into the GLB's extras. A GLB is written per `glb` (NULL:
- * the [export] defaults, the input taken as metres, +Y up), in meshoptimizer's vertex-cache
- * and fetch order, and `stats` (OUT, may be NULL) says what it holds; PLY and OBJ keep the
- * input's units and axes. */
+ * `extras_json` (may be NULL) goes into the GLB's extras. A GLB is written per `glb` (which
+ * a GLB needs: sl_export_default_glb() for the [export] defaults), in meshoptimizer's
+ * vertex-cache and fetch order, and `stats` (OUT, may be NULL) says what it holds; PLY and
+ * OBJ keep the input's units and axes (`glb` may be NULL for them). */
 int sl_export_write_mesh(const char *path, const sl_lod_mesh *mesh, const char *extras_json,
                          const sl_export_glb *glb, sl_glb_stats *stats, sl_error *err);
 

@@ -9,9 +9,10 @@
 
 #include "core/atomicfile.h"
 #include "geometry/mesh_distance.h"
-#include "geometry/ply.h"
+#include "formats/scan_read.h"
+#include "formats/scan_texture.h"
+#include "levels/level.h"
 #include "runtime/lod_io.h"
-#include "stages/crack/crack.h"
 #include "stages/export/export_internal.h"
 
 /* 5: [export] morph (morph targets in the GLBs). 6: report.json gives each level's
@@ -19,21 +20,14 @@
  * method's levels as such (they said "Clustering levels"). 8: a morphing GLB carries the
  * level cut along the coarser level's edges, so its weight-1 surface lies on it. 9: [export]
  * min_part_area (coarser octree levels leave out shards). 10: [export] cap_at_input (no
- * octree level above the input's triangle count). */
-#define EXPORT_STAGE_VERSION 10u
+ * octree level above the input's triangle count). 11: the levels are the refine stage's
+ * level list for every method; normals from each level's own faces. 12: the item's manifest
+ * row (titles, credit, frame), an estimated frame when nobody gives it, pages for curators,
+ * the Voyager scene's meta. 13: [export] texture = keep (default): a level with the input's
+ * texture coordinates embeds the input's image instead of a baked atlas. */
+#define EXPORT_STAGE_VERSION 13u
 
 static const sl_option export_options[] = {
-    {"export", "lod_percents", SL_OPT_LIST, "20,40,60,80,100", 0, 100, NULL,
-     "Levels by LOD percent, as in the paper's Table 1: P% of the LOD array's expansions "
-     "of nodes with surface below them are done (empty band cells change nothing and are "
-     "not counted; 100 = the finest level). Empty for none."},
-    {"export", "budgets", SL_OPT_LIST, "thumb:2000,low:20000,medium:100000,high:500000", 0, 0,
-     NULL,
-     "Named triangle budgets (name:triangles), as museum web viewers use: the largest level "
-     "within each budget. A budget above the finest level gives the finest (\"clamped\" in "
-     "the report). A name becomes the level's file names: letters, digits, '.', '_' and '-', "
-     "starting with a letter or digit, and no two levels (budgets or lodP percents) alike. "
-     "Empty for none."},
     {"export", "formats", SL_OPT_LIST, "ply,glb", 0, 0, "ply|glb|obj",
      "Mesh files written per level: any of ply, glb, obj (empty: none, only thumbnails and "
      "the report)."},
@@ -65,19 +59,25 @@ static const sl_option export_options[] = {
     {"export", "texcoord_bits", SL_OPT_INT, "12", 8, 16, NULL,
      "Bits per texture coordinate (gltfpack's default 12)."},
     {"export", "units", SL_OPT_ENUM, "auto", 0, 0, "auto|mm|cm|m|in|ft",
-     "Length unit of the input coordinates. GLBs are written in metres, as glTF requires. "
-     "auto = a 'comment units NAME' line in the PLY header if there is one, else the "
-     "coordinates are taken as metres (written as given). A value given here wins over "
-     "the header."},
+     "Length unit of the input coordinates, for every item (docs/metadata.md, \"Frames\"). "
+     "GLBs are written in metres, as glTF requires, and the pages give errors in mm. An "
+     "item's row in the collection manifest wins over this; auto = the file's own hint (a "
+     "PLY 'comment units NAME', glTF's metres), else estimated from the bounding box "
+     "(flagged as such in the report, the page and the log)."},
     {"export", "up", SL_OPT_ENUM, "auto", 0, 0, "auto|y|z",
-     "The input's up axis. GLBs are written +Y up, as glTF requires (z: (x, y, z) -> "
-     "(x, z, -y)), and thumbnails look at the model upright. auto = a 'comment up AXIS' "
-     "line in the PLY header if there is one, else y (as given). A value given here wins "
-     "over the header."},
-    {"export", "texture", SL_OPT_ENUM, "auto", 0, 0, "auto|none",
-     "auto: a textured input (PLY 'comment TextureFile' with texture coordinates) gives "
-     "every level a baked texture atlas, embedded in its GLB as baseColorTexture with "
-     "TEXCOORD_0 (PLY files keep vertex colours). none: vertex colours only."},
+     "The input's up axis, for every item. GLBs are written +Y up, as glTF requires (z: "
+     "(x, y, z) -> (x, z, -y)), and thumbnails look at the model upright. An item's row in "
+     "the collection manifest wins over this; auto = the file's own hint (a PLY 'comment "
+     "up AXIS', glTF's +Y), else estimated from the scan's base (flagged as such in the "
+     "report, the page and the log)."},
+    {"export", "texture", SL_OPT_ENUM, "keep", 0, 0, "keep|bake|none|auto",
+     "A textured input (PLY 'comment TextureFile', OBJ's map_Kd, a glTF baseColor texture, "
+     "with texture coordinates) gives each level's GLB a baseColorTexture with TEXCOORD_0 "
+     "(PLY files keep vertex colours). keep: a level made of the scan's own vertices (the "
+     "scan at the top, the scan simplified by the refine stage) keeps their texture "
+     "coordinates and embeds the input's JPEG/PNG unchanged; the others get a baked atlas. "
+     "bake: every level gets a baked atlas. none: vertex colours only. auto: keep (the "
+     "old name)."},
     {"export", "texture_format", SL_OPT_ENUM, "jpeg", 0, 0, "jpeg|png",
      "Image format of the atlases (glTF core: JPEG or PNG)."},
     {"export", "texture_quality", SL_OPT_INT, "90", 1, 100, NULL, "JPEG quality of the atlases."},
@@ -99,25 +99,6 @@ static const sl_option export_options[] = {
      "distance). At weight 0 the GLB is the level, at weight 1 it lies on the coarser level. "
      "The coarsest level has none. Works with every compression (Draco: the target is "
      "stored uncompressed beside the Draco stream)."},
-    {"export", "min_part_area", SL_OPT_DOUBLE, "0.01", 0, 0.5, NULL,
-     "Shards (docs/lod.md): when the octree's finest level is one body (its largest part "
-     "holds 99 % of its area), each coarser published level leaves out the connected parts "
-     "holding less than this share of its area (never its largest): pieces of thin parts "
-     "that the coarse cells cut loose, and specks. 0 publishes every part as the octree "
-     "draws it (paper 1). The finest level, and every level of a scan of several pieces, "
-     "keep all their parts; the levels of the cluster and segment methods are never "
-     "changed."},
-    {"export", "shard_reach", SL_OPT_DOUBLE, "2", 0, 1e9, NULL,
-     "A small part (min_part_area) is left out only when each of its vertices lies within "
-     "this many of the level's mean triangle edges of the rest of the level: a speck the "
-     "body covers goes, a part farther out (the only surface there) stays."},
-    {"export", "cap_at_input", SL_OPT_BOOL, "true", 0, 0, NULL,
-     "No octree level has more triangles than the input mesh: a level whose cut would "
-     "(lod100 when the finest level outgrows the input, a budget above the input's count) is "
-     "the largest cut within the input's count instead ('capped' in the report). false: "
-     "lod100 is the octree's finest level whatever its count (paper 1). Point clouds have no "
-     "count to keep to, nor a mesh so small that no non-empty cut fits its count; the "
-     "cluster and segment methods never exceed it."},
     SL_OPTION_END,
 };
 
@@ -126,8 +107,7 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
     sl_export_config *c = calloc(1, sizeof *c);
     if (!c)
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
-    int rc = sl_export_parse_levels(sl_config_string(cfg, "export", "lod_percents"),
-                                    sl_config_string(cfg, "export", "budgets"), c, err);
+    int rc = 0;
     /* The config checked every element against ply|glb|obj; the canonical list is
      * "a,b,c", so a name is in it when it is a whole element. */
     char formats[64];
@@ -151,7 +131,10 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
     c->units_to_metres = sl_export_unit_metres(c->units); /* 0 for auto */
     const char *up = sl_config_string(cfg, "export", "up");
     c->up = !strcmp(up, "auto") ? 0 : up[0];
-    c->texture = !strcmp(sl_config_string(cfg, "export", "texture"), "auto");
+    const char *texture = sl_config_string(cfg, "export", "texture");
+    c->texture = !strcmp(texture, "none")   ? SL_EXPORT_TEXTURE_NONE
+                 : !strcmp(texture, "bake") ? SL_EXPORT_TEXTURE_BAKE
+                                            : SL_EXPORT_TEXTURE_KEEP;
     c->texture_png = !strcmp(sl_config_string(cfg, "export", "texture_format"), "png");
     c->texture_quality = (int)sl_config_int(cfg, "export", "texture_quality");
     c->texture_size = (int)sl_config_int(cfg, "export", "texture_size");
@@ -169,9 +152,6 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
     }
     c->viewer = sl_config_bool(cfg, "export", "viewer");
     c->morph = sl_config_bool(cfg, "export", "morph");
-    c->min_part_area = sl_config_double(cfg, "export", "min_part_area");
-    c->shard_reach = sl_config_double(cfg, "export", "shard_reach");
-    c->cap_at_input = sl_config_bool(cfg, "export", "cap_at_input");
     if (rc) {
         free(c);
         return rc;
@@ -187,109 +167,111 @@ sl_export_config sl_export_default_config(void)
     return c;
 }
 
-void sl_export_resolve_frame(const sl_export_config *c, const sl_mesh *input,
-                             sl_export_frame *f)
+sl_export_glb sl_export_default_glb(void)
 {
-    const char *hint = input && input->units[0] ? input->units : NULL;
-    snprintf(f->units, sizeof f->units, "%.3s", c->units_to_metres > 0 ? c->units : hint ? hint : "m");
-    f->to_metres = sl_export_unit_metres(f->units);
-    f->units_from = c->units_to_metres > 0 ? "config" : hint ? "header" : "default";
-    char up_hint = input ? input->up_axis : 0;
-    f->up = c->up ? c->up : up_hint ? up_hint : 'y';
-    f->up_from = c->up ? "config" : up_hint ? "header" : "default";
+    sl_export_glb g = {sl_export_default_config().glb, 1.0, 0, NULL, NULL};
+    return g;
+}
+
+/* The input's texture, when it has one and [export] texture is not none (a warning in the
+ * report when it cannot be read). */
+static void open_texture(const sl_export_config *c, const sl_mesh *input, int have_input,
+                         const sl_stage_io *io, sl_export_texture *texture)
+{
+    memset(texture, 0, sizeof *texture);
+    if (!c->texture || !have_input || !sl_scan_has_texture(input))
+        return;
+    char dir[PATH_MAX], why[1600], name[300];
+    sl_scan_directory_of(io->source_path, dir, sizeof dir); /* the input's directory */
+    sl_json_object_begin(io->report, "texture");
+    sl_json_string(io->report, "file", sl_scan_texture_name(input, name, sizeof name));
+    if (sl_export_texture_open(input, dir, texture, why, sizeof why)) {
+        sl_json_u64(io->report, "width", (uint64_t)texture->image.width);
+        sl_json_u64(io->report, "height", (uint64_t)texture->image.height);
+        if (texture->original) {
+            sl_json_string(io->report, "mime_type", texture->original_mime);
+            sl_json_u64(io->report, "image_bytes", (uint64_t)texture->original_size);
+        }
+    } else {
+        sl_json_string(io->report, "warning", why);
+    }
+    sl_json_object_end(io->report);
+}
+
+/* The earlier stages' artifacts the export publishes, found by what they are: the last
+ * level list (the refine stage's) and an LOD model, if any. */
+static int find_inputs(const sl_stage_io *io, const char **list_dir, const char **model_dir,
+                       sl_error *err)
+{
+    *list_dir = *model_dir = NULL;
+    for (const struct sl_stage_dir_entry *u = io->upstream; u && u->stage; u++) {
+        char path[PATH_MAX];
+        if (sl_level_list_present(u->dir))
+            *list_dir = u->dir;
+        if (sl_stage_path(path, u->dir, SL_MODEL_FILE, err) == 0 && access(path, F_OK) == 0)
+            *model_dir = u->dir;
+    }
+    if (!*list_dir)
+        return sl_error_set(err, SL_E_INTERNAL, 0, NULL, "no earlier stage made a level list");
+    return 0;
 }
 
 static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
 {
     const sl_export_config *c = config;
-    /* [lod] method = cluster or segment: that stage's level list instead of an LOD model. */
-    const char *list_method = sl_stage_dir(io, "cluster")   ? "cluster"
-                              : sl_stage_dir(io, "segment") ? "segment"
-                                                            : NULL;
-    const char *list_dir = list_method ? sl_stage_dir(io, list_method) : NULL;
-    char model_path[PATH_MAX], published[PATH_MAX];
-    sl_lod_model model;
-    sl_lod_model_init(&model);
-    int rc = list_dir ? 0 : sl_stage_path(model_path, io->in_dir, SL_MODEL_FILE, err);
-    if (rc == 0 && !list_dir)
-        rc = sl_stage_path(published, io->out_dir, SL_MODEL_FILE, err);
-    if (rc == 0 && !list_dir)
-        rc = sl_lod_model_open(model_path, &model, err);
+    const char *list_dir, *model_dir;
+    int rc = find_inputs(io, &list_dir, &model_dir, err);
     if (rc)
         return rc;
+    if (model_dir) { /* viewers cut any level from it in O(m) */
+        char model_path[PATH_MAX], published[PATH_MAX];
+        rc = sl_stage_path(model_path, model_dir, SL_MODEL_FILE, err);
+        if (rc == 0)
+            rc = sl_stage_path(published, io->out_dir, SL_MODEL_FILE, err);
+        if (rc == 0)
+            rc = sl_link_or_copy(model_path, published, err);
+        if (rc)
+            return rc;
+    }
     /* The input: the surface the fidelity is measured against, and its header's unit
      * and up-axis hints. The range stage already validated it. */
     sl_mesh input;
     sl_mesh_init(&input);
     int have_input = 0, measure = 0;
-    if (c->fidelity || !c->units_to_metres || !c->up || c->texture || c->cap_at_input) {
+    if (c->fidelity || !c->units_to_metres || !c->up || c->texture) {
         sl_error ierr;
         sl_error_init(&ierr);
-        have_input = sl_ply_read(io->source_path, NULL, &input, NULL, NULL, &ierr) == 0;
+        have_input = sl_scan_read(io->source_path, NULL, &input, NULL, NULL, &ierr) == 0;
         /* A point cloud has nothing to compare surfaces with. */
         measure = c->fidelity && have_input && input.triangle_count > 0 &&
                   sl_mesh_check_surface(&input, NULL, &ierr) == 0;
     }
     sl_export_frame frame;
-    sl_export_resolve_frame(c, have_input ? &input : NULL, &frame);
-    sl_json_object_begin(io->report, "frame");
-    sl_json_string(io->report, "units", frame.units);
-    sl_json_string(io->report, "units_from", frame.units_from);
-    sl_json_double(io->report, "to_metres", frame.to_metres);
-    sl_json_string(io->report, "up", frame.up == 'z' ? "z" : "y");
-    sl_json_string(io->report, "up_from", frame.up_from);
-    sl_json_object_end(io->report);
+    sl_export_resolve_frame(c, io->metadata, have_input ? &input : NULL, &frame);
+    sl_export_report_frame(&frame, io);
     sl_export_texture texture;
-    memset(&texture, 0, sizeof texture);
-    if (c->texture && have_input && input.texture_file[0]) {
-        char dir[PATH_MAX], why[1024];
-        snprintf(dir, sizeof dir, "%s", io->source_path);
-        char *slash = strrchr(dir, '/'); /* the PLY's directory */
-        if (!slash)
-            snprintf(dir, sizeof dir, ".");
-        else
-            slash[slash == dir] = '\0';
-        sl_json_object_begin(io->report, "texture");
-        sl_json_string(io->report, "file", input.texture_file);
-        if (sl_export_texture_open(&input, dir, &texture, why, sizeof why)) {
-            sl_json_u64(io->report, "width", (uint64_t)texture.image.width);
-            sl_json_u64(io->report, "height", (uint64_t)texture.image.height);
-        } else {
-            sl_json_string(io->report, "warning", why);
-        }
-        sl_json_object_end(io->report);
-    }
+    open_texture(c, &input, have_input, io, &texture);
     /* Past here the input's surface is read only to measure the levels or to bake its
-     * texture: otherwise it goes now, not after the levels (at 20 M triangles a mesh of
-     * 360 MB was held beside the model and the two levels in flight for nothing). */
-    uint64_t input_triangles = input.triangle_count;
+     * texture: otherwise it goes now, not after the levels. */
     if (!measure && !texture.input)
         sl_mesh_release(&input);
-    if (list_dir) {
-        rc = sl_export_level_list(c, list_method, list_dir, sl_stage_dir(io, "range"),
-                                  measure ? &input : NULL, &frame,
-                                  texture.input ? &texture : NULL, io, err);
-    } else {
-        rc = sl_link_or_copy(model_path, published, err);
-        if (rc == 0)
-            rc = sl_export_levels(c, &model, measure ? &input : NULL,
-                                  c->cap_at_input && have_input ? input_triangles : 0, &frame,
-                                  texture.input ? &texture : NULL, io, err);
-    }
+    rc = sl_export_level_list(c, list_dir, model_dir != NULL, measure ? &input : NULL, &frame,
+                              texture.input ? &texture : NULL, io, err);
     sl_export_texture_close(&texture);
     sl_mesh_release(&input);
-    sl_lod_model_release(&model);
     return rc;
 }
 
 const sl_stage sl_export_stage = {
     .name = "export",
     .methods = SL_METHODS_ALL,
-    .description = "LOD model -> meshes (PLY, GLB), thumbnails, fidelity report (paper 1 3)",
+    .description = "published levels -> meshes (PLY, GLB), thumbnails, fidelity, pages, "
+                   "Voyager scene (paper 1 3)",
     .version = EXPORT_STAGE_VERSION,
     .options = export_options,
     .configure = export_configure,
     .release_config = free,
     .run = export_run,
     .publish = 1,
+    .reads_metadata = 1, /* titles and credit on its pages and scene, the frame */
 };

@@ -1,7 +1,10 @@
 /* Texture atlases for the levels of a textured input (docs/glb.md "Textures").
  *
- * An octree level's vertices are not input vertices, so the input's texture coordinates
- * do not carry over: each level gets its own atlas, baked from the input texture.
+ * A level made of the scan's vertices carries the input's texture coordinates (range and
+ * refine stages): with [export] texture = keep it embeds the input's image as read
+ * (sl_export_texture_keeps). An octree level's vertices are not input vertices, so the
+ * input's texture coordinates do not carry over: such a level gets its own atlas, baked
+ * from the input texture.
  *
  * Charts: one per triangle, two triangles per square cell of c x c texels, cells in rows
  * in triangle order (the level's triangles come in vertex-cache order, so neighbours in
@@ -26,21 +29,72 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/atomicfile.h"
 #include "geometry/mesh_distance.h"
-#include "geometry/ply.h"
+#include "formats/scan_read.h"
+#include "formats/scan_texture.h"
 #include "stages/export/export_internal.h"
 
 #define TEXTURE_MAX_PIXELS (1ull << 28) /* 16k x 16k, as the range stage */
 #define MIN_CELL 6                      /* texels: below this a chart holds (c-4)^2 < 4 */
 
+#define ORIGINAL_MAX_BYTES (1ull << 30) /* a kept image larger than this is baked instead */
+
+/* What glTF core takes (JPEG, PNG), by the bytes' signature; NULL for anything else. */
+static const char *image_mime(const unsigned char *b, size_t n)
+{
+    if (n >= 3 && b[0] == 0xff && b[1] == 0xd8 && b[2] == 0xff)
+        return "image/jpeg";
+    if (n >= 8 && !memcmp(b, "\x89PNG\r\n\x1a\n", 8))
+        return "image/png";
+    return NULL;
+}
+
+/* The texture's encoded bytes as the input has them (levels that keep the input's
+ * texture coordinates embed them unchanged); none when unreadable or not JPEG/PNG. */
+static void read_original(const sl_mesh *input, const char *dir, sl_export_texture *t)
+{
+    if (input->texture_data) {
+        t->original = input->texture_data;
+        t->original_size = (size_t)input->texture_size;
+    } else {
+        char path[4096];
+        char *data = NULL;
+        size_t size = 0;
+        sl_error err;
+        sl_error_init(&err);
+        if (sl_scan_sibling_path(dir, input->texture_file, path, sizeof path) ||
+            sl_read_file(path, ORIGINAL_MAX_BYTES, &data, &size, &err))
+            return;
+        t->original = t->original_owned = data;
+        t->original_size = size;
+    }
+    t->original_mime = image_mime(t->original, t->original_size);
+    if (!t->original_mime) {
+        free(t->original_owned);
+        t->original = t->original_owned = NULL;
+        t->original_size = 0;
+    }
+}
+
+int sl_export_texture_keeps(const sl_export_config *c, const sl_export_texture *t,
+                            const float *texcoords, uint64_t vertex_count)
+{
+    if (c->texture != SL_EXPORT_TEXTURE_KEEP || !t || !t->original || !texcoords)
+        return 0;
+    for (uint64_t i = 0; i < 2 * vertex_count; i++)
+        if (!(texcoords[i] >= 0.0f && texcoords[i] <= 1.0f))
+            return 0;
+    return 1;
+}
+
 int sl_export_texture_open(const sl_mesh *input, const char *dir, sl_export_texture *t,
                            char *why, size_t why_size)
 {
     memset(t, 0, sizeof *t);
-    char path[1024];
     sl_error err;
     sl_error_init(&err);
-    if (!input->texture_file[0]) {
+    if (!sl_scan_has_texture(input)) {
         snprintf(why, why_size, "the input names no texture");
         return 0;
     }
@@ -48,27 +102,19 @@ int sl_export_texture_open(const sl_mesh *input, const char *dir, sl_export_text
         snprintf(why, why_size, "the input has no texture coordinates");
         return 0;
     }
-    if (sl_ply_texture_path(dir, input->texture_file, path, sizeof path)) {
-        snprintf(why, why_size, "texture %.200s: not a name inside the input's directory",
-                 input->texture_file);
-        return 0;
-    }
     if (input->triangle_count == 0 || sl_mesh_check_surface(input, NULL, &err) != 0) {
         snprintf(why, why_size, "the input has no surface to bake from");
         return 0;
     }
-    if (sl_image_read(path, TEXTURE_MAX_PIXELS, &t->image, &err)) {
-        char msg[1400];
-        snprintf(why, why_size, "texture %.200s: %.600s", input->texture_file,
-                 sl_error_format(&err, msg, sizeof msg));
+    if (!sl_scan_texture_read(input, dir, TEXTURE_MAX_PIXELS, &t->image, why, why_size))
         return 0;
-    }
     if (sl_triangle_bvh_build(&t->bvh, input, &err)) {
         sl_image_release(&t->image);
         snprintf(why, why_size, "no memory for the input's triangle tree");
         return 0;
     }
     t->input = input;
+    read_original(input, dir, t);
     return 1;
 }
 
@@ -77,6 +123,7 @@ void sl_export_texture_close(sl_export_texture *t)
     if (t->input) {
         sl_image_release(&t->image);
         sl_triangle_bvh_release(&t->bvh);
+        free(t->original_owned);
     }
     memset(t, 0, sizeof *t);
 }

@@ -9,11 +9,11 @@
 #include <string.h>
 #include <strings.h>
 
-#include "geometry/glb.h"
+#include "formats/glb.h"
 #include "geometry/mesh.h"
 #include "geometry/morph_refine.h"
 #include "geometry/morph_target.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "geometry/raster.h"
 #include "stages/export/export_internal.h"
 
@@ -54,13 +54,6 @@ static void to_gltf_frame(float *pos, float *nrm, uint64_t n, double to_metres, 
             q[1] = q[2], q[2] = -y0;
         }
     }
-}
-
-static sl_export_glb default_glb(void)
-{
-    sl_export_config c = sl_export_default_config();
-    sl_export_glb g = {c.glb, 1.0, 0, NULL, NULL};
-    return g;
 }
 
 /* GLB in meshoptimizer's vertex-cache and vertex-fetch order (same surface, same welds);
@@ -155,12 +148,12 @@ int sl_export_write_mesh(const char *path, const sl_lod_mesh *mesh, const char *
                          const sl_export_glb *glb, sl_glb_stats *stats, sl_error *err)
 {
     const char *ext = extension(path);
-    sl_export_glb defaults = default_glb();
     sl_mesh view = sl_export_mesh_view(mesh);
     if (strcasecmp(ext, "ply") == 0)
         return sl_ply_write(path, &view, err);
     if (strcasecmp(ext, "glb") == 0)
-        return write_glb(path, mesh, extras_json, glb ? glb : &defaults, stats, err);
+        return glb ? write_glb(path, mesh, extras_json, glb, stats, err)
+                   : sl_error_set(err, SL_E_INTERNAL, 0, path, "a GLB written without options");
     if (strcasecmp(ext, "obj") == 0)
         return sl_obj_write(path, &view, NULL, err);
     return sl_error_set(err, SL_E_USAGE, 0, path,

@@ -41,7 +41,7 @@ typedef struct sl_sample_grid {
     const int32_t *coords;  /* 3 * count, leaf-grid vertex coordinates */
     const float *distance;  /* signed distance, world units, < 0 inside */
     const uint8_t *colors;  /* 4 * count RGBA, or NULL */
-    double voxel_size;      /* leaf size, world units */
+    double leaf_size;       /* the leaf cubes' edge, world units */
     double origin[3];       /* world position of grid vertex (0, 0, 0) */
 } sl_sample_grid;
 

@@ -1,5 +1,6 @@
 /* Internals of the octree build, shared by stages/merge/octree_build.c (parents,
- * assembly) and octree_leaves.c (level 0). Not an interface: merge.h is. */
+ * assembly), octree_leaves.c (level 0) and octree_levels.c (what every level does). Not
+ * an interface: merge.h is. */
 #ifndef SCANLOD_STAGES_MERGE_INTERNAL_H
 #define SCANLOD_STAGES_MERGE_INTERNAL_H
 
@@ -40,7 +41,7 @@ typedef struct build_state {
 
 static inline int nomem(build_state *b)
 {
-    return sl_error_set(b->err, SL_E_NOMEM, ENOMEM, NULL, "out of memory building the octree");
+    return sl_error_nomem(b->err, NULL, "out of memory building the octree");
 }
 
 static inline int64_t vertex_index(const level_tables *l, uint32_t x, uint32_t y, uint32_t z)
@@ -55,13 +56,13 @@ static inline int corner_offset(int c, int a)
     return (c >> a) & 1;
 }
 
-int crossings_reserve(build_state *b, uint32_t extra);
-int sort_nodes_morton(build_state *b, sl_octree_node *nodes, size_t count);
-void node_signs(level_tables *l);
-int collect_edges(build_state *b, level_tables *l);
-int node_crossings(build_state *b, level_tables *l);
+int sl_merge_crossings_reserve(build_state *b, uint32_t extra);
+int sl_merge_sort_nodes_morton(build_state *b, sl_octree_node *nodes, size_t count);
+void sl_merge_node_signs(level_tables *l);
+int sl_merge_collect_edges(build_state *b, level_tables *l);
+int sl_merge_node_crossings(build_state *b, level_tables *l);
 
 /* Level 0: leaf cubes, their signs and "simple divide" crossings (octree_leaves.c). */
-int build_leaves(build_state *b, level_tables *l);
+int sl_merge_build_leaves(build_state *b, level_tables *l);
 
 #endif

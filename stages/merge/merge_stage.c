@@ -143,7 +143,7 @@ static int merge_run(const void *config, const sl_stage_io *io, sl_error *err)
     if (rc)
         return rc;
     sl_sample_grid grid = {samples.count, samples.coords, samples.distance, samples.colors,
-                           samples.voxel_size,
+                           samples.leaf_size,
                            {samples.origin[0], samples.origin[1], samples.origin[2]}};
     sl_octree tree;
     rc = sl_octree_build_releasing(&grid, release_samples, &samples, &tree, io->progress, err);

@@ -40,140 +40,6 @@ static void level_release(level_tables *l)
     memset(l, 0, sizeof *l);
 }
 
-int crossings_reserve(build_state *b, uint32_t extra)
-{
-    crossing_table *c = &b->crossings;
-    if ((uint64_t)c->count + extra >= UINT32_MAX)
-        return sl_error_set(b->err, SL_E_LIMIT, 0, NULL, "more than 2^32 crossings");
-    if (c->count + extra <= c->capacity)
-        return 0;
-    uint32_t cap = c->capacity ? c->capacity : 1024;
-    while (cap < c->count + extra)
-        cap = cap > UINT32_MAX / 2 ? UINT32_MAX - 1 : cap * 2;
-    float *p = realloc(c->position, (size_t)cap * 3 * sizeof *p);
-    if (!p)
-        return nomem(b);
-    c->position = p;
-    if (b->coloured) {
-        uint8_t *col = realloc(c->color, (size_t)cap * 4);
-        if (!col)
-            return nomem(b);
-        c->color = col;
-    }
-    c->capacity = cap;
-    return 0;
-}
-
-/* Sorts `count` nodes (x, y, z filled) into Morton order. */
-int sort_nodes_morton(build_state *b, sl_octree_node *nodes, size_t count)
-{
-    sl_key_pair *pairs = malloc(count * sizeof *pairs);
-    sl_octree_node *copy = malloc(count * sizeof *copy);
-    if (!pairs || !copy) {
-        free(pairs);
-        free(copy);
-        return nomem(b);
-    }
-    for (size_t i = 0; i < count; i++) {
-        pairs[i].key = sl_morton3((uint32_t)nodes[i].x, (uint32_t)nodes[i].y, (uint32_t)nodes[i].z);
-        pairs[i].value = i;
-    }
-    int rc = sl_sort_pairs(pairs, count, 3 * SL_COORD_BITS);
-    if (rc == 0) {
-        memcpy(copy, nodes, count * sizeof *copy);
-        for (size_t i = 0; i < count; i++)
-            nodes[i] = copy[pairs[i].value];
-    }
-    free(pairs);
-    free(copy);
-    return rc ? nomem(b) : 0;
-}
-
-/* Corner signs of every node from the level's vertex table. */
-void node_signs(level_tables *l)
-{
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < l->ncount; i++) {
-        sl_octree_node *n = &l->nodes[i];
-        uint8_t inside = 0;
-        for (int c = 0; c < 8; c++) {
-            int64_t v = vertex_index(l, (uint32_t)(n->x + corner_offset(c, 0)),
-                                     (uint32_t)(n->y + corner_offset(c, 1)),
-                                     (uint32_t)(n->z + corner_offset(c, 2)));
-            if (v >= 0 && l->vinside[v])
-                inside |= (uint8_t)(1u << c);
-        }
-        n->inside = inside;
-        uint16_t mask = 0;
-        for (int e = 0; e < 12; e++)
-            if (((inside >> sl_mc_edge_c0(e)) ^ (inside >> sl_mc_edge_c1(e))) & 1)
-                mask |= (uint16_t)(1u << e);
-        n->edge_mask = mask;
-    }
-}
-
-/* Keys of every edge with a crossing, over all nodes of the level, sorted and unique. */
-int collect_edges(build_state *b, level_tables *l)
-{
-    size_t total = 0;
-    for (size_t i = 0; i < l->ncount; i++)
-        total += (size_t)__builtin_popcount(l->nodes[i].edge_mask);
-    uint64_t *keys = malloc((total ? total : 1) * sizeof *keys);
-    if (!keys)
-        return nomem(b);
-    size_t k = 0;
-    for (size_t i = 0; i < l->ncount; i++) {
-        const sl_octree_node *n = &l->nodes[i];
-        for (int e = 0; e < 12; e++) {
-            if (!(n->edge_mask >> e & 1))
-                continue;
-            int c0 = sl_mc_edge_c0(e);
-            keys[k++] = sl_edge_key(sl_vertex_key((uint32_t)(n->x + corner_offset(c0, 0)),
-                                                  (uint32_t)(n->y + corner_offset(c0, 1)),
-                                                  (uint32_t)(n->z + corner_offset(c0, 2))),
-                                    sl_mc_edge_axis(e));
-        }
-    }
-    if (sl_sort_keys(keys, total, 3 * SL_COORD_BITS + 2) != 0) {
-        free(keys);
-        return nomem(b);
-    }
-    l->ecount = sl_unique_keys(keys, total);
-    l->ekeys = keys;
-    l->ecrossing = malloc((l->ecount ? l->ecount : 1) * sizeof *l->ecrossing);
-    return l->ecrossing ? 0 : nomem(b);
-}
-
-/* Per node, the crossing id of each edge (from the level's edge table). */
-int node_crossings(build_state *b, level_tables *l)
-{
-    l->ncross = malloc((l->ncount ? l->ncount : 1) * 12 * sizeof *l->ncross);
-    if (!l->ncross)
-        return nomem(b);
-#pragma omp parallel for schedule(static)
-    for (size_t i = 0; i < l->ncount; i++) {
-        const sl_octree_node *n = &l->nodes[i];
-        for (int e = 0; e < 12; e++) {
-            uint32_t id = SL_OCTREE_NONE;
-            if (n->edge_mask >> e & 1) {
-                int c0 = sl_mc_edge_c0(e);
-                uint64_t key = sl_edge_key(
-                    sl_vertex_key((uint32_t)(n->x + corner_offset(c0, 0)),
-                                  (uint32_t)(n->y + corner_offset(c0, 1)),
-                                  (uint32_t)(n->z + corner_offset(c0, 2))),
-                    sl_mc_edge_axis(e));
-                int64_t at = sl_find_key(l->ekeys, l->ecount, key);
-                if (at >= 0)
-                    id = l->ecrossing[at];
-            }
-            l->ncross[12 * i + (size_t)e] = id;
-        }
-    }
-    return 0;
-}
-
-/* ---- level l + 1 from level l ----------------------------------------------------- */
-
 static int build_parent_nodes(build_state *b, const level_tables *child, level_tables *l)
 {
     l->level = child->level + 1;
@@ -312,13 +178,13 @@ static int parent_crossings(build_state *b, const level_tables *child, level_tab
     size_t fallbacks = 0;
     for (size_t i = 0; i < l->ecount; i++)
         fallbacks += fallback_half[i] != 0;
-    int rc = crossings_reserve(b, (uint32_t)fallbacks);
+    int rc = sl_merge_crossings_reserve(b, (uint32_t)fallbacks);
     if (rc) {
         free(fallback_half);
         return rc;
     }
     crossing_table *ct = &b->crossings;
-    double size = b->samples->voxel_size * (double)(1u << l->level);
+    double size = b->samples->leaf_size * (double)(1u << l->level);
     for (size_t i = 0; i < l->ecount; i++) { /* appended in key order: deterministic */
         if (!fallback_half[i])
             continue;
@@ -348,13 +214,13 @@ static int build_parent(build_state *b, const level_tables *child, level_tables 
     if (rc == 0)
         rc = parent_signs(b, child, l);
     if (rc == 0) {
-        node_signs(l);
-        rc = collect_edges(b, l);
+        sl_merge_node_signs(l);
+        rc = sl_merge_collect_edges(b, l);
     }
     if (rc == 0)
         rc = parent_crossings(b, child, l);
     if (rc == 0)
-        rc = node_crossings(b, l);
+        rc = sl_merge_node_crossings(b, l);
     return rc;
 }
 
@@ -459,7 +325,7 @@ static int assemble(build_state *b, level_tables *levels, uint32_t depth, sl_oct
     out->crossing_color = b->crossings.color;
     b->crossings.position = NULL;
     b->crossings.color = NULL;
-    out->leaf_size = b->samples->voxel_size;
+    out->leaf_size = b->samples->leaf_size;
     memcpy(out->origin, b->origin, sizeof out->origin);
     out->stats = b->stats;
     return sl_octree_index(out) ? nomem(b) : 0;
@@ -470,9 +336,9 @@ static int check_samples(build_state *b)
     const sl_sample_grid *s = b->samples;
     if (s->count == 0)
         return sl_error_set(b->err, SL_E_BADINPUT, 0, NULL, "no samples: nothing to mesh");
-    if (!(s->voxel_size > 0) || !isfinite(s->voxel_size))
+    if (!(s->leaf_size > 0) || !isfinite(s->leaf_size))
         return sl_error_set(b->err, SL_E_CORRUPT, 0, NULL, "leaf size %g is not positive",
-                            s->voxel_size);
+                            s->leaf_size);
     int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
     for (uint64_t i = 0; i < s->count; i++)
         for (int a = 0; a < 3; a++) {
@@ -486,7 +352,7 @@ static int check_samples(build_state *b)
                                 "samples span %lld leaf cells, more than the octree's %u",
                                 (long long)(hi[a] - lo[a]), SL_COORD_LIMIT / 2);
         b->shift[a] = -lo[a]; /* the octree grid starts at the lowest sample */
-        b->origin[a] = s->origin[a] - (double)b->shift[a] * s->voxel_size;
+        b->origin[a] = s->origin[a] - (double)b->shift[a] * s->leaf_size;
     }
     return 0;
 }
@@ -502,7 +368,7 @@ static int no_surface(const build_state *b, const level_tables *leaves)
                         "the surface produced no triangles at leaf size %g: no leaf cube has "
                         "corners on both sides of it (%zu of %zu samples inside); set a "
                         "smaller [octree] leaf_size or a larger [octree] depth",
-                        b->samples->voxel_size, inside, leaves->vcount);
+                        b->samples->leaf_size, inside, leaves->vcount);
 }
 
 int sl_octree_build(const sl_sample_grid *samples, sl_octree *out, sl_progress *progress,
@@ -524,7 +390,7 @@ int sl_octree_build_releasing(const sl_sample_grid *samples, void (*release)(voi
     memset(levels, 0, sizeof levels);
     int rc = check_samples(&b);
     if (rc == 0)
-        rc = build_leaves(&b, &levels[0]);
+        rc = sl_merge_build_leaves(&b, &levels[0]);
     if (release) /* the parents read only the level below them */
         release(owner);
     if (rc == 0 && levels[0].ncount == 0)

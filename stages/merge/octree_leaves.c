@@ -48,7 +48,7 @@ static int leaf_vertices(build_state *b, level_tables *l, uint32_t **sample_of)
     return 0;
 }
 
-int build_leaves(build_state *b, level_tables *l)
+int sl_merge_build_leaves(build_state *b, level_tables *l)
 {
     const sl_sample_grid *s = b->samples;
     uint32_t *sample_of = NULL;
@@ -91,13 +91,13 @@ int build_leaves(build_state *b, level_tables *l)
         k++;
     }
     free(is_leaf);
-    rc = sort_nodes_morton(b, l->nodes, l->ncount);
+    rc = sl_merge_sort_nodes_morton(b, l->nodes, l->ncount);
     if (rc == 0) {
-        node_signs(l);
-        rc = collect_edges(b, l);
+        sl_merge_node_signs(l);
+        rc = sl_merge_collect_edges(b, l);
     }
     if (rc == 0)
-        rc = crossings_reserve(b, (uint32_t)l->ecount);
+        rc = sl_merge_crossings_reserve(b, (uint32_t)l->ecount);
     if (rc) {
         free(sample_of);
         return rc;
@@ -124,7 +124,7 @@ int build_leaves(build_state *b, level_tables *l)
         uint32_t id = base + (uint32_t)i;
         for (int a = 0; a < 3; a++)
             ct->position[3 * (size_t)id + a] =
-                (float)(b->origin[a] + ((double)p[a] + (a == axis ? t : 0.0)) * s->voxel_size);
+                (float)(b->origin[a] + ((double)p[a] + (a == axis ? t : 0.0)) * s->leaf_size);
         if (ct->color)
             for (int k = 0; k < 4; k++)
                 ct->color[4 * (size_t)id + k] = (uint8_t)lround(
@@ -134,6 +134,6 @@ int build_leaves(build_state *b, level_tables *l)
     }
     ct->count += (uint32_t)l->ecount;
     free(sample_of);
-    return node_crossings(b, l);
+    return sl_merge_node_crossings(b, l);
 }
 

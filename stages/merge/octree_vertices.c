@@ -40,61 +40,6 @@
 #include "stages/merge/merge.h"
 #include "stages/merge/vertices_internal.h"
 
-static int nomem(sl_error *err)
-{
-    return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory placing vertices");
-}
-
-int sl_vertices_node_loops(const sl_octree_node *n)
-{
-    return sl_dual_uniform_table()[n->inside].loops;
-}
-
-/* Node corner in leaf-grid units. */
-void sl_vertices_node_corner(const sl_octree_node *n, double c[3])
-{
-    double s = (double)(1u << n->level);
-    c[0] = n->x * s;
-    c[1] = n->y * s;
-    c[2] = n->z * s;
-}
-
-/* A crossing's position in grid units relative to `corner`. */
-void sl_vertices_crossing_local(const sl_octree *t, uint32_t id, const double corner[3],
-                                double p[3])
-{
-    for (int a = 0; a < 3; a++)
-        p[a] = (t->crossing_position[3 * (size_t)id + a] - t->origin[a]) / t->leaf_size - corner[a];
-}
-
-/* The loop of node n nearest to point p (grid units relative to the node's corner): the
- * loop whose fan (from its first crossing) comes closest. */
-int sl_vertices_nearest_loop(const sl_octree *t, const sl_octree_node *n, const double p[3])
-{
-    const sl_mc_triangles *u = &sl_dual_uniform_table()[n->inside];
-    if (u->loops < 2)
-        return 0;
-    double corner[3];
-    sl_vertices_node_corner(n, corner);
-    int best = 0;
-    double best_d = DBL_MAX;
-    for (int l = 0; l < u->loops; l++) {
-        double v0[3], v1[3], v2[3], q[3];
-        sl_vertices_crossing_local(t, sl_octree_crossing(t, n, u->loop_points[l][0]), corner, v0);
-        sl_vertices_crossing_local(t, sl_octree_crossing(t, n, u->loop_points[l][1]), corner, v2);
-        for (int k = 2; k < u->loop_sizes[l]; k++) {
-            memcpy(v1, v2, sizeof v1);
-            sl_vertices_crossing_local(t, sl_octree_crossing(t, n, u->loop_points[l][k]), corner, v2);
-            double d = sl_closest_point_triangle(p, v0, v1, v2, q);
-            if (d < best_d) {
-                best_d = d;
-                best = l;
-            }
-        }
-    }
-    return best;
-}
-
 /* ---- levels -------------------------------------------------------------------------- */
 
 /* Slots for the run of `count` nodes from `node0` (one level's, or a brick's part of it). */
@@ -280,7 +225,7 @@ static int run_levels(const sl_octree *t, const sl_surface *s, double tau, uint3
     memset(&cur, 0, sizeof cur);
     if (slots_init(t, t->level_first[b], t->level_count[b], &cur)) {
         slots_release(&cur);
-        return nomem(err);
+        return sl_error_nomem(err, NULL, "out of memory placing vertices");
     }
     int rc = 0;
     if (b == 0) { /* one node: a brick of its own */
@@ -295,7 +240,7 @@ static int run_levels(const sl_octree *t, const sl_surface *s, double tau, uint3
             for (uint32_t k = 0; k < vb.count; k++)
                 failed |= run_brick(t, s, &vb, k, tau, &cur, all) != 0;
             if (failed)
-                rc = nomem(err);
+                rc = sl_error_nomem(err, NULL, "out of memory placing vertices");
         }
         sl_vertex_bricks_release(&vb);
     }
@@ -313,7 +258,7 @@ static int run_levels(const sl_octree *t, const sl_surface *s, double tau, uint3
         if (level == t->depth)
             break;
         if (slots_init(t, t->level_first[level + 1], t->level_count[level + 1], &cur))
-            rc = nomem(err);
+            rc = sl_error_nomem(err, NULL, "out of memory placing vertices");
     }
     slots_release(&child);
     slots_release(&cur);
@@ -398,7 +343,7 @@ int sl_octree_vertices(sl_octree *t, const sl_surface *s, double tau, uint32_t b
         return sl_error_set(err, SL_E_INTERNAL, 0, NULL, "vertices need triangles or normals");
     all_slots all = {malloc(((size_t)t->node_count + 1) * sizeof(uint32_t)), NULL, NULL, NULL,
                      NULL};
-    int rc = all.first ? 0 : nomem(err);
+    int rc = all.first ? 0 : sl_error_nomem(err, NULL, "out of memory placing vertices");
     if (rc == 0) {
         uint64_t k = 0;
         for (uint32_t i = 0; i < t->node_count; i++) {
@@ -413,12 +358,12 @@ int sl_octree_vertices(sl_octree *t, const sl_surface *s, double tau, uint32_t b
         all.color = t->crossing_color ? malloc((k ? k : 1) * 4) : NULL;
         if (k >= UINT32_MAX || !all.position || !all.area || !all.error ||
             (t->crossing_color && !all.color))
-            rc = nomem(err);
+            rc = sl_error_nomem(err, NULL, "out of memory placing vertices");
     }
     if (rc == 0)
         rc = run_levels(t, s, tau, brick_level, &all, err);
     if (rc == 0 && write_output(t, &all, s->open))
-        rc = nomem(err);
+        rc = sl_error_nomem(err, NULL, "out of memory placing vertices");
     free(all.first);
     free(all.position);
     free(all.area);

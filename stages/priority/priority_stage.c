@@ -48,29 +48,24 @@ int sl_priority_write(const char *path, const sl_priority *p, uint32_t stage_ver
                              (int)(sizeof parts / sizeof parts[0]), err);
 }
 
-static int corrupt(sl_error *err, const char *path, const char *what)
-{
-    return sl_error_set(err, SL_E_CORRUPT, 0, path, "invalid priority file: %s", what);
-}
-
 /* Every node's mask and base against the links held (the leaves' masks are 0), the
  * indices against the node count. */
 static int validate(const sl_priority *p, const sl_octree *t, const char *path, sl_error *err)
 {
     for (uint32_t i = 0; i < p->expansion_count; i++)
         if (p->lod_array[i] >= t->node_count || !t->nodes[p->lod_array[i]].child_mask)
-            return corrupt(err, path, "LOD array entry is not an internal node");
+            return sl_error_corrupt(err, path, "invalid priority file: LOD array entry is not an internal node");
     for (uint32_t i = 0; i < p->node_count; i++) {
         uint64_t count = (uint64_t)__builtin_popcount(p->neighbours.mask[i] & 0x7ffffff);
         if ((p->neighbours.mask[i] >> 13 & 1) || p->neighbours.mask[i] >> 27 ||
             (uint64_t)p->neighbours.base[i] + count > p->neighbours.count)
-            return corrupt(err, path, "neighbour table out of range");
+            return sl_error_corrupt(err, path, "invalid priority file: neighbour table out of range");
         if (!isfinite(p->area_difference[i]) || !isfinite(p->node_error[i]))
-            return corrupt(err, path, "non-finite metric");
+            return sl_error_corrupt(err, path, "invalid priority file: non-finite metric");
     }
     for (uint64_t i = 0; i < p->neighbours.count; i++)
         if (p->neighbours.index[i] >= t->node_count)
-            return corrupt(err, path, "neighbour index out of range");
+            return sl_error_corrupt(err, path, "invalid priority file: neighbour index out of range");
     return 0;
 }
 
@@ -95,7 +90,7 @@ int sl_priority_read(const char *path, const sl_octree *t, sl_priority *out, sl_
     const unsigned char *p = body;
     if (size < PRIORITY_HEADER) {
         free(body);
-        return corrupt(err, path, "truncated header");
+        return sl_error_corrupt(err, path, "invalid priority file: truncated header");
     }
     out->node_count = sl_get_u32(p);
     out->expansion_count = sl_get_u32(p + 4);
@@ -107,7 +102,7 @@ int sl_priority_read(const char *path, const sl_octree *t, sl_priority *out, sl_
         size != PRIORITY_HEADER +
                     4 * ((uint64_t)out->expansion_count + 4 * n + out->neighbours.count)) {
         free(body);
-        return corrupt(err, path, "counts do not match the octree or the file size");
+        return sl_error_corrupt(err, path, "invalid priority file: counts do not match the octree or the file size");
     }
     const unsigned char *at = p + PRIORITY_HEADER;
     out->lod_array = take(&at, (uint64_t)out->expansion_count * 4);

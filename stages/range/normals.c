@@ -1,5 +1,5 @@
 /* Point normals from faces: paper 1 section 4 ("the normal vectors are calculated from
- * neighbor triangles' normal"), area weighted (ARCHITECTURE section 5).
+ * neighbor triangles' normal"), area weighted (docs/range-stage.md, "Decisions").
  *
  * The unnormalised cross product (b - a) x (c - a) of a triangle is its normal scaled by
  * twice its area, so summing it over a point's triangles is the area-weighted mean.

@@ -3,7 +3,8 @@
  *
  * Body, little-endian:
  *   0   u64  count
- *   8   u32  flags (bit 0: colours present; other bits must be 0)
+ *   8   u32  flags (bit 0: colours present; bit 1: texture coordinates present; other
+ *            bits must be 0)
  *   12  6xf32 bbox min xyz, max xyz
  *   36  f64  mean_spacing
  *   44  u32  normal_source (enum sl_normal_source)
@@ -11,11 +12,13 @@
  *   56  f32  positions[3 * count]
  *       f32  normals[3 * count]
  *       u8   colours[4 * count] RGBA (only with flag bit 0)
+ *       f32  texcoords[2 * count] u, v as the input's, v up (only with flag bit 1)
  *       u32  triangles[3 * triangle_count], point indices, wound so that their normals
  *            face the same way as the points' (outwards on a closed mesh)
  * The reader checks that the body size is exactly what the counts and flags imply
  * (overflow-checked) before it allocates anything, and every triangle index.
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -25,6 +28,7 @@
 #define POINTSET_MAGIC "SLPOINTS"
 #define POINTSET_HEAD 56u
 #define POINTSET_HAS_COLORS 1u
+#define POINTSET_HAS_TEXCOORDS 2u
 #define POINTSET_MAX_BODY (1ull << 40)
 
 static int host_is_little_endian(void)
@@ -65,9 +69,9 @@ static const void *le_words(const void *v, uint64_t n, unsigned char **copy)
     return *copy;
 }
 
-static uint64_t body_size(uint64_t count, int colors, uint64_t triangles)
+static uint64_t per_point(uint32_t flags)
 {
-    return POINTSET_HEAD + count * (24u + (colors ? 4u : 0u)) + 12u * triangles;
+    return 24u + (flags & POINTSET_HAS_COLORS ? 4u : 0u) + (flags & POINTSET_HAS_TEXCOORDS ? 8u : 0u);
 }
 
 int sl_pointset_write(const char *path, const sl_pointset *ps, sl_error *err)
@@ -75,7 +79,8 @@ int sl_pointset_write(const char *path, const sl_pointset *ps, sl_error *err)
     int colors = ps->colors != NULL;
     unsigned char head[POINTSET_HEAD];
     sl_put_u64(head, ps->count);
-    sl_put_u32(head + 8, colors ? POINTSET_HAS_COLORS : 0u);
+    sl_put_u32(head + 8, (colors ? POINTSET_HAS_COLORS : 0u) |
+                             (ps->texcoords ? POINTSET_HAS_TEXCOORDS : 0u));
     for (int k = 0; k < 3; k++) {
         put_f32(head + 12 + 4 * k, ps->bbox_min[k]);
         put_f32(head + 24 + 4 * k, ps->bbox_max[k]);
@@ -86,54 +91,52 @@ int sl_pointset_write(const char *path, const sl_pointset *ps, sl_error *err)
     sl_put_u32(head + 44, ps->normal_source);
     sl_put_u64(head + 48, ps->triangle_count);
 
-    unsigned char *pos_copy, *nrm_copy, *tri_copy;
+    unsigned char *pos_copy, *nrm_copy, *tri_copy, *uv_copy = NULL;
     const void *pos = le_words(ps->positions, 3 * ps->count, &pos_copy);
     const void *nrm = le_words(ps->normals, 3 * ps->count, &nrm_copy);
     const void *tri = le_words(ps->triangles, 3 * ps->triangle_count, &tri_copy);
+    const void *uv = ps->texcoords ? le_words(ps->texcoords, 2 * ps->count, &uv_copy) : NULL;
     int rc;
-    if (!pos || !nrm || (ps->triangle_count && !tri)) {
+    if (!pos || !nrm || (ps->triangle_count && !tri) || (ps->texcoords && !uv)) {
         rc = sl_error_set(err, SL_E_NOMEM, 0, path, "out of memory");
     } else {
-        sl_artifact_part parts[5] = {
+        sl_artifact_part parts[6] = {
             {head, sizeof head},
             {pos, (size_t)(12 * ps->count)},
             {nrm, (size_t)(12 * ps->count)},
             {ps->colors, colors ? (size_t)(4 * ps->count) : 0},
+            {uv, uv ? (size_t)(8 * ps->count) : 0},
             {tri, (size_t)(12 * ps->triangle_count)},
         };
         rc = sl_artifact_write(path, POINTSET_MAGIC, SL_POINTSET_FORMAT_VERSION,
-                               sl_range_stage.version, parts, 5, err);
+                               sl_range_stage.version, parts, 6, err);
     }
+    free(uv_copy);
     free(pos_copy);
     free(nrm_copy);
     free(tri_copy);
     return rc;
 }
 
-static int corrupt(sl_error *err, const char *path, const char *what)
-{
-    return sl_error_set(err, SL_E_CORRUPT, 0, path, "point set: %s", what);
-}
-
-/* Checks the fixed head against the body size; OUT: count, colors, triangles. */
+/* Checks the fixed head against the body size; OUT: count, flags, triangles. */
 static int check_head(const unsigned char *body, uint64_t size, const char *path,
-                      uint64_t *count, int *colors, uint64_t *triangles, sl_error *err)
+                      uint64_t *count, uint32_t *flags_out, uint64_t *triangles, sl_error *err)
 {
     if (size < POINTSET_HEAD)
-        return corrupt(err, path, "body shorter than its header");
+        return sl_error_corrupt(err, path, "point set: body shorter than its header");
     uint64_t n = sl_get_u64(body);
     uint32_t flags = sl_get_u32(body + 8);
-    if (flags & ~POINTSET_HAS_COLORS)
-        return corrupt(err, path, "unknown flags");
-    *colors = (flags & POINTSET_HAS_COLORS) != 0;
-    uint64_t per_point = 24u + (*colors ? 4u : 0u), t = sl_get_u64(body + 48);
-    if (n > (size - POINTSET_HEAD) / per_point ||
-        t > (size - POINTSET_HEAD - n * per_point) / 12u || body_size(n, *colors, t) != size)
-        return corrupt(err, path, "point or triangle count disagrees with the body size");
+    if (flags & ~(POINTSET_HAS_COLORS | POINTSET_HAS_TEXCOORDS))
+        return sl_error_corrupt(err, path, "point set: unknown flags");
+    *flags_out = flags;
+    uint64_t each = per_point(flags), t = sl_get_u64(body + 48);
+    if (n > (size - POINTSET_HEAD) / each ||
+        t > (size - POINTSET_HEAD - n * each) / 12u || POINTSET_HEAD + n * each + 12u * t != size)
+        return sl_error_corrupt(err, path, "point set: point or triangle count disagrees with the body size");
     if (t && n > UINT32_MAX)
-        return corrupt(err, path, "triangles over more than 2^32 points");
+        return sl_error_corrupt(err, path, "point set: triangles over more than 2^32 points");
     if (sl_get_u32(body + 44) > SL_NORMALS_RANGE_GRID)
-        return corrupt(err, path, "unknown normal source");
+        return sl_error_corrupt(err, path, "point set: unknown normal source");
     *count = n;
     *triangles = t;
     return SL_OK;
@@ -150,8 +153,8 @@ int sl_pointset_read(const char *path, sl_pointset *out, sl_error *err)
         return rc;
     const unsigned char *body = raw;
     uint64_t n = 0, t = 0;
-    int colors = 0;
-    if ((rc = check_head(body, size, path, &n, &colors, &t, err)) != SL_OK) {
+    uint32_t flags = 0;
+    if ((rc = check_head(body, size, path, &n, &flags, &t, err)) != SL_OK) {
         free(raw);
         return rc;
     }
@@ -165,10 +168,13 @@ int sl_pointset_read(const char *path, sl_pointset *out, sl_error *err)
     out->normal_source = sl_get_u32(body + 44);
     out->positions = malloc(12 * n + 1);
     out->normals = malloc(12 * n + 1);
+    int colors = (flags & POINTSET_HAS_COLORS) != 0, uv = (flags & POINTSET_HAS_TEXCOORDS) != 0;
     out->colors = colors ? malloc(4 * n + 1) : NULL;
+    out->texcoords = uv ? malloc(8 * n + 1) : NULL;
     out->triangle_count = t;
     out->triangles = t ? malloc(12 * t) : NULL;
-    if (!out->positions || !out->normals || (colors && !out->colors) || (t && !out->triangles)) {
+    if (!out->positions || !out->normals || (colors && !out->colors) || (uv && !out->texcoords) ||
+        (t && !out->triangles)) {
         free(raw);
         sl_pointset_release(out);
         return sl_error_set(err, SL_E_NOMEM, 0, path, "out of memory (%llu points)",
@@ -184,12 +190,19 @@ int sl_pointset_read(const char *path, sl_pointset *out, sl_error *err)
     if (colors)
         memcpy(out->colors, p, 4 * n);
     p += colors ? 4 * n : 0;
+    for (uint64_t i = 0; uv && i < 2 * n; i++)
+        if (!isfinite(out->texcoords[i] = get_f32(p + 4 * i))) {
+            free(raw);
+            sl_pointset_release(out);
+            return sl_error_corrupt(err, path, "point set: non-finite texture coordinate");
+        }
+    p += uv ? 8 * n : 0;
     for (uint64_t i = 0; i < 3 * t; i++) {
         out->triangles[i] = sl_get_u32(p + 4 * i);
         if (out->triangles[i] >= n) {
             free(raw);
             sl_pointset_release(out);
-            return corrupt(err, path, "triangle index out of range");
+            return sl_error_corrupt(err, path, "point set: triangle index out of range");
         }
     }
     free(raw);
@@ -203,6 +216,7 @@ void sl_pointset_release(sl_pointset *ps)
     free(ps->positions);
     free(ps->normals);
     free(ps->colors);
+    free(ps->texcoords);
     free(ps->triangles);
     memset(ps, 0, sizeof *ps);
 }

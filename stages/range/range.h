@@ -1,6 +1,7 @@
-/* range stage (paper 1, section 4 "range data from PLY"; ARCHITECTURE section 5 "Points").
+/* range stage (paper 1, section 4 "range data from PLY"; docs/range-stage.md, "Decisions").
  *
- * PLY (+ texture image) -> an oriented, optionally coloured point set:
+ * A scan (PLY, OBJ + MTL, STL, OFF, XYZ/PTS, glTF/GLB through formats/scan_read.h; + its
+ * texture image) -> an oriented, optionally coloured point set:
  *   - meshes: vertices that faces reference, exact-duplicate positions welded first,
  *     degenerate faces and non-finite coordinates dropped; normals are the area-weighted
  *     mean of adjacent face normals (paper) or the file's own ([range] normals = file);
@@ -9,8 +10,8 @@
  *   - point clouds without faces: normals by local PCA over the k nearest neighbours,
  *     oriented towards the scanner viewpoint when the file states one, else by
  *     propagation over a minimum spanning tree of the kNN graph;
- *   - colours from the vertex colours, else sampled from the texture image through
- *     OpenImageIO;
+ *   - colours from the vertex colours, else sampled from the texture image (a file, or
+ *     embedded in a GLB) through OpenImageIO;
  *   - optionally ([range] range_images = true) six range images (depth + normal, one per
  *     axis direction) written as EXR.
  * Output: `points.slpts` (format in docs/formats.md) in the artifact directory.
@@ -23,11 +24,11 @@
 #include "core/error.h"
 #include "core/progress.h"
 #include "geometry/mesh.h"
-#include "geometry/ply.h"
+#include "formats/scan_read.h"
 #include "pipeline/stage.h"
 
 #define SL_POINTSET_FILE "points.slpts"
-#define SL_POINTSET_FORMAT_VERSION 2u
+#define SL_POINTSET_FORMAT_VERSION 3u
 
 extern const sl_stage sl_range_stage;
 
@@ -37,6 +38,8 @@ typedef struct sl_pointset {
     float *positions; /* 3 * count, world */
     float *normals;   /* 3 * count, unit length */
     uint8_t *colors;  /* 4 * count RGBA, or NULL */
+    float *texcoords; /* 2 * count (u, v as the input's, v up): a textured input whose
+                         points each have one texture coordinate, else NULL */
     float bbox_min[3], bbox_max[3];
     double mean_spacing; /* mean nearest-neighbour distance (world units) */
     uint32_t normal_source; /* enum sl_normal_source */
@@ -62,7 +65,7 @@ typedef struct sl_range_config {
                                       median grid-neighbour distance are skipped */
     int range_images;              /* also write six axis-aligned range images (EXR) */
     int range_image_size;          /* their width = height, pixels */
-    sl_ply_limits limits;          /* PLY reader limits */
+    sl_scan_limits limits;         /* the scan readers' limits */
     double max_nonfinite_fraction; /* above this fraction of non-finite vertices: bad input */
     int colors;                    /* 0: none; 1: auto (vertex colours, else texture) */
 } sl_range_config;
@@ -94,6 +97,8 @@ typedef struct sl_range_counts {
     uint64_t colors_unsampled;     /* points that got no colour sample (grey) */
     uint32_t normal_source;        /* enum sl_normal_source */
     const char *color_source;      /* "none", "vertex", "texture" */
+    const char *texcoord_source;   /* "none", "vertices", "corners": the points' texcoords */
+    uint64_t texcoord_seams;       /* corners whose point has another texcoord (or none) */
 } sl_range_counts;
 
 /* The stage's work on an in-memory mesh: `mesh` is consumed (its arrays may be changed or

@@ -64,6 +64,12 @@ int range_pca_normals(const sl_kdtree *tree, const float *positions, uint64_t po
 /* Colours per point (texture.c): vertex colours, else texture samples. OUT: *colors
  * (malloc'd 4 * point_count, or NULL when there is no colour), counts->color_source,
  * texture_warnings, colors_unsampled. */
+/* One texture coordinate per point (u, v as the input's, v up) when the input has a
+ * texture and every point's vertices or triangle corners agree on it (texture.c); else
+ * NULL, with counts->texcoord_seams the corners that disagree. 0 or SL_E_NOMEM. */
+int range_texcoords(const sl_mesh *mesh, const range_clean *clean, float **texcoords,
+                    sl_range_counts *counts, sl_error *err);
+
 int range_colors(const sl_mesh *mesh, const range_clean *clean, const char *texture_dir,
                  int enabled, uint8_t **colors, sl_range_counts *counts, sl_error *err);
 

@@ -1,4 +1,4 @@
-/* The range stage's work on one in-memory mesh (paper 1 section 4; ARCHITECTURE section 5
+/* The range stage's work on one in-memory mesh (paper 1 section 4; docs/range-stage.md, "Decisions"
  * "Points"): grid -> triangles for raw scans, clean and weld, normals (faces, file or PCA),
  * colours, bounding box and spacing. Each step lives in its own file; this one decides
  * which steps apply and what is bad input.
@@ -173,6 +173,7 @@ int sl_range_points_from_mesh(const sl_range_config *cfg, sl_mesh *mesh, const c
     counts->input_faces = mesh->triangle_count;
     counts->polygons_triangulated = mesh->stats.polygons_triangulated;
     counts->color_source = "none";
+    counts->texcoord_source = "none";
     int rc, from_grid = 0;
     if (mesh->triangle_count == 0 && mesh->grid_index && mesh->grid_cols && mesh->grid_rows) {
         if ((rc = range_grid_triangulate(mesh, cfg->grid_max_edge_factor, counts, progress,
@@ -209,6 +210,8 @@ int sl_range_points_from_mesh(const sl_range_config *cfg, sl_mesh *mesh, const c
     if ((rc = compute_normals(cfg, mesh, &clean, tree, out, from_grid, counts, progress, err)))
         goto done;
     if ((rc = range_colors(mesh, &clean, texture_dir, cfg->colors, &out->colors, counts, err)))
+        goto done;
+    if ((rc = range_texcoords(mesh, &clean, &out->texcoords, counts, err)))
         goto done;
     if ((rc = range_mean_spacing(tree, out->positions, n, &out->mean_spacing, err)))
         goto done;

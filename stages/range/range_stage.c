@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry/ply.h"
+#include "formats/scan_read.h"
 #include "stages/range/range.h"
 
 static const sl_option range_options[] = {
@@ -25,17 +25,20 @@ static const sl_option range_options[] = {
     {"range", "range_image_size", SL_OPT_INT, "512", 16, 8192, NULL,
      "Width and height in pixels of each range image."},
     {"range", "max_vertices", SL_OPT_INT, "2147483648", 1, 4294967294.0, NULL,
-     "Inputs declaring more vertices are refused (limit error, item quarantined)."},
+     "Inputs declaring more vertices are refused (limit error, item quarantined); any input "
+     "format (a glTF scene counts every instance of its meshes)."},
     {"range", "max_faces", SL_OPT_INT, "2147483648", 1, 1099511627776.0, NULL,
-     "Inputs declaring more faces are refused (limit error, item quarantined)."},
+     "Inputs declaring more faces are refused (limit error, item quarantined): a PLY's face "
+     "rows, an OFF's faces, the triangles of the other formats."},
     {"range", "max_header_bytes", SL_OPT_INT, "1048576", 1024, 1073741824.0, NULL,
      "Longest PLY header accepted, in bytes."},
     {"range", "max_nonfinite_fraction", SL_OPT_DOUBLE, "0.5", 0, 1, NULL,
      "Single NaN/Inf vertices are dropped and counted; a file where more than this fraction "
      "of vertices is non-finite is garbage (often the wrong endianness) and is refused."},
     {"range", "colors", SL_OPT_ENUM, "auto", 0, 0, "auto|none",
-     "Point colours: 'auto' = vertex colours, else sampled from the texture image named "
-     "by 'comment TextureFile' (a missing texture is a warning); 'none' = no colours."},
+     "Point colours: 'auto' = vertex colours, else sampled from the input's texture image "
+     "(PLY 'comment TextureFile', OBJ's MTL map_Kd, a glTF baseColor texture, embedded or "
+     "not; a missing texture is a warning); 'none' = no colours."},
     SL_OPTION_END,
 };
 
@@ -44,7 +47,7 @@ static int range_configure(const sl_config *cfg, void **stage_config, sl_error *
     sl_range_config *c = calloc(1, sizeof *c);
     if (!c)
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "out of memory");
-    c->limits = sl_ply_default_limits(); /* max_face_corners is the reader's, not an option */
+    c->limits = sl_scan_default_limits(); /* max_face_corners is the reader's, not an option */
     c->normals_from_file = strcmp(sl_config_string(cfg, "range", "normals"), "file") == 0;
     c->knn = (uint32_t)sl_config_int(cfg, "range", "knn");
     c->grid_max_edge_factor = sl_config_double(cfg, "range", "grid_max_edge_factor");
@@ -64,6 +67,14 @@ sl_range_config sl_range_default_config(void)
     sl_range_config c;
     sl_stage_default_config(&sl_range_stage, &c, sizeof c);
     return c;
+}
+
+/* What the reader says about the input: its format and what it read on without. */
+static void report_input(sl_json *j, const sl_mesh *mesh)
+{
+    sl_json_string(j, "input_format", mesh->format);
+    sl_json_u64(j, "input_warnings", mesh->warning_count);
+    sl_json_string(j, "input_warning", mesh->warning_count ? mesh->warnings : NULL);
 }
 
 static void report_counts(sl_json *j, const sl_range_counts *c, const sl_pointset *ps,
@@ -88,6 +99,8 @@ static void report_counts(sl_json *j, const sl_range_counts *c, const sl_pointse
     sl_json_bool(j, "normals_flipped_outward", c->normals_flipped);
     sl_json_u64(j, "pca_components", c->pca_components);
     sl_json_string(j, "color_source", c->color_source);
+    sl_json_string(j, "texcoord_source", c->texcoord_source);
+    sl_json_u64(j, "texcoord_seams", c->texcoord_seams);
     sl_json_u64(j, "texture_warnings", c->texture_warnings);
     sl_json_string(j, "texture_warning", c->texture_warnings ? c->texture_warning : NULL);
     sl_json_u64(j, "colors_unsampled", c->colors_unsampled);
@@ -103,30 +116,19 @@ static void report_counts(sl_json *j, const sl_range_counts *c, const sl_pointse
     sl_json_bool(j, "range_images", range_images);
 }
 
-/* The directory part of `path` ("." when there is none). */
-static void directory_of(const char *path, char *dir, size_t size)
-{
-    const char *slash = strrchr(path, '/');
-    if (!slash)
-        snprintf(dir, size, ".");
-    else if (slash == path)
-        snprintf(dir, size, "/");
-    else
-        snprintf(dir, size, "%.*s", (int)(slash - path), path);
-}
-
 static int range_run(const void *stage_config, const sl_stage_io *io, sl_error *err)
 {
     const sl_range_config *cfg = stage_config;
     sl_mesh mesh;
     sl_mesh_init(&mesh);
-    int rc = sl_ply_read(io->source_path, &cfg->limits, &mesh, NULL, io->progress, err);
+    int rc = sl_scan_read(io->source_path, &cfg->limits, &mesh, NULL, io->progress, err);
     if (rc != SL_OK) {
         sl_mesh_release(&mesh);
         return rc;
     }
-    char dir[1024], path[PATH_MAX];
-    directory_of(io->source_path, dir, sizeof dir);
+    char dir[PATH_MAX], path[PATH_MAX];
+    sl_scan_directory_of(io->source_path, dir, sizeof dir);
+    report_input(io->report, &mesh);
     sl_pointset ps;
     sl_range_counts counts;
     rc = sl_range_points_from_mesh(cfg, &mesh, dir, &ps, &counts, io->progress, err);
@@ -153,8 +155,9 @@ done:
 const sl_stage sl_range_stage = {
     .name = "range",
     .methods = SL_METHODS_ALL,
-    .description = "PLY mesh or point cloud -> oriented, coloured point set (paper 1 section 4)",
-    .version = 2,
+    .description = "scan (PLY, OBJ, STL, OFF, XYZ/PTS, glTF/GLB) mesh or point cloud -> "
+                   "oriented, coloured point set (paper 1 section 4)",
+    .version = 3, /* 3: points.slpts format 3 (the points' texture coordinates) */
     .options = range_options,
     .configure = range_configure,
     .release_config = free,

@@ -1,9 +1,10 @@
-/* Point colours (ARCHITECTURE section 2: "oriented, coloured point set"; the samples and
+/* Point colours (docs/range-stage.md: an "oriented, coloured point set"; the samples and
  * merge stages carry them down to the LOD meshes, paper 1 section 2.2 "the color value is
  * copied in the same manner").
  *
- * Source, in order: the file's vertex colours; else the texture image named by
- * `comment TextureFile NAME`, relative to the PLY's directory, sampled bilinearly at the
+ * Source, in order: the file's vertex colours; else the texture image the reader found
+ * (PLY `comment TextureFile NAME`, OBJ's `map_Kd`, a glTF baseColor texture: a file
+ * relative to the input's directory, or an image embedded in a GLB), sampled bilinearly at the
  * per-face texture coordinates (each point: mean of its corners' samples, so a UV seam
  * blends both sides) or at the per-vertex ones. Welded twins average their samples.
  * Texture lookup follows the OpenGL convention: v = 0 is the bottom row of the image,
@@ -16,7 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry/ply.h"
+#include "formats/scan_texture.h"
 #include "shim/oiio_shim.h"
 #include "stages/range/range_internal.h"
 
@@ -27,10 +28,14 @@ typedef struct color_sum {
     uint32_t *samples;
 } color_sum;
 
-static void warn(sl_range_counts *counts, const char *fmt, const char *a, const char *b)
+/* The first warning is kept in the report (cut to fit), every one counted. */
+static void warn(sl_range_counts *counts, const char *msg)
 {
-    if (counts->texture_warnings++ == 0)
-        snprintf(counts->texture_warning, sizeof counts->texture_warning, fmt, a, b);
+    if (counts->texture_warnings++ == 0) {
+        size_t n = strnlen(msg, sizeof counts->texture_warning - 1);
+        memcpy(counts->texture_warning, msg, n);
+        counts->texture_warning[n] = 0;
+    }
 }
 
 static int wrap(int64_t i, int n)
@@ -112,34 +117,17 @@ static void sum_vertex_colors(const sl_mesh *mesh, const range_clean *clean, col
 static int load_texture(const sl_mesh *mesh, const char *texture_dir, sl_image *img,
                         sl_range_counts *counts)
 {
-    const char *name = mesh->texture_file;
+    char name[300], why[1600];
     if (!mesh->texcoords && !mesh->face_texcoords) {
-        warn(counts, "texture %s%s: the file has no texture coordinates", name, "");
+        snprintf(why, sizeof why, "texture %s: the file has no texture coordinates",
+                 sl_scan_texture_name(mesh, name, sizeof name));
+        warn(counts, why);
         return 0;
     }
-    char path[1024];
-    int where = sl_ply_texture_path(texture_dir, name, path, sizeof path);
-    if (where == -1) {
-        warn(counts, "texture %s%s: not a name inside the input's directory", name, "");
-        return 0;
-    }
-    if (where) {
-        warn(counts, "texture %s%s: path too long", name, "");
-        return 0;
-    }
-    sl_error e;
-    sl_error_init(&e);
-    if (sl_image_read(path, TEXTURE_MAX_PIXELS, img, &e) != SL_OK) {
-        char msg[1400];
-        warn(counts, "texture %s: %s", name, sl_error_format(&e, msg, sizeof msg));
-        return 0;
-    }
-    if (img->width <= 0 || img->height <= 0 || img->channels <= 0) {
-        sl_image_release(img);
-        warn(counts, "texture %s%s: empty image", name, "");
-        return 0;
-    }
-    return 1;
+    if (sl_scan_texture_read(mesh, texture_dir, TEXTURE_MAX_PIXELS, img, why, sizeof why))
+        return 1;
+    warn(counts, why);
+    return 0;
 }
 
 int range_colors(const sl_mesh *mesh, const range_clean *clean, const char *texture_dir,
@@ -148,7 +136,7 @@ int range_colors(const sl_mesh *mesh, const range_clean *clean, const char *text
     *colors = NULL;
     counts->color_source = "none";
     int from_vertices = mesh->colors != NULL;
-    if (!enabled || (!from_vertices && !mesh->texture_file[0]))
+    if (!enabled || (!from_vertices && !sl_scan_has_texture(mesh)))
         return SL_OK;
     sl_image img = {0, 0, 0, NULL};
     if (!from_vertices && !load_texture(mesh, texture_dir, &img, counts))
@@ -182,5 +170,61 @@ int range_colors(const sl_mesh *mesh, const range_clean *clean, const char *text
     free(s.rgba), free(s.samples);
     *colors = out;
     counts->color_source = from_vertices ? "vertex" : "texture";
+    return SL_OK;
+}
+
+/* A point's texture coordinate is its vertices' (welded twins) or its corners' when they
+ * all agree; where they differ (a seam, which this artifact has no room for) the point
+ * set carries none and the export bakes as before. */
+static int agree(float *uv, uint8_t *set, uint32_t p, float u, float v)
+{
+    if (!isfinite(u) || !isfinite(v))
+        return 0;
+    if (!set[p]) {
+        set[p] = 1, uv[2 * (uint64_t)p] = u, uv[2 * (uint64_t)p + 1] = v;
+        return 1;
+    }
+    return uv[2 * (uint64_t)p] == u && uv[2 * (uint64_t)p + 1] == v;
+}
+
+int range_texcoords(const sl_mesh *mesh, const range_clean *clean, float **texcoords,
+                    sl_range_counts *counts, sl_error *err)
+{
+    *texcoords = NULL;
+    counts->texcoord_source = "none";
+    if ((!mesh->texcoords && !mesh->face_texcoords) || !clean->triangle_count ||
+        !sl_scan_has_texture(mesh))
+        return SL_OK;
+    uint64_t n = clean->point_count;
+    float *uv = malloc(8 * n + 1);
+    uint8_t *set = calloc(n + 1, 1);
+    if (!uv || !set) {
+        free(uv), free(set);
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "texture coordinates: out of memory");
+    }
+    uint64_t seams = 0;
+    if (mesh->face_texcoords) {
+        for (uint64_t t = 0; t < clean->triangle_count; t++) {
+            const float *c = mesh->face_texcoords + 6 * clean->triangle_source[t];
+            for (int k = 0; k < 3; k++)
+                seams += !agree(uv, set, clean->triangles[3 * t + k], c[2 * k], c[2 * k + 1]);
+        }
+    } else {
+        for (uint64_t v = 0; v < mesh->vertex_count; v++) {
+            uint32_t p = clean->vertex_point[v];
+            if (p != RANGE_NONE)
+                seams += !agree(uv, set, p, mesh->texcoords[2 * v], mesh->texcoords[2 * v + 1]);
+        }
+    }
+    for (uint64_t p = 0; p < n && !seams; p++)
+        seams += !set[p];
+    free(set);
+    counts->texcoord_seams = seams;
+    if (seams) {
+        free(uv);
+        return SL_OK;
+    }
+    *texcoords = uv;
+    counts->texcoord_source = mesh->face_texcoords ? "corners" : "vertices";
     return SL_OK;
 }

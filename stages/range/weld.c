@@ -1,4 +1,4 @@
-/* Input vertices -> points (ARCHITECTURE section 5 "Points": the PLY vertices that faces
+/* Input vertices -> points (docs/range-stage.md, "Decisions": the PLY vertices that faces
  * reference, exact duplicates welded first, since scans often come unwelded).
  *
  * Weld rule: two finite vertices weld when their three coordinates compare equal as

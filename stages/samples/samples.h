@@ -1,4 +1,4 @@
-/* samples stage (paper 1, section 2.1 "Marching Cube Node"; ARCHITECTURE section 5
+/* samples stage (paper 1, section 2.1 "Marching Cube Node"; docs/samples-stage.md, "Method"
  * "Samples").
  *
  * Oriented points and triangles (the range stage's points.slpts) -> signed samples at the grid vertices

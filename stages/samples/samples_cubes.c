@@ -1,5 +1,5 @@
 /* samples stage: which grid vertices get a sample (paper 1 section 2.1: the vertices of the
- * cubes that contain points; ARCHITECTURE section 5: one sample per grid vertex).
+ * cubes that contain points; docs/samples-stage.md, "Method": one sample per grid vertex).
  *
  * Method: sets of cubes and vertices are sorted arrays of packed keys (sl_vertex_key:
  * x << 40 | y << 20 | z), so memory follows the surface, never the bounding volume, and

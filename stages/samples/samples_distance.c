@@ -4,7 +4,7 @@
  *   s_n = sign((v_n - p_n) . n_p)         sample = s_n * d_n  (> 0 outside, < 0 inside)
  *
  * The paper restricts p_n to the cube C; we take the closest point of the whole set, so
- * that a vertex shared by several cubes has one sample (ARCHITECTURE section 5) and the
+ * that a vertex shared by several cubes has one sample (docs/samples-stage.md, "Method") and the
  * band cubes, which hold no points, get samples too. Closest points are exact (k-d tree,
  * geometry/kdtree.h), ties to the lower point index. With sign_neighbours = k > 1 the sign
  * is instead a vote of the k nearest points, each weighted by 1 / (distance + leaf/16):
@@ -198,7 +198,7 @@ static int compute_samples(const sl_samples_config *cfg, const sl_pointset *ps,
         rc = alloc_samples(out, vertices->count, ps->colors != NULL, err);
     if (rc == SL_OK) {
         eval_ctx c = {cfg, &counts->plan, ps, tree, use_surface, vertices->keys, out};
-        out->voxel_size = counts->plan.leaf_size;
+        out->leaf_size = counts->plan.leaf_size;
         memcpy(out->origin, counts->plan.origin, sizeof out->origin);
         uint64_t first = 0, end = vertices->count;
         if (split && !joining)

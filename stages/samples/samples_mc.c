@@ -48,7 +48,7 @@ static int edge_vertex(const sl_vdb_samples *s, const uint64_t idx[8], int e, mc
         double d0 = s->distance[idx[c0]], d1 = s->distance[idx[c1]], t = d0 / (d0 - d1);
         for (int k = 0; k < 3; k++) {
             double g = s->coords[3 * idx[c0] + k] + (k == a ? t : 0.0);
-            m->positions[3 * m->vertex_count + k] = (float)(s->origin[k] + s->voxel_size * g);
+            m->positions[3 * m->vertex_count + k] = (float)(s->origin[k] + s->leaf_size * g);
         }
         o->edge_vertex[slot] = (uint32_t)m->vertex_count++;
     }

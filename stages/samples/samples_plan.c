@@ -1,5 +1,5 @@
 /* samples stage: the grid of leaf cubes (paper 1 section 2.1 leaves the cube size open;
- * ARCHITECTURE section 5: "leaf size defaults from point spacing").
+ * docs/samples-stage.md, "The grid": "leaf size defaults from point spacing").
  *
  * The leaf size comes from, in order: [octree] leaf_size; [octree] depth (the longest
  * side of the bounding box plus the band on both sides fills the 2^depth cubes of the

@@ -154,14 +154,12 @@ int sl_segment_simplify(const sl_segment_config *cfg, const sl_segment_input *in
 /* --- the stage ([lod] method = segment) ---------------------------------------------- */
 
 /* Reads the range stage's points.slpts, writes into its artifact directory:
- *   levels.sllev    every level of the export's ladder ([export] lod_percents and
- *                   budgets; a percent P = at most P % of the input's triangles), in the
- *                   level-list format the cluster method writes too
- *                   (SL_CLUSTER_LEVELS_FILE, stages/cluster/cluster.h; bound 0: the
- *                   segment method proves none), which the export stage publishes;
+ *   a level list (levels/level.h)  a level per rung of the ladder ([levels], a share
+ *                   P % = at most P % of the input's triangles), with bound 0 (the segment
+ *                   method proves none), which the refine stage takes on;
  *   segments.slsgm  the segment of every input triangle (equation 1) and per segment
  *                   its unit area-weighted normal and area.
- * Options: [segment] (segment_stage.c); it also reads [export] for the ladder. */
+ * Options: [segment] (segment_config.c); it also reads [levels]. */
 extern const sl_stage sl_segment_stage;
 
 #define SL_SEGMENT_MAP_FILE "segments.slsgm"

@@ -13,7 +13,19 @@
 #include "geometry/mesh_adjacency.h"
 #include "geometry/region_grow.h"
 #include "geometry/segment_loops.h"
+#include "levels/ladder.h"
+#include "pipeline/config.h"
 #include "stages/segment/segment.h"
+
+/* The stage's resolved config (segment_config.c): the method's section first (what
+ * sl_segment_default_config copies), then the ladder it builds. */
+typedef struct sl_segment_stage_config {
+    sl_segment_config seg;
+    sl_ladder ladder;
+} sl_segment_stage_config;
+
+extern const sl_option sl_segment_options[];
+int sl_segment_configure(const sl_config *cfg, void **out, sl_error *err);
 
 #define SEG_NONE UINT32_MAX
 

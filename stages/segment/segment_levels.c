@@ -22,52 +22,6 @@
 #define ERROR_MIN 1e-7
 #define RECORD_BELOW 16.0 /* a pass records insertions down to max_error / this */
 
-sl_segment_config sl_segment_default_config(void)
-{
-    sl_segment_config c;
-    memset(&c, 0, sizeof c);
-    c.delta_seg = 20.0;
-    c.target_segments = 0;
-    c.delta_b = 180.0;
-    c.rule = SL_SEGMENT_RULE_ERROR;
-    c.alpha = -1.5;
-    c.max_error = 0.001;
-    c.max_normal_deviation = 90.0;
-    c.merge_ratio = 25.0;
-    c.merge_angle = 60.0;
-    c.search_samples = 50000;
-    return c;
-}
-
-int sl_segment_check_config(const sl_segment_config *c, sl_error *err)
-{
-    if (!c->target_segments && !(c->delta_seg > 0 && c->delta_seg <= SL_REGION_GROW_MAX_DELTA))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "delta_seg %g is outside (0, %g] degrees",
-                            c->delta_seg, SL_REGION_GROW_MAX_DELTA);
-    if (!(c->delta_b >= 0 && c->delta_b <= 180))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "delta_b %g is outside [0, 180] degrees",
-                            c->delta_b);
-    if (c->rule < SL_SEGMENT_RULE_ERROR || c->rule > SL_SEGMENT_RULE_PAPER)
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "unknown vertex rule %d", c->rule);
-    if (!isfinite(c->alpha))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "alpha must be a finite number");
-    if (!(c->max_error > 0 && c->max_error <= 1))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL,
-                            "max_error %g is outside (0, 1] (a fraction of the diagonal)",
-                            c->max_error);
-    if (!(c->max_normal_deviation > 0 && c->max_normal_deviation <= 180))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL,
-                            "max_normal_deviation %g is outside (0, 180] degrees",
-                            c->max_normal_deviation);
-    if (!(c->merge_ratio >= 0 && isfinite(c->merge_ratio)))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "merge_ratio %g must be >= 0",
-                            c->merge_ratio);
-    if (!(c->merge_angle > 0 && c->merge_angle <= SL_REGION_GROW_MAX_DELTA))
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "merge_angle %g is outside (0, %g] degrees",
-                            c->merge_angle, SL_REGION_GROW_MAX_DELTA);
-    return SL_OK;
-}
-
 /* Parameters for a pass at max_error `error` (world units). */
 static void params_for(const sl_segment_config *cfg, double error, seg_trim_params *t,
                        seg_patch_params *p)

@@ -430,125 +430,123 @@ static void clear_all(pass *p)
         clear_result(&p->result[k]);
 }
 
-int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_patch_params *patch,
-                 uint64_t budget, sl_segment_level *lv, sl_progress *progress, sl_error *err)
+/* The pass's state for model m, every fitted segment to trim. SL_OK or SL_E_NOMEM. */
+static int pass_start(pass *p, sl_segment_model *m, const seg_trim_params *trim,
+                      const seg_patch_params *patch)
 {
-    memset(lv, 0, sizeof *lv);
-    pass p;
-    memset(&p, 0, sizeof p);
-    p.m = m;
-    p.trim = *trim;
-    p.patch = *patch;
+    memset(p, 0, sizeof *p);
+    p->m = m;
+    p->trim = *trim;
+    p->patch = *patch;
     uint32_t ns = m->seg.segment_count;
     size_t nsz = ns ? ns : 1;
-    p.state = malloc(nsz);
-    p.trimmable = malloc(nsz);
-    p.signature = calloc(nsz, sizeof *p.signature);
-    p.result = calloc(nsz, sizeof *p.result);
-    p.kept = calloc(m->vertex_count ? m->vertex_count : 1, 1);
-    p.chain_level = calloc(m->chain_count ? m->chain_count : 1, 1);
-    int rc = SL_OK;
-    if (!p.state || !p.trimmable || !p.signature || !p.result || !p.kept || !p.chain_level)
-        rc = SL_E_NOMEM;
-    for (uint32_t k = 0; !rc && k < ns; k++)
-        p.state[k] = m->unfit[k] == SEG_FIT ? STATE_TRIM : STATE_KEEP;
-    /* budget: record the insertions down to tau_min, pick tau, then replay to it */
-    int search = budget > 0 && patch->rule == SL_SEGMENT_RULE_ERROR, replaying = 0;
-    double tau_min = patch->tau;
-    if (search) {
-        p.patch.record = 1;
-        p.patch.tau = tau_min;
+    p->state = malloc(nsz);
+    p->trimmable = malloc(nsz);
+    p->signature = calloc(nsz, sizeof *p->signature);
+    p->result = calloc(nsz, sizeof *p->result);
+    p->kept = calloc(m->vertex_count ? m->vertex_count : 1, 1);
+    p->chain_level = calloc(m->chain_count ? m->chain_count : 1, 1);
+    if (!p->state || !p->trimmable || !p->signature || !p->result || !p->kept || !p->chain_level)
+        return SL_E_NOMEM;
+    for (uint32_t k = 0; k < ns; k++)
+        p->state[k] = m->unfit[k] == SEG_FIT ? STATE_TRIM : STATE_KEEP;
+    return SL_OK;
+}
+
+/* Back to recording the insertions down to tau_min: what was recorded no longer holds. */
+static void record_again(pass *p, double tau_min, int *replaying)
+{
+    *replaying = 0;
+    p->patch.record = 1;
+    p->patch.tau = tau_min;
+    clear_all(p);
+}
+
+/* With a budget, after a recording round: tau picked from the records, and the pass set
+ * to replay the insertions to it. 1: replay (or record further), 0: over budget with a
+ * probe (the pass stops, p->over_budget), SL_E_NOMEM. */
+static int settle_tau(pass *p, uint64_t budget, double *tau_min, int *replaying, int *probed)
+{
+    const sl_segment_model *m = p->m;
+    double tau = pick_tau(p, budget, *tau_min);
+    if (tau == -3)
+        return SL_E_NOMEM;
+    if (tau == -1 && *tau_min > 1e-18 * m->diagonal * m->diagonal) { /* record further */
+        *tau_min = *tau_min > 0 ? *tau_min / 64 : 0;
+        p->patch.tau = *tau_min;
+        clear_all(p);
+        return 1;
     }
+    p->over_budget = tau == -2;
+    if (p->over_budget && p->patch.probe) { /* kept segments only add: over it stays */
+        *probed = 1;
+        return 0;
+    }
+    /* a vertex within a billionth of the diagonal never comes back: it would only be
+     * rounding noise on a flat patch */
+    double floor2 = 1e-18 * m->diagonal * m->diagonal;
+    p->patch.tau = tau == -2 ? INFINITY : fmax(tau, floor2);
+    p->patch.record = 0;
+    if (p->patch.tau > 0 && isfinite(p->patch.tau))
+        p->patch.max_error = sqrt(p->patch.tau); /* the final flips' bound */
+    p->tau_used = p->patch.tau;
+    *replaying = 1;
+    clear_all(p);
+    return 1;
+}
+
+/* One round of trimming and retriangulation. SL_OK, 1 (a segment refused: go again),
+ * SL_E_NOMEM, SL_E_INTERRUPTED. */
+static int trim_and_patch(pass *p, sl_progress *progress)
+{
+    for (uint32_t k = 0; k < p->m->seg.segment_count; k++)
+        p->trimmable[k] = p->state[k] == STATE_TRIM;
+    seg_trim_chains(p->m, &p->trim, p->trimmable, p->chain_level, p->kept);
+    int64_t refused = retriangulate(p);
+    if (refused < 0)
+        return SL_E_NOMEM;
+    if (sl_progress_interrupted(progress))
+        return SL_E_INTERRUPTED;
+    return refused > 0;
+}
+
+/* The level assembled and checked: SL_OK (done), 1 (repaired: go again), SL_E_NOMEM,
+ * SL_E_INTERNAL. */
+static int assemble_checked(pass *p, sl_segment_level *lv, sl_error *err)
+{
     uint32_t *ts = NULL;
-    int probed = 0;
-    while (!rc) {
-        for (uint32_t k = 0; k < ns; k++)
-            p.trimmable[k] = p.state[k] == STATE_TRIM;
-        seg_trim_chains(m, &p.trim, p.trimmable, p.chain_level, p.kept);
-        int64_t refused = retriangulate(&p);
-        if (refused < 0)
-            rc = SL_E_NOMEM;
-        else if (sl_progress_interrupted(progress))
-            rc = SL_E_INTERRUPTED;
-        if (rc)
-            break;
-        if (refused > 0) {
-            if (replaying) { /* the records no longer hold: record again */
-                replaying = 0;
-                p.patch.record = 1;
-                p.patch.tau = tau_min;
-                clear_all(&p);
-            }
-            continue;
-        }
-        if (search && !replaying) {
-            double tau = pick_tau(&p, budget, tau_min);
-            if (tau == -3) {
-                rc = SL_E_NOMEM;
-                break;
-            }
-            if (tau == -1 && tau_min > 1e-18 * m->diagonal * m->diagonal) { /* record further */
-                tau_min = tau_min > 0 ? tau_min / 64 : 0;
-                p.patch.tau = tau_min;
-                clear_all(&p);
-                continue;
-            }
-            p.over_budget = tau == -2;
-            if (p.over_budget && patch->probe) { /* kept segments only add: over it stays */
-                probed = 1;
-                break;
-            }
-            /* a vertex within a billionth of the diagonal never comes back: it would only
-             * be rounding noise on a flat patch */
-            double floor2 = 1e-18 * m->diagonal * m->diagonal;
-            p.patch.tau = tau == -2 ? INFINITY : fmax(tau, floor2);
-            p.patch.record = 0;
-            if (p.patch.tau > 0 && isfinite(p.patch.tau))
-                p.patch.max_error = sqrt(p.patch.tau); /* the final flips' bound */
-            p.tau_used = p.patch.tau;
-            replaying = 1;
-            clear_all(&p);
-            continue;
-        }
-        sl_segment_level_release(lv);
-        free(ts);
-        ts = NULL;
-        if (assemble(&p, lv, &ts)) {
-            rc = SL_E_NOMEM;
-            break;
-        }
-        int c = check_level(&p, lv, ts, err);
-        if (c == 0)
-            break;
-        if (c == -1)
-            rc = SL_E_NOMEM;
-        else if (c == -2)
-            rc = SL_E_INTERNAL;
-        else {
-            p.repairs++;
-            if (search) { /* kept segments change the count: pick tau again */
-                replaying = 0;
-                p.patch.record = 1;
-                p.patch.tau = tau_min;
-                clear_all(&p);
-            }
-        }
-    }
+    sl_segment_level_release(lv);
+    int c = assemble(p, lv, &ts) ? -1 : check_level(p, lv, ts, err);
     free(ts);
+    if (c == 0)
+        return SL_OK;
+    if (c == -1)
+        return SL_E_NOMEM;
+    if (c == -2)
+        return SL_E_INTERNAL;
+    p->repairs++;
+    return 1;
+}
+
+/* The level's statistics after a pass that ended with `rc` (and `probed`: over budget). */
+static void pass_finish(pass *p, sl_segment_level *lv, int rc, int probed, sl_error *err)
+{
+    const sl_segment_model *m = p->m;
+    uint32_t ns = m->seg.segment_count;
     if (!rc && probed) {
         sl_segment_level_release(lv);
         lv->stats.over_budget = 1;
         lv->stats.tau = INFINITY;
     } else if (!rc) {
-        fill_stats(&p, lv);
-        double residual = seg_chain_residual(m, p.kept);
+        fill_stats(p, lv);
+        double residual = seg_chain_residual(m, p->kept);
         for (uint32_t k = 0; k < ns; k++)
-            if (p.state[k] != STATE_KEEP)
-                residual += p.result[k].residual;
+            if (p->state[k] != STATE_KEEP)
+                residual += p->result[k].residual;
         lv->stats.estimate = m->used_vertices
                                  ? sqrt(residual / (double)m->used_vertices) / m->diagonal : 0;
-        lv->stats.tau = p.tau_used;
-        lv->stats.over_budget = p.over_budget;
+        lv->stats.tau = p->tau_used;
+        lv->stats.over_budget = p->over_budget;
     } else {
         sl_segment_level_release(lv);
         if (rc == SL_E_NOMEM)
@@ -556,6 +554,47 @@ int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_pat
         else if (rc == SL_E_INTERRUPTED)
             sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "segment method interrupted");
     }
+}
+
+int seg_run_pass(sl_segment_model *m, const seg_trim_params *trim, const seg_patch_params *patch,
+                 uint64_t budget, sl_segment_level *lv, sl_progress *progress, sl_error *err)
+{
+    memset(lv, 0, sizeof *lv);
+    pass p;
+    int rc = pass_start(&p, m, trim, patch);
+    /* budget: record the insertions down to tau_min, pick tau, then replay to it */
+    int search = budget > 0 && patch->rule == SL_SEGMENT_RULE_ERROR, replaying = 0;
+    double tau_min = patch->tau;
+    if (search) {
+        p.patch.record = 1;
+        p.patch.tau = tau_min;
+    }
+    int probed = 0;
+    while (!rc) {
+        int step = trim_and_patch(&p, progress);
+        if (step == 1 && replaying) /* the records no longer hold: record again */
+            record_again(&p, tau_min, &replaying);
+        if (step) {
+            rc = step < 0 ? step : SL_OK;
+            continue;
+        }
+        if (search && !replaying) {
+            step = settle_tau(&p, budget, &tau_min, &replaying, &probed);
+            if (step <= 0) {
+                rc = step;
+                break;
+            }
+            continue;
+        }
+        step = assemble_checked(&p, lv, err);
+        if (step == 1 && search) /* kept segments change the count: pick tau again */
+            record_again(&p, tau_min, &replaying);
+        if (step <= 0) {
+            rc = step;
+            break;
+        }
+    }
+    pass_finish(&p, lv, rc, probed, err);
     pass_release(&p);
     return rc;
 }

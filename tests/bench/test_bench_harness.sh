@@ -2,8 +2,10 @@
 # The benchmark harness (scripts/bench/lib) on canned inputs, no build and no runs, so it
 # does not rot: parsing of timings.json, `extract` and `compare --json` output; medians,
 # pair ratios, log-log slopes, the OpenVDB adaptivity bisection, the per-triangle cost;
-# then docs/benchmarks.md (and the plots, when gnuplot is there) rendered from a mini
-# results folder, checked for the figures it must show.
+# the fidelity anchor's budgets, cache look-ups, pairs, summary and record; then
+# docs/benchmarks.md (and the plots, when gnuplot is there) rendered from a mini results
+# folder, checked for the figures it must show, and the fidelity phase's section spliced
+# into a page alone.
 set -euo pipefail
 root=${SCANLOD_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
 lib=$root/scripts/bench/lib
@@ -80,6 +82,90 @@ check "timings.json as the engine writes it" \
   eq "$(py "import stats; t = stats.load_timings('$tmp/timings.json'); print(t['merge']['peak_rss_kb'], t['range']['seconds'])")" "84836 0.101"
 check "compare --json to the table figures" eq "$(py 'import stats; f = stats.fidelity("{\"b_triangles\": 10, \"rms\": 0.002, \"hausdorff\": 0.01, \"b_topology\": {\"boundary_edges\": 3, \"watertight\": false}}"); print(f["triangles"], f["rms"], f["boundary_edges"], f["watertight"])')" "10 0.002 3 False"
 
+# --- the fidelity anchor ---------------------------------------------------------------
+check "compare --json: parts and the largest part's area share" eq "$(py 'import stats; f = stats.fidelity({"b_triangles": 10, "rms": 0.1, "hausdorff": 0.2, "b_topology": {"components": 3, "largest_component_area_fraction": 0.75}}); print(f["components"], f["largest_area"])')" "3 0.75"
+check "budgets: P % of the input's triangles, named pP, at least 1" \
+  eq "$(py 'import stats; t = stats.budget_targets(12946, [1, 2.5, 50]) + stats.budget_targets(40, [1]); print(t, stats.budget_setting(t))')" \
+  "[(1, 'p1', 129), (2.5, 'p2.5', 324), (50, 'p50', 6473), (1, 'p1', 1)] p1:129,p2.5:324,p50:6473,p1:1"
+check "budget error is relative to the budget" \
+  eq "$(py 'import stats; print(stats.budget_error(404, 201) > 1, stats.budget_error(128, 128), stats.budget_error(5, 0))')" "True 0.0 None"
+check "cache: exact count, else the nearest within the tolerance, else none" \
+  eq "$(py 'import stats; c = {"1000": "a", "1008": "b", "990": "c"}; print(stats.cached_at(c, 1000), stats.cached_at(c, 1005, 0.01), stats.cached_at(c, 1005), stats.cached_at(c, 1100, 0.01))')" \
+  "(1000, 'a') (1008, 'b') None None"
+# Canned pairs: toy is watertight in one part, open is neither. RMS ratios 2, 1, 1.5, 0.5
+# (median 1.25, one above 1.5); Hausdorff 2, 0.5, 1, 0.8 (median 0.9); toy 10 % misses
+# its budget by 2 %; toy 1 % loses area to small parts and toy 10 % is not watertight
+# (open's figures of that kind do not count: its input is neither). The segment method
+# alone: one pair (ratio 3), and open stopped by the timeout.
+python3 - "$tmp/fidelity.json" "$lib" <<'EOF'
+import json, sys
+sys.path.insert(0, sys.argv[2])
+import fidelity
+fig = lambda n, rms, h, parts=1, largest=1.0, wt=True: {
+    "triangles": n, "rms": rms, "hausdorff": h, "components": parts, "largest_area": largest,
+    "watertight": wt, "boundary_edges": 0 if wt else 4}
+peer = lambda n, rms, h: {"count": n, "triangles": n, "rms": rms, "hausdorff": h,
+                          "reached": True, "seconds": 0.01, "target": n}
+inputs = {"toy": {"triangles": 1000, "watertight": True, "largest_area": 1.0, "components": 1,
+                  "boundary_edges": 0, "sha1": "x"},
+          "open": {"triangles": 2000, "watertight": False, "largest_area": 0.5, "components": 2,
+                   "boundary_edges": 9, "sha1": "y"}}
+def one(name, p, budget, ours, urms, uh):
+    anchors = {"update": peer(ours["triangles"], urms, uh),
+               "simplify": peer(ours["triangles"], 0.8 * ours["rms"], uh),
+               "mo18": peer(ours["triangles"], 0.5 * ours["rms"], uh)}
+    return fidelity.pair(name, inputs[name], p, "p%g" % p, budget, {"name": "p%g" % p},
+                         ours, anchors)
+item = lambda pairs, s: {"status": "ok", "method": "octree", "wall_seconds": s + 0.5,
+                         "build_seconds": s, "cpu_seconds": s, "peak_rss_kb": 2048 * s,
+                         "pairs": pairs}
+run = {"commit": "abc", "date": "2000-01-01 00:00 UTC", "load_start": 0.5, "complete": True,
+       "seconds": 60, "settings": {"inputs": ["toy", "open"], "budgets": [1, 10],
+       "methods": ["default", "segment"], "samples": 1000, "threads": 2,
+       "timeout_seconds": 60, "reuse_peers": False, "js_flags": ["Prune"],
+       "js_target_error": "1e10", "peers": {"update": "u", "simplify": "s", "mo18": "m"},
+       "versions": {"meshoptimizer_js": "1.3.0", "meshoptimizer": "0.18"}},
+       "inputs": inputs, "methods": {
+    "default": {"seconds": 40, "items": {
+        "toy": item([one("toy", 1, 10, fig(10, 0.004, 0.02, 3, 0.9), 0.002, 0.01),
+                     one("toy", 10, 100, fig(98, 0.001, 0.01, wt=False), 0.001, 0.02)], 2.0),
+        "open": item([one("open", 1, 20, fig(20, 0.003, 0.02, 5, 0.4, False), 0.002, 0.02),
+                      one("open", 10, 200, fig(199, 0.0005, 0.008, 2, 0.5, False), 0.001, 0.01)],
+                     4.0)}},
+    "segment": {"seconds": 20, "items": {
+        "toy": item([one("toy", 1, 10, fig(10, 0.006, 0.01), 0.002, 0.01)], 8.0),
+        "open": {"status": "timeout", "wall_seconds": 60}}}}}
+json.dump(run, open(sys.argv[1], "w"))
+EOF
+check "anchor pair: ratios to update, simplify and 0.18, budget error" \
+  eq "$(py "import json; p = json.load(open('$tmp/fidelity.json'))['methods']['default']['items']['toy']['pairs'][1]; print(p['rms_ratio'], p['hausdorff_ratio'], round(p['rms_ratio_simplify'], 3), p['rms_ratio_mo18'], round(p['budget_error'], 3), p['file'])")" \
+  "1.0 0.5 1.25 2.0 0.02 p10"
+summary=$(py "
+import json, headline
+rec = headline.fidelity_record(json.load(open('$tmp/fidelity.json')))
+s = headline.anchor(rec)['default']['summary']
+print(s['pairs'], s['rms_ratio']['median'], s['rms_ratio']['max'], s['rms_worst'], s['rms_above'],
+      s['hausdorff_ratio']['median'], s['budget_misses'], s['part_losses'], s['part_pairs'],
+      s['not_watertight'], s['watertight_pairs'])")
+check "anchor summary: medians, worst pair, counts where the input qualifies" eq "$summary" \
+  "4 1.25 2.0 {'input': 'toy', 'percent': 1} 1 0.9 1 1 2 1 2"
+record=$(py "
+import json, headline
+run = json.load(open('$tmp/fidelity.json'))
+old = headline.fidelity_record(run)
+run['methods'] = {'default': run['methods']['default']}
+run['commit'] = 'def'
+new = headline.fidelity_record(run)
+new['pairs'] = new['pairs'][:1]
+m = headline.merge_record(old, new)
+headline.write_record('$tmp/record.json', m)
+back = headline.read_record('$tmp/record.json')
+print(back == m, sorted(back['methods']), back['methods']['default']['commit'],
+      back['methods']['segment']['commit'], len(back['pairs']))")
+check "record: a run's methods replace the record's, the others stay; read back as written" \
+  eq "$record" "True ['default', 'segment'] def abc 2"
+check "record: one pair a line" eq "$(grep -c '^  {"budget"' "$tmp/record.json")" "2"
+
 # --- a mini results folder rendered to markdown (and plots) ----------------------------
 res=$tmp/results
 mkdir -p "$res"
@@ -141,6 +227,7 @@ save("growth", {"sizes": [{"target": n, "triangles": n, "reps": [timings(n / 1e6
                           for n in (1000000, 4000000)],
                 "skipped": [{"target": 20000000, "reason": "predicted 9999 s"}]})
 EOF
+cp "$tmp/fidelity.json" "$res/"   # a complete fidelity run (the canned pairs above)
 md=$tmp/benchmarks.md
 # Hand-kept sections (docs/bench/NAME.md) survive a rerun, in their places.
 mkdir -p "$tmp/bench"
@@ -169,6 +256,48 @@ check "report: speed-up vs meshopt, warm and first" has "$md" "250 [200–300] |
 check "report: linear growth fitted" has "$md" "time ~ N^1.00 (about linear)"
 check "report: skipped size said" has "$md" "Skipped 20000000 triangles: predicted 9999 s."
 check "report: versions" has "$md" "OpenVDB 10.0.1 and meshoptimizer 0.18"
+
+check "report: the anchor's headline line (default config)" has "$md" "scanlod / meshoptimizer 1.3.0 \`simplifyWithUpdate\`: median 1.25, max 2.00 (toy 1 %), 1 of 4 pairs above 1.5x; Hausdorff ratio median 0.90; budget misses beyond 1 %: 1 of 4; scanlod / \`simplify\` median 1.25, / meshoptimizer 0.18 median 2.00."
+check "report: each method alone, a timeout named" has "$md" "RMS ratio median: segment 3.00 (1 of 1 above 1.5x, budget misses 0) (open: timeout)."
+check "report: section 3's line against 0.18 says what it is" has "$md" "section 3, RMS at the counts of the reference builds' LOD-percent levels, scanlod / meshoptimizer 0.18 \`meshopt_simplify\`: median 2.00"
+check "report: anchor summary row" has "$md" "| default config | abc, 2000-01-01 00:00 UTC | 4 | 1.25 | 2.00 (toy 1 %) | 1 | 0.90 | 1.25 | 2.00 | 0.25 % / 1 | 1 of 2 | 1 of 2 | 3.00 (6) | 8 | – |"
+check "report: a pair, flags in bold" has "$md" "| toy | 1 % | 10 | 10 | 0.00 % | 0.400 % | 0.200 % | **2.00** | 2.000 % | 1.000 % | **2.00** | 1.25 | 2.00 | **3 (90.0 %)** | yes |"
+check "report: not watertight where the input is, in bold; not where it is not" has "$md" "| 1 (100.0 %) | **no** |"
+check "report: the open input's parts and holes not flagged" has "$md" "| 5 (40.0 %) | no |"
+check "report: each method alone folded" has "$md" "<details><summary><b>Segment alone</b>: every pair</summary>"
+check "report: section 3a between 3 and 4, the anchor's version in the opening" python3 - "$md" <<'PY'
+import sys
+t = open(sys.argv[1]).read()
+assert t.index("## 3. ") < t.index("<!-- fidelity:begin -->\n## 3a. ") < t.index("<!-- fidelity:end -->") < t.index("## 4. ")
+assert "the fidelity anchor, meshoptimizer 1.3.0, from npm" in t
+PY
+check "report: a complete fidelity run saved as the record" test -f "$tmp/bench/fidelity.json"
+
+# The fidelity phase alone: section 3a and the anchor's lines spliced into a page that has
+# neither (the stale line they replace dropped), the rest untouched; again: no change; a
+# run of a subset: its own fidelity.md, the page unchanged.
+mkdir -p "$tmp/splice/res" "$tmp/splice/part"
+cp "$tmp/fidelity.json" "$tmp/splice/res/"
+page=$tmp/splice/benchmarks.md
+intro=$(py 'import report; print(report.HEADLINE_INTRO)')
+printf '# Benchmarks\n\nPeers: meshoptimizer 0.18 from Debian packages.\n\n## Headline figures\n\n%s\n\n- other line\n- RMS at equal triangle counts, scanlod / meshoptimizer: median 8.92 (stale)\n\n## 3. Levels\n\ntext\n\n## 4. Cost\n\nkeep me\n' "$intro" >"$page"
+check "splice: runs" python3 "$lib/report.py" --fidelity "$tmp/splice/res" "$page"
+check "splice: in place, the stale line dropped, the rest kept" python3 - "$page" <<'PY'
+import sys
+t = open(sys.argv[1]).read()
+h = t.index("<!-- fidelity-headline:begin -->\n- fidelity anchor (section 3a; default config")
+assert t.index("## Headline figures") < h < t.index("- other line") < t.index("## 3. Levels")
+assert "8.92" not in t
+assert "Peers: meshoptimizer 0.18 from Debian packages; the fidelity anchor, meshoptimizer 1.3.0, from npm.\n" in t
+assert t.index("text\n\n<!-- fidelity:begin -->\n## 3a. ") < t.index("<!-- fidelity:end -->\n\n## 4. Cost\n\nkeep me\n")
+PY
+cp "$page" "$tmp/splice/once.md"
+python3 "$lib/report.py" --fidelity "$tmp/splice/res" "$page" >/dev/null
+check "splice: twice is once" cmp -s "$page" "$tmp/splice/once.md"
+py "import json; d = json.load(open('$tmp/fidelity.json')); d['complete'] = False; json.dump(d, open('$tmp/splice/part/fidelity.json', 'w'))"
+python3 "$lib/report.py" --fidelity "$tmp/splice/part" "$page" >/dev/null
+check "splice: a subset leaves the page" cmp -s "$page" "$tmp/splice/once.md"
+check "splice: a subset has its own fidelity.md" has "$tmp/splice/part/fidelity.md" "| default config | abc, 2000-01-01 00:00 UTC | 4 | 1.25 |"
 
 if command -v gnuplot >/dev/null; then
   check "plots render" python3 "$lib/plots.py" "$res" "$tmp/plots"

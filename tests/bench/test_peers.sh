@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # The benchmark's peers and `scanlod compare` on tiny meshes, so the harness does not rot:
 # gen_surface makes a closed torus; meshopt_lod reaches its targets within 10%;
+# meshopt_js.mjs (meshoptimizer 1.3 from npm, the fidelity anchor) reads ascii and binary
+# PLY of either byte order with extra properties, elements and polygons, and its
+# simplifyWithUpdate and simplify levels reach their targets as binary PLY compare reads;
 # vdb_remesh (signed on closed inputs, unsigned on an open scan) makes a mesh whose
 # Hausdorff distance to its input is under 5% of the diagonal; compare is exact on
 # identical meshes, deterministic across thread counts, and fails cleanly on bad input.
@@ -50,6 +53,89 @@ check "meshopt: cow at 500 triangles within 5% of the diagonal ($h)" below "$h" 
 mo=$("$BENCH/meshopt_lod" "$SCANS/bun_zipper_res4.ply" --fractions 0.5)
 t=$(json_values triangles <<<"$mo")
 check "meshopt: half of 948 triangles within 10% ($t)" test "$t" -ge 427 -a "$t" -le 474
+
+# --- meshoptimizer 1.3 (npm), the fidelity anchor -------------------------------------
+MJS="$SCANLOD_SOURCE_DIR/scripts/bench/peers/meshopt_js.mjs"
+if ! command -v node >/dev/null ||
+   [ ! -f "$SCANLOD_SOURCE_DIR/scripts/bench/peers/npm/node_modules/meshoptimizer/package.json" ]; then
+  echo "FAIL: node or the npm meshoptimizer missing (scripts/install-deps.sh: npm ci in scripts/bench/peers/npm)" >&2
+  exit 1
+fi
+mo=$(node "$MJS" "$SCANS/cow.ply" --targets 2000,500 -o "$TMP/cow_js")
+check "meshopt_js: version 1.3.0" grep -q '"version":"1.3.0"' <<<"$mo"
+check "meshopt_js: Prune, no error limit" grep -q '"target_error":10000000000,"flags":\["Prune"\]' <<<"$mo"
+fns=($(grep -o '"function":"[a-zA-Z]*"' <<<"$mo" | cut -d'"' -f4))
+check "meshopt_js: update then simplify per target (${fns[*]})" \
+  test "${fns[*]}" = "simplifyWithUpdate simplify simplifyWithUpdate simplify"
+tris=($(json_values triangles <<<"$mo"))
+for k in 0 1; do
+  check "meshopt_js: 2000 within 10% (${tris[$k]:-none})" test "${tris[$k]:-0}" -ge 1800 -a "${tris[$k]:-0}" -le 2000
+done
+for k in 2 3; do
+  check "meshopt_js: 500 within 10% (${tris[$k]:-none})" test "${tris[$k]:-0}" -ge 450 -a "${tris[$k]:-0}" -le 500
+done
+for fn in update simplify; do
+  compare_json "$SCANS/cow.ply" "$TMP/cow_js_${fn}_500.ply"
+  check "meshopt_js: $fn level is the PLY it says (${tris[2]} triangles)" \
+    test "$(json_first b_triangles <<<"$cmp")" = "${tris[2]}"
+  h=$(json_first hausdorff <<<"$cmp")
+  check "meshopt_js: cow $fn at 500 within 5% of the diagonal ($h)" below "$h" 0.05
+  eval "rms_$fn=$(json_first rms <<<"$cmp")"
+done
+check "meshopt_js: simplifyWithUpdate no worse than simplify in RMS ($rms_update, $rms_simplify)" \
+  below "$rms_update" "$(awk -v r="$rms_simplify" 'BEGIN { print 1.05 * r }')"
+check "meshopt_js: update moved vertices off the input's" \
+  test "$(cmp -s "$TMP/cow_js_update_500.ply" "$TMP/cow_js_simplify_500.ply"; echo $?)" = 1
+mo=$(node "$MJS" "$SCANS/bun_zipper_res4.ply" --fractions 0.5 --functions update)
+t=$(json_values triangles <<<"$mo")
+check "meshopt_js: ascii with extra vertex properties, half of 948 ($t)" test "$t" -ge 427 -a "$t" -le 474
+
+# A cube of six quads, four vertices of its own each (24 vertices, 8 positions), with an
+# extra element: ascii, then binary big-endian with a double coordinate, a face property
+# after the list and a list in the extra element.
+python3 - "$TMP" <<'PY'
+import struct, sys
+d = sys.argv[1]
+corners = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]
+quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+verts = [corners[c] for q in quads for c in q]
+faces = [[4 * f + k for k in range(4)] for f in range(6)]
+with open(d + "/cube_ascii.ply", "w") as f:
+    f.write("ply\nformat ascii 1.0\ncomment six quads\nelement vertex 24\nproperty float x\n"
+            "property float y\nproperty float z\nproperty uchar red\nelement face 6\n"
+            "property list uchar int vertex_indices\nelement edge 1\nproperty int vertex1\n"
+            "property int vertex2\nend_header\n")
+    f.writelines("%g %g %g 200\n" % v for v in verts)
+    f.writelines("4 %s\n" % " ".join(map(str, q)) for q in faces)
+    f.write("0 1\n")
+with open(d + "/cube_be.ply", "wb") as f:
+    f.write(b"ply\nformat binary_big_endian 1.0\nelement vertex 24\nproperty float x\n"
+            b"property double y\nproperty short s\nproperty float z\nelement face 6\n"
+            b"property list uint8 uint vertex_indices\nproperty uchar flags\n"
+            b"element extra 2\nproperty list uchar float values\nend_header\n")
+    for x, y, z in verts:
+        f.write(struct.pack(">fdhf", x, y, -7, z))
+    for q in faces:
+        f.write(struct.pack(">B4IB", 4, *q, 9))
+    f.write(struct.pack(">Bf", 1, 0.5) + struct.pack(">B2f", 2, 1, 2))
+PY
+for v in ascii be; do
+  mo=$(node "$MJS" "$TMP/cube_$v.ply" --targets 12 --functions simplify -o "$TMP/cube_${v}_js")
+  check "meshopt_js: cube ($v): 6 quads cut into 12 triangles" \
+    grep -q '"input_triangles":12,"input_vertices":24,"welded_vertices":8,"polygons_triangulated":6' <<<"$mo"
+  compare_json "$TMP/cube_ascii.ply" "$TMP/cube_${v}_js_simplify_12.ply"
+  check "meshopt_js: cube ($v) written back watertight, in place" \
+    test "$(json_first watertight <<<"$cmp")" = true -a "$(json_first welded_vertices <<<"$cmp")" = 8
+  check "meshopt_js: cube ($v) at distance 0" below "$(json_first hausdorff <<<"$cmp")" 1e-9
+done
+rc=0; node "$MJS" "$TMP/missing.ply" --targets 10 2>/dev/null || rc=$?
+check "meshopt_js: missing input exits 65 ($rc)" test "$rc" = 65
+head -c 500 "$TMP/cube_be.ply" >"$TMP/cube_cut.ply"
+rc=0; err=$(node "$MJS" "$TMP/cube_cut.ply" --targets 10 2>&1) || rc=$?
+check "meshopt_js: truncated input exits 65 ($rc)" test "$rc" = 65
+check "meshopt_js: truncated input named" grep -q "^meshopt_js: $TMP/cube_cut.ply: file ends early" <<<"$err"
+rc=0; node "$MJS" "$TMP/cube_be.ply" --targets 1.5 2>/dev/null || rc=$?
+check "meshopt_js: a fractional count is a usage error ($rc)" test "$rc" = 64
 
 # --- OpenVDB ---------------------------------------------------------------------------
 vdb=$("$BENCH/vdb_remesh" "$SCANS/cow.ply" -o "$TMP/cow_vdb.ply" --voxel-fraction 0.01 --threads 2)

@@ -50,6 +50,29 @@ check "--lod-percent 100: exit 0 ($err)" [ "$rc" -eq 0 -a -s "$TMP/p100.ply" ]
 run_scanlod extract "$model" --lod-percent 5e1 -o "$TMP/p50.ply"
 check "--lod-percent 5e1: exit 0 ($err)" [ "$rc" -eq 0 -a -s "$TMP/p50.ply" ]
 
+# An output folder that is not there is a bad command line (issue 34 item 6): exit 64 in
+# one line naming -o and the folder, before the model is read. It was 75 ("try again"),
+# after the whole cut, naming a temp file: ".o.ply.HOST.PID.0.tmp: create failed".
+run_scanlod extract "$model" --triangles 16 -o "$TMP/no/such/dir/o.ply"
+check "-o into a missing folder: exit 64 (rc $rc)" [ "$rc" -eq 64 ]
+check "-o into a missing folder: one line naming the flag and the folder ($err)" \
+  [ "$err" = "scanlod extract: -o $TMP/no/such/dir/o.ply: its folder does not exist ($TMP/no/such/dir)" ]
+echo x >"$TMP/plain"
+run_scanlod extract "$TMP/missing.slod" --triangles 16 -o "$TMP/plain/o.ply"
+check "-o under a file: exit 64 before the (missing) model is read (rc $rc)" [ "$rc" -eq 64 ]
+check "-o under a file: says why ($err)" contains "its folder is not a folder" "$err"
+
+# A budget is a ceiling: above the finest level it gives the finest (as [export] budgets
+# do), so the README's own example works on the demo's small bunny (it exited 64,
+# "exceeds the finest level").
+example=$(grep -m1 -o 'scanlod extract out/bunny.ply/model.slod --triangles [0-9]* -o bunny.glb' \
+  "$SCANLOD_SOURCE_DIR/README.md")
+check "the README has its extract example ($example)" [ -n "$example" ]
+read -r -a words <<<"${example/out\/bunny.ply\/model.slod/$model}"
+run_scanlod "${words[@]:1:4}" -o "$TMP/readme.glb"
+check "the README's example: exit 0 on a model below its budget (rc $rc: $err)" [ "$rc" -eq 0 -a -s "$TMP/readme.glb" ]
+check "the README's example: says it took the finest level ($err)" contains "above the finest level" "$err"
+
 # A level beyond the octree names the octree's real depth (it said "depth is 0").
 check "the octree is deeper than 2 (depth $depth)" [ "$depth" -gt 2 ]
 refused --level $((depth + 1)) "--level $((depth + 1)) exceeds the octree's depth $depth (levels 0 to $depth)" "$octree"

@@ -30,7 +30,7 @@ check "broken: named with its cause" contains "broken.ply.*header" "$(field brok
 check "every stage of the method estimated" [ "$(python3 -c 'import json,sys
 p = json.load(open(sys.argv[1]))
 print(",".join(p["items"][1]["stages"]))' "$TMP/plan.json")" = \
-  "range,samples,merge,priority,crack,export" ]
+  "range,samples,merge,priority,crack,refine,export" ]
 check "totals: three items, one error" [ "$(python3 -c 'import json,sys
 t = json.load(open(sys.argv[1]))["totals"]
 print(t["items"], t["errors"])' "$TMP/plan.json")" = "3 1" ]

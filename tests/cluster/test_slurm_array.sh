@@ -38,7 +38,7 @@ for f in "$SCANS"/*.ply; do cp "$f" "$TMP/in/"; done
 for f in cow fandisk bun_zipper_res3; do cp "$SCANS/$f.ply" "$TMP/in/again/"; done
 # The export (fidelity measured on 3 levels) makes an item last a second or more, so a
 # cancel lands inside one; 8 items, so that every worker gets to an export.
-export_lines=("[export]" "lod_percents = 20,50,100" "budgets =" "formats = ply,glb"
+export_lines=("[levels]" "percents = 20,50,100" "budgets =" "[export]" "formats = ply,glb"
               "thumbnail_size = 48" "fidelity = true")
 write_config "$TMP/ref.ini" "$TMP/in" "$TMP/ref-work" "$TMP/ref-out" "${export_lines[@]}"
 # The array's run splits the samples stage of the larger scans into parts of 0.1 MB of

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Interrupts (ARCHITECTURE section 2): SIGTERM, SIGINT and SIGUSR1 (Slurm's pre-timeout
+# Interrupts (docs/adding-a-stage.md, the stage contract): SIGTERM, SIGINT and SIGUSR1 (Slurm's pre-timeout
 # warning) make a run stop at a safe point and exit 75 with nothing partial published; the
 # next run finishes byte-identical to an uninterrupted one. Each signal is sent once the
 # run holds an item, and at least one run must have exited 75 on it (a test where every
@@ -26,7 +26,7 @@ for sig in TERM INT USR1; do
   "$SCANLOD" run "$TMP/c.ini" -q >/dev/null 2>"$TMP/sig.err" &
   pid=$!
   # The signal lands while an item is being worked on: a fixed sleep let a fast machine
-  # finish every run first, and the test passed without one interrupt. 5 items x 6
+  # finish every run first, and the test passed without one interrupt. 5 items x 7
   # stages leave work for every signal.
   for _ in $(seq 1 3000); do claimed_ticket && break; kill -0 "$pid" 2>/dev/null || break; sleep 0.01; done
   kill -"$sig" "$pid" 2>/dev/null || true # the run may still have finished meanwhile

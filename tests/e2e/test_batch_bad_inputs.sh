@@ -63,6 +63,18 @@ check "merge quarantines it with the cause (got: $err)" grep -q "\[merge\] octah
 run_scanlod run "$TMP/far.ini" -q
 check "and does not retry it (got $rc: $out)" grep -q "^nothing to do" <<<"$out"
 
+# A one-point cloud passes the range stage; the samples stage finds no spacing to size the
+# grid by. The quarantine is about the input, and names it: it named range's work
+# artifact, .../work/artifacts/range/one.ply/points.slpts (issue 34 item 6).
+mkdir -p "$TMP/one"
+printf 'ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n' >"$TMP/one/one.ply"
+write_config "$TMP/one.ini" "$TMP/one" "$TMP/wone" "$TMP/oone"
+run_scanlod run "$TMP/one.ini"
+check "one point: exit 65 (got $rc)" [ "$rc" -eq 65 ]
+check "one point: the quarantine names the input (got: $err)" \
+  grep -q "\[samples\] one.ply: quarantined: $TMP/one/one.ply: mean point spacing is 0" <<<"$err"
+check "one point: and no work artifact" bash -c '! grep -q "points.slpts" <<<"$1"' _ "$err"
+
 # Bad config: unknown key -> exit 78 with file:line.
 printf '[run]\ninput = %s\nwork = %s\noutput = %s\n[range]\nno_such_key = 1\n' "$in" "$TMP/w2" "$TMP/o2" >"$TMP/bad.ini"
 run_scanlod run "$TMP/bad.ini"

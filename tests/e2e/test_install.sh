@@ -40,8 +40,8 @@ model="$TMP/out/fandisk.ply/model.slod"
 run_scanlod --version
 check "the installed binary loads the installed image module ($out)" \
   contains "^images: OpenImageIO .*($prefix/.*/scanlod/scanlod-oiio.so)" "$out"
-write_config "$TMP/thumb.ini" "$TMP/in" "$TMP/work-thumb" "$TMP/out-thumb" "[export]" \
-  "lod_percents = 50" "budgets =" "formats = ply" "thumbnail_size = 64" "fidelity = false"
+write_config "$TMP/thumb.ini" "$TMP/in" "$TMP/work-thumb" "$TMP/out-thumb" "[levels]" \
+  "percents = 50" "budgets =" "[export]" "formats = ply" "thumbnail_size = 64" "fidelity = false"
 run_scanlod run "$TMP/thumb.ini" -q
 check "the installed binary draws a thumbnail (rc $rc: $err)" \
   [ "$rc" -eq 0 -a -s "$TMP/out-thumb/fandisk.ply/lod50.png" ]

@@ -17,7 +17,7 @@ fi
 items=("${closed[@]}" bun_zipper_res3)
 mkdir -p "$TMP/in"
 for item in "${items[@]}"; do cp "$SCANS/$item.ply" "$TMP/in/"; done
-write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out" "[export]" "budgets = thumb:1000,big:99999999" "thumbnail_size = 64" "fidelity_samples = 20000"
+write_config "$TMP/c.ini" "$TMP/in" "$TMP/work" "$TMP/out" "[levels]" "budgets = thumb:1000,big:99999999" "[export]" "thumbnail_size = 64" "fidelity_samples = 20000"
 run_scanlod run "$TMP/c.ini" -q
 check "run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
 
@@ -128,9 +128,10 @@ for value in nan inf '' 12abc; do
   check "--lod-percent '$value': usage error (rc $rc)" [ "$rc" -eq 64 ]
   check "--lod-percent '$value': one line saying why ($err)" [ "$err" = "scanlod extract: --lod-percent: '$value' is not a finite number" ]
 done
-run_scanlod extract "$model" --triangles $((finest + 1)) -o "$TMP/x.ply"
-check "--triangles above the finest: usage error (rc $rc)" [ "$rc" -eq 64 ]
-check "--triangles above the finest: says why ($err)" contains "exceeds the finest" "$err"
+run_scanlod extract "$model" --triangles $((finest + 1)) -o "$TMP/finest.ply"
+check "--triangles above the finest: exit 0 (rc $rc)" [ "$rc" -eq 0 ]
+check "--triangles above the finest: the finest level ($out)" contains " $finest triangles" "$out"
+check "--triangles above the finest: says so ($err)" contains "above the finest level" "$err"
 cp "$model" "$TMP/bad.slod"
 printf 'X' | dd of="$TMP/bad.slod" bs=1 seek=4000 conv=notrunc status=none
 run_scanlod extract "$TMP/bad.slod" --lod-percent 50 -o "$TMP/x.ply"
@@ -156,11 +157,19 @@ check "public API on the built model" "$api_check" "$model"
 # Level names become file names: a path in one, or two levels alike, is a config error
 # before any work (exit 78, no work folder), not a file outside the item or overwritten.
 for budgets in "../evil:100" "a/b:100" "thumb:100,thumb:200" "lod20:300"; do
-  write_config "$TMP/bad.ini" "$TMP/in" "$TMP/bad-work" "$TMP/bad-out" "[export]" "budgets = $budgets"
+  write_config "$TMP/bad.ini" "$TMP/in" "$TMP/bad-work" "$TMP/bad-out" "[levels]" "budgets = $budgets" "[export]"
   run_scanlod run "$TMP/bad.ini" -q
   check "budgets = $budgets: config error (rc $rc)" [ "$rc" -eq 78 ]
   check "budgets = $budgets: before any work" [ ! -e "$TMP/bad-work" ]
-  check "budgets = $budgets: says why ($err)" contains "\[export\] budgets: .*\(a level name is\|two levels are named\)" "$err"
+  check "budgets = $budgets: says why, at the file and line ($err)" \
+    contains "bad.ini:[0-9]*: \[levels\] budgets: .*\(a level name is\|two levels are named\)" "$err"
+done
+# The same through -s, and across the lists (issue 34 item 6): the error names the -s.
+write_config "$TMP/bad.ini" "$TMP/in" "$TMP/bad-work" "$TMP/bad-out"
+for set in "levels.budgets=thumb:2000,thumb:3000" "levels.percents=20,20" "levels.budgets=../x:100"; do
+  run_scanlod run "$TMP/bad.ini" -q -s "$set"
+  check "-s $set: config error before any work (rc $rc)" [ "$rc" -eq 78 -a ! -e "$TMP/bad-work" ]
+  check "-s $set: names the -s ($err)" contains "^scanlod run: -s ${set%%=*}: \[levels\] " "$err"
 done
 write_config "$TMP/bad.ini" "$TMP/in" "$TMP/bad-work" "$TMP/bad-out" "[export]" "formats = ply,stl"
 run_scanlod run "$TMP/bad.ini" -q

@@ -61,7 +61,7 @@ write_config "$TMP/img.ini" "$TMP/in" "$TMP/work-img" "$TMP/out-img" "memory_lim
   "[export]" "thumbnail_size = 64" "fidelity = false"
 run_scanlod run "$TMP/img.ini" -q
 check "memory_limit_mb = 300, thumbnails on: the cow is published (exit $rc: $err)" [ "$rc" -eq 0 ]
-check "with its thumbnails" [ -f "$TMP/out-img/cow.ply/thumb.png" ]
+check "with its thumbnails" [ -f "$TMP/out-img/cow.ply/lod50.png" ]
 
 # Without a limit, the budget is what the node (or its cgroup) has: an item declared at
 # 300 M triangles is over it on any machine with under about 60 GB (100 M, about 23 GB

@@ -13,7 +13,7 @@
 #include <string.h>
 
 #include "geometry/kdtree.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "../unit/glb_reader.h"
 
 int main(int argc, char **argv)

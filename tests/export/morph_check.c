@@ -16,7 +16,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "geometry/triangle_bvh.h"
 #include "../unit/glb_reader.h"
 

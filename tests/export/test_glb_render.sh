@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # A textured scan in, textured GLBs out, and the texture on screen: the bundled textured
 # cow (tests/data/textured, per-vertex UVs and a board of 8 flat colours) goes through
-# the pipeline with meshopt and with Draco compression. Each level's GLB has TEXCOORD_0,
+# the pipeline with meshopt and with Draco compression, every level baked ([export] texture
+# = bake; the default keeps the input's image where it can: test_glb_texture_kept.sh).
+# Each level's GLB has TEXCOORD_0,
 # an embedded JPEG and a baseColorTexture, and passes the validator; three.js in headless
 # Chromium (scripts/viewer/render.cjs, playwright-core) loads it, finds the texture, and
 # draws it unlit from the side: at least 85% of the cow's pixels lie within 40 (RGB
@@ -21,14 +23,14 @@ gltf_validator_ready || { echo "FAIL: the glTF validator is not installed (scrip
 mkdir -p "$TMP/in"
 cp "$SCANLOD_SOURCE_DIR/tests/data/textured/cow_textured.ply" "$SCANLOD_SOURCE_DIR/tests/data/textured/cow_texture.png" "$TMP/in/"
 run_mode() { # run_mode NAME compression texture
-  write_config "$TMP/$1.ini" "$TMP/in" "$TMP/work-$1" "$TMP/out-$1" "[export]" "lod_percents = 100" \
-    "budgets = thumb:800" "formats = ply,glb" "thumbnail_size = 0" "fidelity = false" \
+  write_config "$TMP/$1.ini" "$TMP/in" "$TMP/work-$1" "$TMP/out-$1" "[levels]" "percents = 100" \
+    "budgets = thumb:800" "[export]" "formats = ply,glb" "thumbnail_size = 0" "fidelity = false" \
     "compression = $2" "texture = $3" "texture_sizes = thumb:512,lod100:1024"
   run_scanlod run "$TMP/$1.ini" -q
   check "$1: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
 }
-run_mode meshopt meshopt auto
-run_mode draco draco auto
+run_mode meshopt meshopt bake
+run_mode draco draco bake
 run_mode plain meshopt none
 
 # The texture's own colours, and how much of a picture of the cow is made of them.

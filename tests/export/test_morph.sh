@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# [export] morph = true (docs/morphing.md) on the octree method's levels of the bundled
+# [export] morph = true (docs/morphing.md) on the octree method's own levels of the bundled
 # bunny (lod30, lod60, lod100) for every GLB encoding (none float, none quantised, meshopt,
 # draco), and on the cluster method's levels of the cow (thumb, lod40, lod100; float,
 # meshopt, draco):
@@ -24,12 +24,17 @@ mc="${SCANLOD_BUILD_DIR:?}/tests/morph_check"
 views="$SCANLOD_SOURCE_DIR/tests/export/glb_views.py"
 gltf_validator_ready || { echo "FAIL: the glTF validator is not installed (scripts/install-deps.sh)" >&2; exit 1; }
 
+# The papers' levels: each method's own cuts and models, unrefined, its finest level on top
+# rather than the scan (docs/levels.md: top = method, oversample = 1, collapse and fit
+# off), so a level's morph target is the method's own coarser level. The published
+# (refined) levels' morphs are test_morph_render's and test_morph_surface's.
+paper=("top = method" "oversample = 1" "[refine]" "collapse = false" "fit = false")
 mkdir -p "$TMP/in"
 cp "$SCANS/bun_zipper_res3.ply" "$TMP/in/"
 item=bun_zipper_res3.ply
 run_mode() { # run_mode NAME compression quantize morph
-  write_config "$TMP/$1.ini" "$TMP/in" "$TMP/work-$1" "$TMP/out-$1" "[export]" \
-    "lod_percents = 30,60,100" "budgets =" "formats = ply,glb" "thumbnail_size = 0" \
+  write_config "$TMP/$1.ini" "$TMP/in" "$TMP/work-$1" "$TMP/out-$1" "[levels]" \
+    "percents = 30,60,100" "budgets =" "${paper[@]}" "[export]" "formats = ply,glb" "thumbnail_size = 0" \
     "fidelity = false" "compression = $2" "quantize = $3" "morph = $4"
   run_scanlod run "$TMP/$1.ini" -q
   check "$1: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
@@ -99,7 +104,8 @@ for mode in cluster-float:none:false cluster-meshopt:meshopt:true cluster-draco:
   for morph in true false; do
     suffix=$([ "$morph" = true ] && echo "" || echo "-plain")
     write_config "$TMP/$name$suffix.ini" "$TMP/in-cluster" "$TMP/work-$name$suffix" "$TMP/out-$name$suffix" \
-      "[cluster]" "intermediates = 1" "[export]" "lod_percents = 40,100" "budgets = thumb:1000" \
+      "[cluster]" "intermediates = 1" "[levels]" "percents = 40,100" "budgets = thumb:1000" \
+      "${paper[@]}" "[export]" \
       "formats = ply,glb" "thumbnail_size = 0" "fidelity = false" "compression = $comp" \
       "quantize = $quant" "morph = $morph"
     run_scanlod run "$TMP/$name$suffix.ini" -q -s lod.method=cluster

@@ -29,8 +29,8 @@ w0, wh, w1, coarse = (load(p) for p in sys.argv[1:5])
 print(diff(w0, coarse), diff(wh, coarse), diff(w1, coarse), diff(w0, wh), diff(w0, w1))
 PY
 for comp in meshopt draco; do
-  write_config "$TMP/$comp.ini" "$TMP/in" "$TMP/work-$comp" "$TMP/out-$comp" "[export]" \
-    "lod_percents = 30,60" "budgets =" "formats = glb" "thumbnail_size = 0" "fidelity = false" \
+  write_config "$TMP/$comp.ini" "$TMP/in" "$TMP/work-$comp" "$TMP/out-$comp" "[levels]" \
+    "percents = 30,60" "budgets =" "[export]" "formats = glb" "thumbnail_size = 0" "fidelity = false" \
     "compression = $comp" "morph = true"
   run_scanlod run "$TMP/$comp.ini" -q
   check "$comp: run exits 0 ($err)" [ "$rc" -eq 0 ]
@@ -76,7 +76,7 @@ PY
   check "$comp examples/viewer: lod30 has no morph weight ($got)" [ "$got" = "null" ]
   # The report's index.html: its views draw, lod60's with the blending (weight 0 at the
   # framing distance), and its caption says what it blends into.
-  (cd "$dir" && node "$render/check_page.mjs" index.html) >"$TMP/$comp-page.jsonl" 2>&1 || true
+  (cd "$dir" && node "$render/check_page.mjs" --levels index.html) >"$TMP/$comp-page.jsonl" 2>&1 || true
   check "$comp index.html: lod60 drawn with morph weight 0.000 ($(grep lod60 "$TMP/$comp-page.jsonl" | head -1))" \
     grep -q '"src":"lod60.glb.js","state":"drawn".*"morph":"0.000"' "$TMP/$comp-page.jsonl"
   check "$comp index.html: lod30 drawn without morph" \

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The weight-1 *surface* of a morphing level lies on the coarser level (issue 13,
-# docs/morphing.md "The surface at weight 1"), for every LOD method: octree (bunny,
-# bun_zipper_res3: lod100 -> lod60 -> lod30), cluster (cow: lod100 -> lod40 -> thumb) and
-# segment (fandisk: lod100 -> lod40 -> thumb), float GLBs with [export] morph = true:
+# docs/morphing.md "The surface at weight 1"), for every LOD method as its paper makes its
+# levels: octree (bunny, bun_zipper_res3: k100 -> k60 -> k30), cluster (cow: lod100 ->
+# lod40 -> thumb) and segment (fandisk: lod100 -> lod40 -> thumb); and for the default
+# (best: the scan and refined levels, which are not nested: cow lod100 -> lod40 -> thumb),
+# float GLBs with [export] morph = true:
 #   - the GLB decoded by the tests' own reader at weight 1 (triangles and all, morph_check
 #     OUT.ply) is measured against the coarser level's PLY by `scanlod compare`: the
 #     area-sampled one-sided Hausdorff from it to the coarser level (b_to_a) is at most
@@ -63,11 +65,13 @@ export_lines=("formats = ply,glb" "thumbnail_size = 0" "fidelity = false" "compr
 # Octree: the bunny's published levels, and extract on its model.
 mkdir -p "$TMP/in-octree"
 cp "$SCANS/bun_zipper_res3.ply" "$TMP/in-octree/"
-write_config "$TMP/octree.ini" "$TMP/in-octree" "$TMP/work-octree" "$TMP/out-octree" "[export]" \
-  "lod_percents = 30,60,100" "budgets =" "${export_lines[@]}"
+write_config "$TMP/octree.ini" "$TMP/in-octree" "$TMP/work-octree" "$TMP/out-octree" "[lod]" \
+  "method = octree" "[levels]" "percents =" "expansions = 30,60,100" "budgets =" "top = method" \
+  "oversample = 1" \
+  "[refine]" "collapse = false" "fit = false" "[export]" "${export_lines[@]}"
 run_scanlod run "$TMP/octree.ini" -q
 check "octree: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
-check_pairs octree "$TMP/out-octree/bun_zipper_res3.ply" "lod100:lod60:3 lod60:lod30::25"
+check_pairs octree "$TMP/out-octree/bun_zipper_res3.ply" "k100:k60:3 k60:k30::25"
 
 model="$TMP/out-octree/bun_zipper_res3.ply/model.slod"
 run_scanlod extract "$model" --triangles 1500 -o "$TMP/coarse.ply"
@@ -83,11 +87,20 @@ for method in cluster:cow.ply segment:fandisk.ply; do
   IFS=: read -r name item <<<"$method"
   mkdir -p "$TMP/in-$name"
   cp "$SCANS/$item" "$TMP/in-$name/"
-  write_config "$TMP/$name.ini" "$TMP/in-$name" "$TMP/work-$name" "$TMP/out-$name" "[export]" \
-    "lod_percents = 40,100" "budgets = thumb:1000" "${export_lines[@]}"
+  write_config "$TMP/$name.ini" "$TMP/in-$name" "$TMP/work-$name" "$TMP/out-$name" "[levels]" \
+    "percents = 40,100" "budgets = thumb:1000" "top = method" "oversample = 1" "[refine]" "collapse = false" \
+    "fit = false" "[export]" "${export_lines[@]}"
   run_scanlod run "$TMP/$name.ini" -q -s lod.method="$name"
   check "$name: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
   ratios=(2.5 2.5); [ "$name" = cluster ] || ratios=(2 4)
   check_pairs "$name" "$TMP/out-$name/$item" "lod100:lod40:${ratios[0]} lod40:thumb:${ratios[1]}"
 done
+# The default: the scan at the top, the rest collapsed and fitted (not nested in it).
+mkdir -p "$TMP/in-best"
+cp "$SCANS/cow.ply" "$TMP/in-best/"
+write_config "$TMP/best.ini" "$TMP/in-best" "$TMP/work-best" "$TMP/out-best" "[levels]" \
+  "percents = 40,100" "budgets = thumb:1000" "[export]" "${export_lines[@]}"
+run_scanlod run "$TMP/best.ini" -q
+check "best: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
+check_pairs best "$TMP/out-best/cow.ply" "lod100:lod40: lod40:thumb:"
 finish

@@ -60,8 +60,8 @@ for n in "${points[@]}"; do
     woken_bad=$((woken_bad + 1)); echo "rename $n: woken run exits $woken: $(tail -n 2 "$TMP/frozen.err")" >&2
   fi
   done_events=$(cat "$TMP"/logs/*.jsonl 2>/dev/null | grep -c '"event":"stage_done"' || true)
-  if [ "$done_events" -ne 6 ]; then
-    misslogged=$((misslogged + 1)); echo "rename $n: $done_events stage_done events, not 6" >&2
+  if [ "$done_events" -ne 7 ]; then
+    misslogged=$((misslogged + 1)); echo "rename $n: $done_events stage_done events, not 7" >&2
   fi
   claims=$(find "$TMP/work/queue" -path '*/claimed/*' -type f ! -name '.*' 2>/dev/null)
   if [ -n "$claims" ]; then

@@ -48,8 +48,8 @@ set -e
 check "the frozen run, woken up, ends (timeout: $woke)" [ "$woke" -eq 0 ]
 check "it exits 0 or 75 (got $frozen_rc)" [ "$frozen_rc" -eq 0 -o "$frozen_rc" -eq 75 ]
 done_events=$(cat "$TMP/logs"/*.jsonl | grep -c '"stage_done"' || true)
-check "each of the 3 x 6 stages is done once, by one owner ($done_events stage_done events)" [ "$done_events" -eq 18 ]
-[ "$done_events" -eq 18 ] || cat "$TMP/logs"/*.jsonl | grep '"stage_done"' >&2
+check "each of the 3 x 7 stages is done once, by one owner ($done_events stage_done events)" [ "$done_events" -eq 21 ]
+[ "$done_events" -eq 21 ] || cat "$TMP/logs"/*.jsonl | grep '"stage_done"' >&2
 run_scanlod verify "$TMP/c.ini"
 check "verify after both: exit 0 (got $rc: $out)" [ "$rc" -eq 0 ]
 check "result byte-identical to the clean run" same_digest "$ref" "$TMP/work" "$TMP/out"

@@ -66,8 +66,8 @@ for n in "${points[@]}"; do
   # The log tells the same story: over the injected run and its rerun, each of the six
   # stages is said done once, whether its owner or the run that adopted its commit says so.
   done_events=$(cat "$TMP"/logs/*.jsonl 2>/dev/null | grep -c '"event":"stage_done"' || true)
-  if [ "$done_events" -ne 6 ]; then
-    misslogged=$((misslogged + 1)); echo "rename $n: $done_events stage_done events, not 6" >&2
+  if [ "$done_events" -ne 7 ]; then
+    misslogged=$((misslogged + 1)); echo "rename $n: $done_events stage_done events, not 7" >&2
   fi
 done
 echo "${#points[@]} of $renames renames injected: $faulted runs failed with an error, the rest finished" >&2

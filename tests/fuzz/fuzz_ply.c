@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry/ply.h"
+#include "formats/ply.h"
 
 static void require(int cond)
 {

@@ -17,7 +17,7 @@
 #include <string.h>
 
 #include "geometry/kdtree.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "stages/range/range.h"
 #include "tests/check.h"
 

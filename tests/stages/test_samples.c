@@ -20,7 +20,7 @@
 #include "core/atomicfile.h"
 #include "core/hash.h"
 #include "geometry/mesh_distance.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "pipeline/config.h"
 #include "geometry/key_table.h"
 #include "stages/registry.h"
@@ -154,7 +154,7 @@ static void test_sphere(int distance, int sign_neighbours)
     for (uint64_t i = 0; i < s.count; i++) {
         double v[3], d2 = 0;
         for (int k = 0; k < 3; k++) {
-            v[k] = s.origin[k] + s.voxel_size * s.coords[3 * i + k] - c[k];
+            v[k] = s.origin[k] + s.leaf_size * s.coords[3 * i + k] - c[k];
             d2 += v[k] * v[k];
         }
         double exact = sqrt(d2) - r, got = s.distance[i];
@@ -299,7 +299,7 @@ static void test_degenerate(void)
     CHECK(sl_samples_compute(&cfg, &ps, &s, &counts, NULL, &err) == SL_OK);
     uint64_t wrong = 0;
     for (uint64_t i = 0; i < s.count; i++) {
-        double z = s.origin[2] + s.voxel_size * s.coords[3 * i + 2] - 0.5;
+        double z = s.origin[2] + s.leaf_size * s.coords[3 * i + 2] - 0.5;
         wrong += z != 0 && (z < 0) != (s.distance[i] < 0);
     }
     CHECK_MSG(wrong == 0 && counts.plan.cells[2] == 1 && s.count > 2500, "plane: %llu wrong",
@@ -395,7 +395,7 @@ static void test_stage_on(const char *ply, const char *name)
     CHECK(sl_pointset_read(pts, &ps, &err) == SL_OK);
     CHECK(sl_samples_compute(&cfg, &ps, &a, &counts, NULL, &err) == SL_OK);
     CHECK(sl_vdb_samples_read(vdb[0], UINT64_MAX, &b, &err) == SL_OK);
-    CHECK(a.count == b.count && a.voxel_size == b.voxel_size && !a.colors == !b.colors &&
+    CHECK(a.count == b.count && a.leaf_size == b.leaf_size && !a.colors == !b.colors &&
           !memcmp(a.origin, b.origin, sizeof a.origin) &&
           !memcmp(a.coords, b.coords, 12 * a.count) && !memcmp(a.distance, b.distance, 4 * a.count) &&
           (!a.colors || !memcmp(a.colors, b.colors, 4 * a.count)));

@@ -18,7 +18,7 @@
 #include <string.h>
 
 #include "geometry/mesh_distance.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "stages/samples/samples.h"
 #include "tests/check.h"
 
@@ -98,7 +98,7 @@ static void test_cube(void)
     for (uint64_t i = 0; i < s.count; i++) {
         double v[3];
         for (int k = 0; k < 3; k++)
-            v[k] = s.origin[k] + s.voxel_size * s.coords[3 * i + k];
+            v[k] = s.origin[k] + s.leaf_size * s.coords[3 * i + k];
         double e = fabs(s.distance[i] - box_distance(v));
         worst = e > worst ? e : worst;
         flipped += (s.distance[i] < 0) != (t.distance[i] < 0) &&

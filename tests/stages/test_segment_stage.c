@@ -1,8 +1,8 @@
-/* The segment stage through its entry: options of [segment] and the export's ladder, the
- * run on the range stage's points.slpts (levels.sllev, the level list, within their
- * budgets and watertight, segments.slsgm), byte-identical files on 1 and 2 threads,
- * nothing written when interrupted, a point cloud refused, a damaged levels file refused
- * by the reader. */
+/* The segment stage through its entry: options of [segment] and the ladder ([levels]), the
+ * run on the range stage's points.slpts (the level list of levels/level.h, its levels
+ * within their budgets and watertight, segments.slsgm), byte-identical files on 1 and 2
+ * threads, nothing written when interrupted, a point cloud refused, a damaged level file
+ * refused by the reader. */
 #include <dirent.h>
 #include <omp.h>
 #include <stdio.h>
@@ -12,10 +12,9 @@
 #include <unistd.h>
 
 #include "geometry/mesh_adjacency.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "pipeline/config.h"
-#include "stages/cluster/cluster.h"
-#include "stages/export/export.h"
+#include "levels/level.h"
 #include "stages/range/range.h"
 #include "stages/segment/segment.h"
 #include "tests/check.h"
@@ -96,7 +95,7 @@ static int write_points(const char *scan, const char *dir, sl_pointset *ps)
 
 static void *configure(const char **overrides, int n)
 {
-    const sl_option *tables[] = {sl_segment_stage.options, sl_export_stage.options, NULL};
+    const sl_option *tables[] = {sl_segment_stage.options, sl_ladder_options, NULL};
     sl_config *cfg = NULL;
     sl_error err;
     sl_error_init(&err);
@@ -135,10 +134,10 @@ static int run_stage(const void *sc, const char *range_dir, const char *out, int
 static void test_options(void)
 {
     const char *over[] = {"segment.delta_seg=35", "segment.rule=paper", "segment.alpha=2",
-                          "export.lod_percents=10,100", "export.budgets=thumb:500"};
+                          "levels.percents=10,100", "levels.budgets=thumb:500"};
     void *sc = configure(over, 5);
     sl_segment_stage.release_config(sc);
-    const sl_option *tables[] = {sl_segment_stage.options, sl_export_stage.options, NULL};
+    const sl_option *tables[] = {sl_segment_stage.options, sl_ladder_options, NULL};
     const char *bad[] = {"segment.delta_seg=95"};
     sl_config *cfg = NULL;
     sl_error err;
@@ -157,14 +156,16 @@ static void test_run(void)
     sl_pointset ps;
     if (write_points("tests/data/scans/fandisk.ply", range, &ps))
         return;
-    const char *over[] = {"export.lod_percents=5,20,100", "export.budgets=thumb:500,big:99999",
-                          "segment.search_samples=0"};
-    void *sc = configure(over, 3);
+    /* Each level at its own count (paper 3); by default they are made at twice it, for the
+     * refine stage's collapse (checked below). */
+    const char *over[] = {"levels.percents=5,20,100", "levels.budgets=thumb:500,big:99999",
+                          "segment.search_samples=0", "levels.oversample=1"};
+    void *sc = configure(over, 4);
     CHECK(run_stage(sc, range, out1, 1, NULL) == 0);
     CHECK(run_stage(sc, range, out2, 2, NULL) == 0);
-    CHECK_EQ_U64(count_files(out1), 2);
-    const char *files[] = {SL_CLUSTER_LEVELS_FILE, SL_SEGMENT_MAP_FILE};
-    for (int f = 0; f < 2; f++) { /* the same bytes on 1 and 2 threads */
+    CHECK_EQ_U64(count_files(out1), 7); /* the map, the list, five levels */
+    const char *files[] = {SL_LEVEL_LIST_FILE, SL_SEGMENT_MAP_FILE, "lod5.sllvl", "thumb.sllvl"};
+    for (int f = 0; f < 4; f++) { /* the same bytes on 1 and 2 threads */
         long s1, s2;
         snprintf(path, sizeof path, "%s/%s", out1, files[f]);
         char *a = slurp(path, &s1);
@@ -174,23 +175,24 @@ static void test_run(void)
         free(a);
         free(b);
     }
-    sl_cluster_list lv; /* the level list the export reads, as the cluster method's */
+    sl_level_list lv; /* the level list the refine stage reads */
     sl_error err;
     sl_error_init(&err);
-    snprintf(path, sizeof path, "%s/%s", out1, SL_CLUSTER_LEVELS_FILE);
-    CHECK(sl_cluster_list_read(path, &lv, &err) == 0);
+    CHECK(sl_level_list_read(out1, &lv, &err) == 0);
     CHECK_EQ_U64(lv.count, 5);
     CHECK_EQ_U64(lv.input_triangles, ps.triangle_count);
     const uint64_t budgets[5] = {ps.triangle_count * 5 / 100, ps.triangle_count * 20 / 100,
                                  ps.triangle_count, 500, 99999};
     const char *names[5] = {"lod5", "lod20", "lod100", "thumb", "big"};
     for (uint32_t i = 0; i < lv.count && i < 5; i++) {
-        const sl_cluster_list_mesh *l = &lv.meshes[i];
+        sl_level *l = &lv.levels[i];
         CHECK_MSG(!strcmp(l->name, names[i]), "%s", l->name);
+        CHECK(sl_level_read_mesh(out1, l, ps.count, &err) == 0);
         CHECK_MSG(l->triangle_count <= budgets[i], "%s: %llu", l->name,
                   (unsigned long long)l->triangle_count);
-        CHECK(l->clamped == (budgets[i] >= ps.triangle_count));
-        CHECK(l->by_percent == (i < 3) && l->budget == budgets[i] && !l->intermediate);
+        CHECK(!!(l->flags & SL_LEVEL_CLAMPED) == (budgets[i] >= ps.triangle_count));
+        CHECK((l->rung.kind == SL_RUNG_SHARE) == (i < 3) && l->budget == budgets[i] &&
+              !(l->flags & SL_LEVEL_INTERMEDIATE) && !strcmp(l->method, "segment"));
         int moved = 0; /* every vertex is the point it names, unmoved */
         for (uint64_t v = 0; v < l->vertex_count; v++)
             moved += l->source[v] >= ps.count ||
@@ -204,21 +206,42 @@ static void test_run(void)
                   (unsigned long long)adj.report.boundary_edges);
         sl_mesh_adjacency_release(&adj);
     }
-    CHECK(lv.meshes[2].triangle_count == ps.triangle_count); /* lod100: the input */
-    sl_cluster_list_release(&lv);
+    CHECK(lv.levels[2].triangle_count == ps.triangle_count); /* lod100: the input */
+    sl_level_list_release(&lv);
 
-    /* a damaged file is refused: one byte of its body flipped */
+    /* a damaged level file is refused: one byte of its body flipped */
     long size;
+    snprintf(path, sizeof path, "%s/lod5.sllvl", out1);
     char *data = slurp(path, &size);
     data[size - 5] ^= 0x40;
-    snprintf(path, sizeof path, "%s/damaged.sllev", out3);
+    snprintf(path, sizeof path, "%s/lod5.sllvl", out3);
     FILE *f = fopen(path, "wb");
     fwrite(data, 1, (size_t)size, f);
     fclose(f);
     free(data);
     sl_error_init(&err);
-    CHECK(sl_cluster_list_read(path, &lv, &err) == SL_E_CORRUPT);
+    sl_level damaged;
+    memset(&damaged, 0, sizeof damaged);
+    snprintf(damaged.name, sizeof damaged.name, "lod5");
+    CHECK(sl_level_read_mesh(out3, &damaged, ps.count, &err) == SL_E_CORRUPT);
     unlink(path);
+
+    /* The default: each level made at twice its count (at most the input's), for the
+     * refine stage to collapse the rest of the way. */
+    const char *twice[] = {"levels.percents=5", "levels.budgets=", "segment.search_samples=0"};
+    void *sc2 = configure(twice, 3);
+    char out4[600];
+    make_dir(out4, sizeof out4, "out4");
+    CHECK(run_stage(sc2, range, out4, 2, NULL) == 0);
+    sl_level_list two;
+    CHECK(sl_level_list_read(out4, &two, &err) == 0);
+    uint64_t five = ps.triangle_count * 5 / 100;
+    CHECK_MSG(two.count == 1 && two.levels[0].budget == five &&
+                  two.levels[0].triangle_count > five && two.levels[0].triangle_count <= 2 * five,
+              "lod5 made at %llu triangles for %llu", (unsigned long long)two.levels[0].triangle_count,
+              (unsigned long long)five);
+    sl_level_list_release(&two);
+    sl_segment_stage.release_config(sc2);
 
     /* interrupted: nothing written */
     volatile sig_atomic_t stop = 1;

@@ -105,7 +105,7 @@ static void test_scan(const char *name, sl_pointset *ps, int cloud, int want_col
         }
     }
     CHECK(sl_samples_compute(&scfg, ps, &s, &counts, NULL, &err) == SL_OK);
-    sl_sample_grid grid = {s.count, s.coords, s.distance, s.colors, s.voxel_size,
+    sl_sample_grid grid = {s.count, s.coords, s.distance, s.colors, s.leaf_size,
                            {s.origin[0], s.origin[1], s.origin[2]}};
     sl_octree tree;
     CHECK(sl_octree_build(&grid, &tree, NULL, &err) == SL_OK);

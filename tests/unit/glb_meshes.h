@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "geometry/mesh.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 
 static inline void meshes_alloc_(sl_mesh *m, uint64_t vertices, uint64_t triangles, int normals,
                           int colors)

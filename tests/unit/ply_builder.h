@@ -17,7 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry/ply.h"
+#include "formats/ply.h"
 
 typedef struct plyb {
     char *buf;

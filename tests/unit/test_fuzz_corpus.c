@@ -4,7 +4,9 @@
  * - tests/fuzz/corpus/ply through sl_ply_read_memory: a valid mesh or one bad-input/limit
  *   error;
  * - tests/fuzz/corpus/slod (.slod bodies) through sl_lod_model_parse and generation: the
- *   promises of tests/fuzz/slod_promises.h.
+ *   promises of tests/fuzz/slod_promises.h;
+ * - tests/fuzz/corpus/{obj,stl,off,xyz,gltf} through sl_scan_read_memory with that format:
+ *   the promises of tests/fuzz/scan_promises.h.
  */
 #include <dirent.h>
 #include <stdint.h>
@@ -12,8 +14,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "tests/check.h"
+#include "tests/fuzz/scan_promises.h"
 #include "tests/fuzz/slod_promises.h"
 
 static unsigned char *slurp(const char *path, size_t *size)
@@ -59,6 +62,21 @@ static void replay_ply(const unsigned char *data, size_t size, const char *name,
                   "%s: rc %d '%s'", name, rc, err.message);
         counts[1]++;
     }
+    sl_mesh_release(&m);
+}
+
+/* The scan readers' corpora: the reader is the folder's name (the corpus' sub-folder). */
+static const char *scan_format;
+
+static void replay_scan(const unsigned char *data, size_t size, const char *name, int counts[3])
+{
+    sl_mesh m;
+    sl_error err;
+    sl_error_init(&err);
+    int rc = sl_scan_read_memory(data, size, name, scan_format, NULL, NULL, &m, NULL, &err);
+    const char *why = scan_outcome_broken(rc, &err, &m, name);
+    CHECK_MSG(why == NULL, "%s/%s: %s (rc %d '%s')", scan_format, name, why, rc, err.message);
+    counts[rc == 0 ? 0 : 1]++;
     sl_mesh_release(&m);
 }
 
@@ -115,5 +133,12 @@ int main(void)
     CHECK(ply[0] > 20 && ply[1] > 20);
     replay_corpus("slod", replay_slod, slod);
     CHECK_MSG(slod[2] == 6 && slod[1] >= 5, "slod corpus: %d seeds, %d refused", slod[2], slod[1]);
+    static const char *const scans[] = {"obj", "stl", "off", "xyz", "gltf"};
+    for (size_t i = 0; i < sizeof scans / sizeof scans[0]; i++) {
+        int n[3] = {0, 0, 0};
+        scan_format = scans[i];
+        replay_corpus(scans[i], replay_scan, n);
+        CHECK_MSG(n[0] >= 2 && n[1] >= 5, "%s corpus: %d loaded, %d refused", scans[i], n[0], n[1]);
+    }
     return check_report();
 }

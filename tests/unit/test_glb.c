@@ -16,7 +16,7 @@
 
 #include "../check.h"
 #include "core/atomicfile.h"
-#include "geometry/glb.h"
+#include "formats/glb.h"
 #include "glb_meshes.h"
 #include "json_validate.h"
 

@@ -1,4 +1,4 @@
-/* GLB quantisation and compression (geometry/glb.h), checked by decoding what was written
+/* GLB quantisation and compression (formats/glb.h), checked by decoding what was written
  * with the tests' own reader (glb_reader.h: meshoptimizer's decoders, Draco's decoder) and
  * comparing with the mesh given, in every encoding:
  *   - positions within the documented bound (sqrt(3)/2 x the grid step), the measured
@@ -22,7 +22,7 @@
 
 #include "../check.h"
 #include "core/atomicfile.h"
-#include "geometry/glb.h"
+#include "formats/glb.h"
 #include "geometry/kdtree.h"
 #include "glb_meshes.h"
 #include "glb_reader.h"

@@ -10,7 +10,7 @@
 
 #include "tests/check.h"
 #include "geometry/mesh_distance.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "geometry/triangle_bvh.h"
 
 /* Unit sphere from a cube: each face an n x n grid, projected onto the sphere, scaled

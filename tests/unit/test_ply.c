@@ -1,5 +1,5 @@
 /* PLY reader: every encoding, scalar type, layout and convention the reader promises
- * (geometry/ply.h), each written by tests/unit/ply_builder.h in ascii, binary LE and
+ * (formats/ply.h), each written by tests/unit/ply_builder.h in ascii, binary LE and
  * binary BE and read back through both sl_ply_read (mmap) and sl_ply_read_memory; the
  * three encodings must give the same, exactly expected mesh.
  */
@@ -12,7 +12,7 @@
 #include <unistd.h>
 
 #include "tests/check.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "tests/unit/ply_builder.h"
 
 static char tmpdir[256];

@@ -11,7 +11,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "tests/check.h"
 #include "tests/unit/ply_builder.h"
 

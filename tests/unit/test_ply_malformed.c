@@ -17,7 +17,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "tests/check.h"
 #include "tests/unit/ply_builder.h"
 

@@ -1,4 +1,4 @@
-/* The ascii number parsers (geometry/ply_number.c) must give exactly what strtof/strtod
+/* The ascii number parsers (formats/ply_number.c) must give exactly what strtof/strtod
  * give, bit for bit: on the ways writers print floats (%g/%f/%e at every precision, the
  * shortest round-trip form), on random decimal strings of any length and exponent, and on
  * the special cases (signed zeros, subnormals, overflow, nan/inf, half-way values).
@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry/ply_internal.h"
+#include "formats/ply_internal.h"
 #include "tests/check.h"
 
 static uint64_t rng_state = 0x9E3779B97F4A7C15ull;

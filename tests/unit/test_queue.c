@@ -7,6 +7,9 @@
 #include "tests/unit/durable_checks.h"
 
 #include <errno.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #define CLAIMERS 8
 #define ROUNDS 25
@@ -33,6 +36,9 @@ static sl_ticket ticket_for(const char *item)
     t.pid = 4242;
     t.expires = 1700000000;
     snprintf(t.reason, sizeof t.reason, "first line\nsecond line");
+    t.memory_limit_mb = 90;
+    snprintf(t.run, sizeof t.run, "20261206T092636Z-run-node-1-4242");
+    t.parts = 8;
     return t;
 }
 
@@ -61,6 +67,15 @@ static void test_create_put_move_find(void)
     CHECK(!strcmp(back.key, t.key) && back.attempt == 2 && back.epoch == 7 && back.pid == 4242);
     CHECK(!strcmp(back.host, "node-1") && back.expires == 1700000000);
     CHECK_MSG(!strcmp(back.reason, "first line second line"), "reason '%s'", back.reason);
+    /* What issue 34 added: the limit a crash ran under, the run a failure waits out, the
+     * split a part belongs to. A ticket of an older build has no limit: -1, not 0. */
+    CHECK(back.memory_limit_mb == 90 && back.parts == 8 &&
+          !strcmp(back.run, "20261206T092636Z-run-node-1-4242"));
+    FILE *old = fopen(path, "w");
+    fputs("item=cow\nsource=cow.ply\nkey=0123456789abcdef0123456789abcdef\nclass=bug\nend\n", old);
+    fclose(old);
+    CHECK(sl_ticket_read(path, &back, &err) == 0 && back.memory_limit_mb == -1 &&
+          back.parts == 0 && !back.run[0]);
 
     /* ready -> claimed -> done; a move from a state that no longer holds it is BUSY. */
     CHECK(sl_queue_move(work, stage, "cow", SL_STATE_READY, SL_STATE_CLAIMED, &err) == 0);
@@ -338,6 +353,31 @@ static void test_escaping(void)
     CHECK(rc == SL_E_LIMIT || (rc == 0 && strlen(name) <= SL_TICKET_NAME_MAX));
 }
 
+/* Debug builds assert the state machine: a ready ticket moved straight to done aborts
+ * (the sanitizer pass is a Debug build; a Release build has no assertions to check). */
+static void test_illegal_move_aborts(void)
+{
+#ifndef NDEBUG
+    sl_error err;
+    sl_error_init(&err);
+    sl_ticket t = ticket_for("sheep");
+    CHECK(sl_queue_put(work, stage, SL_STATE_READY, "sheep", &t, &err) == 0);
+    fflush(NULL);
+    pid_t pid = fork();
+    if (pid == 0) {
+        fclose(stderr); /* the assertion's message is expected */
+        sl_queue_move(work, stage, "sheep", SL_STATE_READY, SL_STATE_DONE, &err);
+        _exit(0);
+    }
+    int status = 0;
+    waitpid(pid, &status, 0);
+    CHECK_MSG(WIFSIGNALED(status) && WTERMSIG(status) == SIGABRT,
+              "ready -> done did not abort (status %d)", status);
+    CHECK(sl_queue_find(work, stage, "sheep") == SL_STATE_READY); /* and did not move */
+    CHECK(sl_queue_move(work, stage, "sheep", SL_STATE_READY, SL_STATE_CLAIMED, &err) == 0);
+#endif
+}
+
 int main(void)
 {
     if (durable_scratch("test_queue", work)) {
@@ -350,6 +390,7 @@ int main(void)
     test_concurrent_claims();
     test_torn_tickets();
     test_escaping();
+    test_illegal_move_aborts();
     durable_remove_tree(work);
     return check_report();
 }

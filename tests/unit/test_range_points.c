@@ -323,10 +323,42 @@ static void test_texture(const char *dir)
             CHECK(ps.colors && memcmp(ps.colors, "\xff\x00\x00\xff", 4) == 0);
             CHECK(ps.colors && memcmp(ps.colors + 4, "\x80\x80\x80\xff", 4) == 0);
             CHECK(ps.colors && memcmp(ps.colors + 8, "\xff\xff\xff\xff", 4) == 0);
+            /* Every point has one texture coordinate: carried, and through the file. */
+            CHECK(ps.texcoords && memcmp(ps.texcoords, uv, sizeof uv) == 0);
+            CHECK(strcmp(c.texcoord_source, per_face ? "corners" : "vertices") == 0);
+            char file[1100];
+            snprintf(file, sizeof file, "%s/uv.slpts", dir);
+            sl_pointset back;
+            CHECK(sl_pointset_write(file, &ps, &err) == SL_OK);
+            CHECK(sl_pointset_read(file, &back, &err) == SL_OK);
+            CHECK(back.texcoords && memcmp(back.texcoords, uv, sizeof uv) == 0);
+            sl_pointset_release(&back);
+            unlink(file);
         }
         sl_pointset_release(&ps);
         sl_mesh_release(&m);
     }
+    /* A seam: two triangles whose corners give their shared points different texture
+     * coordinates. The point set carries none (the export bakes), and says why. */
+    sl_mesh m;
+    sl_pointset ps;
+    sl_range_counts c;
+    const float v[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+    const uint32_t tri[] = {0, 1, 2, 2, 1, 3};
+    const float uv[] = {0, 0, 0.5f, 0, 0, 0.5f, 0.6f, 0.5f, 0.5f, 0.1f, 1, 1};
+    sl_mesh_init(&m);
+    m.vertex_count = 4;
+    m.positions = copy_floats(v, 12);
+    m.triangle_count = 2;
+    m.triangles = malloc(sizeof tri);
+    memcpy(m.triangles, tri, sizeof tri);
+    m.face_texcoords = copy_floats(uv, 12);
+    snprintf(m.texture_file, sizeof m.texture_file, "tex.png");
+    CHECK(run(&cfg, &m, dir, &ps, &c) == SL_OK);
+    CHECK(ps.texcoords == NULL && strcmp(c.texcoord_source, "none") == 0);
+    CHECK_EQ_U64(c.texcoord_seams, 2);
+    sl_pointset_release(&ps);
+    sl_mesh_release(&m);
     unlink(path);
 }
 

@@ -11,7 +11,7 @@
 
 #include "geometry/mesh_adjacency.h"
 #include "geometry/mesh_distance.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 #include "geometry/triangle_bvh.h"
 #include "stages/range/range.h"
 #include "stages/segment/segment.h"

@@ -63,7 +63,7 @@ static sl_vdb_samples make_samples(int with_colors)
                     for (int k = 0; k < 4; k++)
                         s.colors[4 * i + k] = (uint8_t)(x * 7 + y * 3 + z + k * 50);
             }
-    s.voxel_size = 0.0123456789;
+    s.leaf_size = 0.0123456789;
     s.origin[0] = -1.5;
     s.origin[1] = 2.0 / 3.0;
     s.origin[2] = 1e-7;
@@ -72,9 +72,9 @@ static sl_vdb_samples make_samples(int with_colors)
 
 static int same_samples(const sl_vdb_samples *a, const sl_vdb_samples *b)
 {
-    if (a->count != b->count || a->voxel_size != b->voxel_size || !a->colors != !b->colors) {
+    if (a->count != b->count || a->leaf_size != b->leaf_size || !a->colors != !b->colors) {
         fprintf(stderr, "count %llu vs %llu, voxel %.17g vs %.17g\n", (unsigned long long)a->count,
-                (unsigned long long)b->count, a->voxel_size, b->voxel_size);
+                (unsigned long long)b->count, a->leaf_size, b->leaf_size);
         return 0;
     }
     for (int k = 0; k < 3; k++)
@@ -199,10 +199,10 @@ static void test_refusals(void)
     memcpy(s.coords + 3, s.coords, sizeof t);
     memcpy(s.coords, t, sizeof t);
     /* Bad voxel size, non-finite distance. */
-    s.voxel_size = 0;
+    s.leaf_size = 0;
     sl_error_init(&err);
     CHECK(sl_vdb_samples_write(path, &s, &err) == SL_E_INTERNAL);
-    s.voxel_size = 1;
+    s.leaf_size = 1;
     s.distance[5] = NAN;
     sl_error_init(&err);
     CHECK(sl_vdb_samples_write(path, &s, &err) == SL_E_INTERNAL);
@@ -218,7 +218,7 @@ static void test_refusals(void)
     snprintf(path, sizeof path, "%s/empty.vdb", dir);
     sl_error_init(&err);
     CHECK(sl_vdb_samples_write(path, &e, &err) == SL_OK);
-    CHECK(sl_vdb_samples_read(path, 10, &r, &err) == SL_OK && r.count == 0 && r.voxel_size == 1);
+    CHECK(sl_vdb_samples_read(path, 10, &r, &err) == SL_OK && r.count == 0 && r.leaf_size == 1);
     sl_vdb_samples_release(&r);
     sl_vdb_samples_release(&s);
 }

@@ -54,14 +54,35 @@ def log(msg):
     sys.stderr.flush()
 
 
-def run(cmd, check=True):
-    """Run a command; returns stdout. Raises with stderr on failure when check."""
-    p = subprocess.run([str(c) for c in cmd], stdout=subprocess.PIPE,
-                       stderr=subprocess.PIPE, text=True)
+class Timeout(RuntimeError):
+    pass
+
+
+def run(cmd, check=True, timeout=None):
+    """Run a command; returns stdout. Raises with stderr on failure when check. With a
+    timeout (seconds) the command runs in a process group of its own, which is stopped
+    (SIGTERM, then SIGKILL 10 s later) when the time is up: Timeout is raised."""
+    cmd = [str(c) for c in cmd]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         start_new_session=timeout is not None)
+    try:
+        out, err = p.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        for sig, wait in ((signal.SIGTERM, 10), (signal.SIGKILL, None)):
+            try:
+                os.killpg(p.pid, sig)
+            except ProcessLookupError:
+                break
+            try:
+                p.communicate(timeout=wait)
+                break
+            except subprocess.TimeoutExpired:
+                continue
+        raise Timeout("%s: stopped after %g s" % (" ".join(cmd), timeout))
     if check and p.returncode != 0:
-        raise RuntimeError("%s: exit %d: %s" % (" ".join(map(str, cmd)), p.returncode,
-                                                 p.stderr.strip()[-500:]))
-    return p.stdout
+        raise RuntimeError("%s: exit %d: %s" % (" ".join(cmd), p.returncode,
+                                                 err.strip()[-500:]))
+    return out
 
 
 def tree_bytes(root):
@@ -103,14 +124,15 @@ class Collection:
     def artifact(self, stage, name):
         return self.path("work", "artifacts", stage, self.item_id, name)
 
-    def run(self, ctx, threads, overrides=(), fresh=True):
-        """`scanlod run` on the collection; returns the published timings per stage."""
+    def run(self, ctx, threads, overrides=(), fresh=True, timeout=None):
+        """`scanlod run` on the collection; returns the published timings per stage.
+        Raises Timeout when it runs longer than timeout seconds."""
         if fresh:
             self.clean()
         cmd = [ctx.scanlod, "run", self.config, "--threads", threads, "-q"]
         for o in overrides:
             cmd += ["-s", o]
-        run(cmd)
+        run(cmd, timeout=timeout)
         return stats.load_timings(self.path("out", self.item_id, "timings.json"))
 
     def run_until(self, ctx, stage, threads, overrides=()):

@@ -159,6 +159,158 @@ def growth(gr):
     return {"rows": rows, "slopes": slopes, "skipped": gr.get("skipped", [])}
 
 
+# --- the fidelity anchor (lib/fidelity.py) -----------------------------------------------
+# docs/bench/fidelity.json keeps the figures of the latest complete fidelity run of each
+# method (a run of fewer methods replaces only its own), so the section and its headline
+# lines can be rendered again without the raw results; a pair is one line of it.
+RECORD_FIGURES = ("triangles", "rms", "hausdorff", "components", "largest_area",
+                  "watertight", "boundary_edges")
+ANCHOR_FIGURES = ("count", "triangles", "rms", "hausdorff", "reached")
+METHOD_LABEL = {"default": "default config", "octree": "octree alone",
+                "segment": "segment alone", "cluster": "cluster alone"}
+
+
+def sig(v, digits=6):
+    """v to so many significant digits (floats only), so that the record stays small."""
+    return float("%.*g" % (digits, v)) if isinstance(v, float) else v
+
+
+def fidelity_record(run):
+    """A fidelity.json of lib/fidelity.py in the record's form: per method its run
+    (commit, date, load, time) and per input its build; the pairs, each with its method
+    and the figures the section shows."""
+    pairs, methods = [], {}
+    for m, md in run["methods"].items():
+        items = {}
+        for name, it in md["items"].items():
+            items[name] = {k: sig(it.get(k), 4) for k in ("status", "method", "wall_seconds",
+                                                          "build_seconds", "cpu_seconds",
+                                                          "peak_rss_kb")}
+            for p in it.get("pairs", []):
+                row = {k: sig(p.get(k), 4) for k in (
+                    "input", "percent", "budget", "file", "clamped", "triangles",
+                    "budget_error", "rms_ratio", "hausdorff_ratio", "rms_ratio_simplify",
+                    "rms_ratio_mo18")}
+                row["method"] = m
+                row["ours"] = {k: sig(p["ours"].get(k)) for k in RECORD_FIGURES}
+                for a in ("update", "simplify", "mo18"):
+                    row[a] = ({k: sig(p[a].get(k)) for k in ANCHOR_FIGURES}
+                              if p.get(a) else None)
+                pairs.append(row)
+        methods[m] = {"items": items, "seconds": sig(md.get("seconds"), 4),
+                      "commit": run["commit"], "date": run["date"],
+                      "load_start": sig(run["load_start"], 2),
+                      "reuse_peers": run["settings"]["reuse_peers"]}
+    return {"settings": {k: run["settings"][k] for k in ("budgets", "samples", "threads",
+                                                         "timeout_seconds", "peers",
+                                                         "js_flags", "js_target_error",
+                                                         "versions")},
+            "inputs": {n: {k: v for k, v in f.items() if k != "sha1"}
+                       for n, f in run["inputs"].items()},
+            "methods": methods, "pairs": pairs}
+
+
+def merge_record(old, new):
+    """new's methods replace old's (their runs and pairs); the other methods stay."""
+    if not old:
+        return new
+    keep = [p for p in old["pairs"] if p["method"] not in new["methods"]]
+    methods = dict(old["methods"])
+    methods.update(new["methods"])
+    inputs = dict(old["inputs"])
+    inputs.update(new["inputs"])
+    return {"settings": new["settings"], "inputs": inputs, "methods": methods,
+            "pairs": keep + new["pairs"]}
+
+
+def read_record(path):
+    if not os.path.exists(path):
+        return None
+    with open(path) as f:
+        return json.load(f)
+
+
+def write_record(path, rec):
+    """The record as JSON with one pair a line (diffs of a rerun stay readable)."""
+    head = json.dumps({k: v for k, v in rec.items() if k != "pairs"}, indent=1,
+                      sort_keys=True)
+    rows = ",\n".join("  " + json.dumps(p, sort_keys=True, separators=(",", ":"))
+                      for p in rec["pairs"])
+    with open(path + ".tmp", "w") as f:
+        f.write(head[:-2] + ',\n "pairs": [\n' + rows + "\n ]\n}\n")
+    os.replace(path + ".tmp", path)
+
+
+def anchor(rec):
+    """Per method of a record: its pairs, their summary (stats.anchor_summary), the
+    builds (seconds, peak RSS; timeouts and failures named) and the worst RMS pairs."""
+    if not rec:
+        return None
+    order = [m for m in ("default", "octree", "segment", "cluster") if m in rec["methods"]]
+    order += sorted(m for m in rec["methods"] if m not in order)
+    out = {}
+    for m in order:
+        md = rec["methods"][m]
+        pairs = [p for p in rec["pairs"] if p["method"] == m]
+        items = md["items"]
+        ok = [it for it in items.values() if it.get("status") == "ok"]
+        out[m] = {"label": METHOD_LABEL.get(m, m), "run": md, "pairs": pairs,
+                  "summary": stats.anchor_summary(pairs, rec["inputs"]),
+                  "build_seconds": stats.summary([it["build_seconds"] for it in ok]),
+                  "build_total": sum(it["build_seconds"] for it in ok),
+                  "peak_rss_kb": stats.summary([it["peak_rss_kb"] for it in ok]),
+                  "not_built": {n: it["status"] for n, it in items.items()
+                                if it.get("status") != "ok"},
+                  "worst": sorted([p for p in pairs if p.get("rms_ratio") is not None],
+                                  key=lambda p: -p["rms_ratio"])[:3]}
+    return out
+
+
+def pair_name(p):
+    return "%s %g %%" % (p["input"], p["percent"])
+
+
+def anchor_lines(rec):
+    """The headline lines of the fidelity anchor: the default config's pairs, then each
+    method alone."""
+    a = anchor(rec)
+    if not a:
+        return []
+    v = rec["settings"]["versions"]
+    lines = []
+    first = "default" if "default" in a else next(iter(a))
+    r = a[first]
+    s = r["summary"]
+    if s["rms_ratio"]["n"]:
+        lines.append(
+            "fidelity anchor (section 3a; %s, commit %s, %s): RMS at each published budget "
+            "level's triangle count, scanlod / meshoptimizer %s `simplifyWithUpdate`: median "
+            "%.2f, max %.2f (%s), %d of %d pairs above %.1fx; Hausdorff ratio median %.2f; "
+            "budget misses beyond %d %%: %d of %d; scanlod / `simplify` median %.2f, / "
+            "meshoptimizer %s median %.2f."
+            % (r["label"], r["run"]["commit"], r["run"]["date"], v["meshoptimizer_js"],
+               s["rms_ratio"]["median"], s["rms_ratio"]["max"],
+               pair_name(r["worst"][0]), s["rms_above"], s["rms_ratio"]["n"],
+               stats.ANCHOR_RATIO, s["hausdorff_ratio"]["median"],
+               round(100 * stats.BUDGET_TOLERANCE), s["budget_misses"], s["pairs"],
+               s["rms_ratio_simplify"]["median"] or 0, v["meshoptimizer"],
+               s["rms_ratio_mo18"]["median"] or 0))
+    alone = [m for m in a if m != "default"]
+    if alone:
+        parts = []
+        for m in alone:
+            s = a[m]["summary"]
+            txt = "%s %s (%d of %d above %.1fx, budget misses %d)" % (
+                m, fmt_range([s["rms_ratio"]["median"]], "%.2f"), s["rms_above"],
+                s["rms_ratio"]["n"], stats.ANCHOR_RATIO, s["budget_misses"])
+            if a[m]["not_built"]:
+                txt += " (%s)" % ", ".join("%s: %s" % kv for kv in a[m]["not_built"].items())
+            parts.append(txt)
+        lines.append("each method alone against the same anchor, RMS ratio median: "
+                     + "; ".join(parts) + ".")
+    return lines
+
+
 def fmt_range(vals, fmt):
     vals = [v for v in vals if v is not None]
     if not vals:
@@ -168,7 +320,13 @@ def fmt_range(vals, fmt):
     return (fmt + "–" + fmt) % (min(vals), max(vals))
 
 
-def derive(models, st, oc, lod, gr):
+# Headline lines of earlier generators that the fidelity anchor's lines replace: a page
+# spliced by `report.py --fidelity` drops them (the line of section 3 against
+# meshoptimizer 0.18 was the RMS headline before the anchor; it is now labelled as such).
+SUPERSEDED = ("RMS at equal triangle counts, scanlod / meshoptimizer:",)
+
+
+def derive(models, st, oc, lod, gr, versions=None):
     h = {"stages": stage_summary(models, st), "vdb_time": vdb_time(st),
          "depths": depth_rows(oc), "ladder": ladder(lod), "growth": growth(gr)}
     lines = []
@@ -241,9 +399,11 @@ def derive(models, st, oc, lod, gr):
                     mo.append(e["scanlod"]["rms"] / e["meshopt"]["rms"])
                 if e["vdb"]["rms"]:
                     vd.append(e["scanlod"]["rms"] / e["vdb"]["rms"])
-        lines.append("RMS at equal triangle counts, scanlod / meshoptimizer: median %.2f "
+        lines.append("section 3, RMS at the counts of the reference builds' LOD-percent "
+                     "levels, scanlod / meshoptimizer %s `meshopt_simplify`: median %.2f "
                      "(%s; aim <= 2); scanlod / OpenVDB adaptive: median %.2f (%s; aim <= 0.5)."
-                     % (stats.median(mo) or 0, fmt_range(mo, "%.2f"),
+                     % ((versions or {}).get("meshoptimizer", "?"),
+                        stats.median(mo) or 0, fmt_range(mo, "%.2f"),
                         stats.median(vd) or 0, fmt_range(vd, "%.2f")))
         if mf:
             lines.append("RMS at equal counts, scanlod LOD / meshopt_simplify of scanlod's own "

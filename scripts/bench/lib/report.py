@@ -1,8 +1,14 @@
 """Render docs/benchmarks.md from a results folder.
 
 usage: report.py RESULTS_DIR OUT.md
+       report.py --fidelity RESULTS_DIR OUT.md
 Reads machine, models, stages, octree, lod, growth (.json; a missing phase is said so).
 Derived figures (medians, pair ratios, slopes) come from headline.py.
+The fidelity anchor's section and headline lines come from docs/bench/fidelity.json (next
+to OUT.md), into which a complete run's fidelity.json is merged first (a run of a subset
+of the inputs or budgets writes RESULTS_DIR/fidelity.md instead and leaves the docs as
+they are). --fidelity renders only those: it replaces them in OUT.md (between their
+markers) and leaves the rest of the page alone, for a run of the fidelity phase alone.
 """
 import json
 import os
@@ -92,10 +98,23 @@ def section_inputs(out, models):
                 "finest LOD triangles"], rows)
 
 
-def section_headline(out, h, mach):
+HEADLINE_INTRO = ("Per input the median over the repetitions; ranges are over inputs. Every "
+                  "ratio is formed pair by pair within one repetition, then its median taken.")
+
+
+def anchor_block(rec):
+    """The anchor's headline lines between their markers (empty without a record)."""
+    lines = headline.anchor_lines(rec)
+    if not lines:
+        return []
+    return (["<!-- fidelity-headline:begin -->"] + ["- " + x for x in lines] +
+            ["<!-- fidelity-headline:end -->"])
+
+
+def section_headline(out, h, mach, rec=None):
     out.append("## Headline figures\n")
-    out.append("Per input the median over the repetitions; ranges are over inputs. Every "
-               "ratio is formed pair by pair within one repetition, then its median taken.\n")
+    out.append(HEADLINE_INTRO + "\n")
+    out.extend(anchor_block(rec))
     for line in h["lines"]:
         out.append("- " + line)
     if mach.get("load_start") and mach["load_start"][0] > 0.5 * mach["nproc"]:
@@ -279,6 +298,121 @@ def section_lod(out, lod, h):
                for x in r["rows"]])
 
 
+FIDELITY_HEADING = "## 3a. The fidelity anchor: meshoptimizer 1.3 at the published levels' counts"
+
+
+def flag(text, bad):
+    return "**%s**" % text if bad else text
+
+
+def section_fidelity(out, rec):
+    """Section 3a from a fidelity record (headline.fidelity_record): per method a summary
+    row, then per method its builds and its pairs."""
+    a = headline.anchor(rec)
+    st, v = rec["settings"], rec["settings"]["versions"]
+    lim, tol, floor = stats.ANCHOR_RATIO, stats.BUDGET_TOLERANCE, stats.PART_FLOOR
+    out.append(FIDELITY_HEADING + "\n")
+    out.append(
+        "What users measure us by: the newest meshoptimizer's error at the same triangle "
+        "count. From `scripts/bench/run.sh --phases fidelity` (lib/fidelity.py; "
+        "docs/fidelity.md, \"The anchor\"). Per input, one `scanlod run` (%d threads, fresh "
+        "work folder) with the default config plus `[export] budgets` = `pP:N` for P = %s %% "
+        "of the input's triangles; *each method alone* adds `-s lod.method=M`. The level "
+        "each budget published (report.json's `file`) is measured against the input by "
+        "`scanlod compare` (%d area samples, the export's setting), and so are, at that "
+        "level's triangle count and from the whole input: meshoptimizer %s "
+        "`simplifyWithUpdate` (*update*) and `simplify` (npm, `peers/meshopt_js.mjs`: "
+        "flags %s, target_error %s relative, i.e. no limit; welded at equal positions only) "
+        "and meshoptimizer %s `meshopt_simplify` (Debian, `peers/meshopt_lod.c`). RMS and "
+        "Hausdorff: symmetric, %% of the input's diagonal; ratio = scanlod / anchor (< 1: "
+        "scanlod closer). Budget error = |triangles - budget| / budget. Largest part = the "
+        "largest connected part's share of the level's area. One run per figure (the "
+        "fidelity figures are deterministic; times are of that one run: the stages' wall "
+        "seconds and peak RSS from timings.json). **Bold**: a ratio above %.1f, a budget "
+        "missed by more than %d %%, the largest part below %d %% where the input's is at "
+        "least that, not watertight where the input is.\n"
+        % (st["threads"], ", ".join("%g" % b for b in st["budgets"]), st["samples"],
+           v["meshoptimizer_js"], ", ".join("`%s`" % f for f in st["js_flags"]),
+           st["js_target_error"], v["meshoptimizer"], lim,
+           round(100 * tol), round(100 * floor)))
+    rows = []
+    for m, r in a.items():
+        s = r["summary"]
+        rr = s["rms_ratio"]
+        rows.append([r["label"], "%s, %s" % (r["run"]["commit"], r["run"]["date"]), s["pairs"],
+                     num(rr["median"], "%.2f"),
+                     "%s (%s)" % (num(rr["max"], "%.2f"), pair_name(r["worst"][0]))
+                     if r["worst"] else "–",
+                     "%d" % s["rms_above"], num(s["hausdorff_ratio"]["median"], "%.2f"),
+                     num(s["rms_ratio_simplify"]["median"], "%.2f"),
+                     num(s["rms_ratio_mo18"]["median"], "%.2f"),
+                     "%s / %d" % (num(100 * s["budget_error"]["median"]
+                                      if s["budget_error"]["n"] else None, "%.2f %%"),
+                                  s["budget_misses"]),
+                     "%d of %d" % (s["part_losses"], s["part_pairs"]),
+                     "%d of %d" % (s["not_watertight"], s["watertight_pairs"]),
+                     "%s (%s)" % (num(r["build_seconds"]["median"], "%.2f"),
+                                  num(r["build_total"], "%.0f")),
+                     num(r["peak_rss_kb"]["max"] / 1024.0 if r["peak_rss_kb"]["n"] else None,
+                         "%.0f"),
+                     ", ".join("%s %s" % kv for kv in r["not_built"].items()) or "–"])
+    table(out, ["levels", "run", "pairs", "RMS / update", "max", "> %.1fx" % lim,
+                "Hausdorff / update", "RMS / simplify", "RMS / %s" % v["meshoptimizer"],
+                "budget error median / misses", "largest part < %d %%" % round(100 * floor),
+                "not watertight", "build s median (sum)", "peak MB", "not built"], rows)
+    for m, r in a.items():
+        run = r["run"]
+        details = m != "default"
+        title = r["label"][0].upper() + r["label"][1:]
+        out.append("<details><summary><b>%s</b>: every pair</summary>\n" % title
+                   if details else "### %s\n" % title)
+        out.append("Commit %s, %s, load average %.1f at its start; the phase took %s s%s.\n"
+                   % (run["commit"], run["date"], run["load_start"], num(run["seconds"], "%.0f"),
+                      "; anchors taken from the cache where one at the same count, else "
+                      "within 1 %, was there (†)" if run.get("reuse_peers") else ""))
+        table(out, ["input", "triangles", "input: watertight, largest part", "build s",
+                    "CPU s", "peak RSS MB", "wall s", "status"],
+              [[n, rec["inputs"][n]["triangles"],
+                "%s, %.1f %%" % ("yes" if rec["inputs"][n]["watertight"] else "no",
+                                 100 * (rec["inputs"][n]["largest_area"] or 0)),
+                num(it.get("build_seconds"), "%.1f"), num(it.get("cpu_seconds"), "%.1f"),
+                num(it["peak_rss_kb"] / 1024.0 if it.get("peak_rss_kb") else None, "%.0f"),
+                num(it.get("wall_seconds"), "%.1f"),
+                it["status"] if it["status"] == "ok" else "**%s**" % it["status"]]
+               for n, it in run["items"].items()])
+        body = []
+        for p in r["pairs"]:
+            o, u = p["ours"], p["update"] or {}
+            facts = rec["inputs"][p["input"]]
+            off = " †" if u and u.get("count") != p["triangles"] else ""
+            body.append([p["input"], "%g %%" % p["percent"], p["budget"],
+                         "%d%s" % (p["triangles"], " (clamped)" if p.get("clamped") else ""),
+                         flag(num(100 * p["budget_error"], "%.2f %%"),
+                              p["budget_error"] > tol),
+                         pct(o["rms"]), pct(u.get("rms")),
+                         flag(num(p["rms_ratio"], "%.2f") + off,
+                              (p["rms_ratio"] or 0) > lim),
+                         pct(o["hausdorff"]), pct(u.get("hausdorff")),
+                         flag(num(p["hausdorff_ratio"], "%.2f"),
+                              (p["hausdorff_ratio"] or 0) > lim),
+                         num(p["rms_ratio_simplify"], "%.2f"), num(p["rms_ratio_mo18"], "%.2f"),
+                         flag("%s (%.1f %%)" % (o["components"], 100 * (o["largest_area"] or 0)),
+                              (facts.get("largest_area") or 0) >= floor and
+                              (o["largest_area"] or 0) < floor),
+                         flag("yes" if o["watertight"] else "no",
+                              facts.get("watertight") and not o["watertight"])])
+        table(out, ["input", "budget", "budget triangles", "triangles", "budget error", "RMS",
+                    "update RMS", "RMS / update", "Hausdorff", "update Hausdorff",
+                    "Hausdorff / update", "RMS / simplify", "RMS / %s" % v["meshoptimizer"],
+                    "parts (largest)", "watertight"], body)
+        if details:
+            out.append("</details>\n")
+
+
+def pair_name(p):
+    return headline.pair_name(p)
+
+
 def section_growth(out, h):
     g = h.get("growth")
     if not g:
@@ -373,6 +507,35 @@ def section_parts(out, results):
 CLUSTER_HEADING = "## 5. Clustering with bounded error (paper 2, issue 13)"
 
 
+def section_shapes(out, results):
+    """The shapes phase (lib/shapes.py): the plan on slivers and a soup."""
+    path = os.path.join(results, "shapes.json")
+    if not os.path.exists(path):
+        return
+    with open(path) as f:
+        shapes = json.load(f)["shapes"]
+    out.append("### 4b. The plan on hostile shapes (issue 34)\n")
+    out.append("`gen_surface --aspect 16` (slivers: the torus's triangles 16 times longer "
+               "than wide) and `--soup` (triangles that share no vertex); `scanlod plan "
+               "--json`, then one run at 2 threads, default config, fidelity off. The plan "
+               "reads such a scan's geometry (cli/plan_shape.c) and scales the octree "
+               "stages by the samples it expects; ratio = plan / measured.\n")
+    rows = []
+    for s in shapes:
+        p, st = s["plan"], s["stages"]
+        peak = max(v["peak_rss_kb"] for v in st.values()) / 1024.0
+        stage = max(st, key=lambda k: st[k]["peak_rss_kb"])
+        took = sum(v["seconds"] for v in st.values())
+        shape = p.get("shape", {})
+        rows.append([s["name"], s["triangles"], num(shape.get("samples"), "%.0f"), s["samples"],
+                     num(p["peak_rss_mb"], "%.0f"), "%s (%s)" % (num(peak, "%.0f"), stage),
+                     num(p["peak_rss_mb"] / peak, "%.2f"), num(p["seconds"], "%.0f"),
+                     num(took, "%.0f"), num(p["seconds"] / took if took else None, "%.2f")])
+    table(out, ["shape", "triangles", "plan samples", "samples", "plan MB", "peak MB (stage)",
+                "ratio", "plan s", "took s", "ratio"], rows)
+    out.append("")
+
+
 def section_cluster(out, results, dest):
     """bench_cluster.sh's tables (its own run, BUILD/bench-results/cluster/cluster.md,
     beside this run's folder), else the section the page already has: run.sh does not
@@ -405,21 +568,120 @@ def section_plots(out):
         out.append("![%s](bench/%s)\n\n*%s*\n" % (what, f, what))
 
 
+def fidelity_record(results, dest):
+    """The fidelity record (docs/bench/fidelity.json beside dest), with RESULTS'
+    fidelity.json merged in and saved when that run finished all the inputs and budgets;
+    the run of a subset is written to RESULTS/fidelity.md instead. Returns the record
+    (None when there is none) and that subset's markdown path (else None)."""
+    path = os.path.join(os.path.dirname(os.path.abspath(dest)), "bench", "fidelity.json")
+    rec = headline.read_record(path)
+    run_path = os.path.join(results, "fidelity.json")
+    if not os.path.exists(run_path):
+        return rec, None
+    with open(run_path) as f:
+        run = json.load(f)
+    new = headline.fidelity_record(run)
+    if not (run.get("complete") and "seconds" in run):
+        md = os.path.join(results, "fidelity.md")
+        out = ["# Fidelity anchor: %s (a subset: %s; budgets %s %%)\n"
+               % (results, ", ".join(run["settings"]["inputs"]),
+                  ", ".join("%g" % b for b in run["settings"]["budgets"]))]
+        out += ["- " + x for x in headline.anchor_lines(new)] + [""]
+        section_fidelity(out, new)
+        with open(md, "w") as f:
+            f.write("\n".join(out).rstrip() + "\n")
+        return rec, md
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    rec = headline.merge_record(rec, new)
+    headline.write_record(path, rec)
+    return rec, None
+
+
+def fidelity_block(rec):
+    """Section 3a between its markers, as lines."""
+    out = ["<!-- fidelity:begin -->"]
+    section_fidelity(out, rec)
+    while out[-1] == "":
+        out.pop()
+    return out + ["<!-- fidelity:end -->", ""]
+
+
+def between(page, marker, lines):
+    """page with the block between <!-- marker:begin --> and <!-- marker:end -->
+    replaced by lines (markers included); None when the page has no such block."""
+    a, b = "<!-- %s:begin -->" % marker, "<!-- %s:end -->" % marker
+    i, j = page.find(a), page.find(b)
+    if i < 0 or j < 0:
+        return None
+    return page[:i] + "\n".join(lines).rstrip() + page[j + len(b):]
+
+
+def splice_fidelity(results, dest):
+    """Section 3a and the anchor's headline lines replaced in the page (inserted the first
+    time: the lines at the top of the headline list, the section before section 4), the
+    lines they supersede dropped; the rest of the page as it was."""
+    rec, partial = fidelity_record(results, dest)
+    if partial:
+        print("report: a subset of the inputs or budgets: %s written, %s unchanged"
+              % (partial, dest))
+        return
+    if not rec:
+        print("report: no fidelity results in %s" % results)
+        return
+    with open(dest) as f:
+        page = f.read()
+    sec = fidelity_block(rec)
+    spliced = between(page, "fidelity", sec)
+    if spliced is None:
+        at = page.find("\n## 4. ")
+        at = len(page) if at < 0 else at + 1
+        spliced = page[:at] + "\n".join(sec) + "\n" + page[at:]
+    page = spliced
+    lines = anchor_block(rec)
+    spliced = between(page, "fidelity-headline", lines)
+    if spliced is None:
+        intro = HEADLINE_INTRO + "\n\n"
+        at = page.find(intro)
+        if at < 0:
+            raise SystemExit("report: no headline section in %s" % dest)
+        at += len(intro)
+        spliced = page[:at] + "\n".join(lines) + "\n" + page[at:]
+    page = "".join(l for l in spliced.splitlines(True)
+                   if not any(l.startswith("- " + s) for s in headline.SUPERSEDED))
+    peers = "from Debian packages."   # the opening's list of peers, as main() writes it
+    if peers in page and "the fidelity anchor, meshoptimizer" not in page:
+        page = page.replace(peers, "from Debian packages; the fidelity anchor, meshoptimizer "
+                            "%s, from npm." % rec["settings"]["versions"]["meshoptimizer_js"], 1)
+    with open(dest + ".tmp", "w") as f:
+        f.write(page)
+    os.replace(dest + ".tmp", dest)
+    print("report: section 3a and the anchor's headline lines of %s from %s"
+          % (dest, results))
+
+
 def main():
+    if sys.argv[1] == "--fidelity":
+        splice_fidelity(sys.argv[2], sys.argv[3])
+        return
     results, dest = sys.argv[1], sys.argv[2]
     d = headline.load_all(results)
     mach, models, versions = d["machine"], d["models"], d["versions"]
     st, oc, lod = d["stages"], d["octree"], d["lod"]
-    h = headline.derive(models, st, oc, lod, d["growth"])
+    h = headline.derive(models, st, oc, lod, d["growth"], versions)
+    rec, partial = fidelity_record(results, dest)
+    if partial:
+        print("report: the fidelity phase ran on a subset: %s (section 3a unchanged)" % partial)
     out = ["# Benchmarks\n",
            "Generated by `scripts/bench/run.sh%s`; do not edit by hand (rerun it). Raw "
            "figures: `BUILD/bench-results/`. How each figure is measured is said above "
-           "its table; peers: OpenVDB %s and meshoptimizer %s from Debian packages.\n"
+           "its table; peers: OpenVDB %s and meshoptimizer %s from Debian packages%s.\n"
            % (" --quick" if mach["mode"] == "quick" else "", versions["openvdb"],
-              versions["meshoptimizer"])]
+              versions["meshoptimizer"],
+              "; the fidelity anchor, meshoptimizer %s, from npm"
+              % rec["settings"]["versions"]["meshoptimizer_js"] if rec else "")]
     section_machine(out, mach, results)
     section_inputs(out, models)
-    section_headline(out, h, mach)
+    section_headline(out, h, mach, rec)
     # Figures that come from other benchmarks or from measurements by hand live in
     # docs/bench/NAME.md and are kept in their places between markers: a rerun of this
     # benchmark rewrites its own tables and never loses them.
@@ -440,9 +702,12 @@ def main():
         else:
             fn()
     kept("qef-notes")        # docs/lod.md's quadric vertices, measured with fidelity.py
+    if rec:                  # section 3a, from docs/bench/fidelity.json
+        out.extend(fidelity_block(rec))
     section_growth(out, h)
     kept("growth-notes")     # reruns of the growth inputs by hand
     section_parts(out, results)
+    section_shapes(out, results)
     section_cluster(out, results, dest)
     section_plots(out)
     # The segment method's section comes from its own benchmark (bench_segment.sh), which

@@ -117,7 +117,8 @@ class Bench:
         cfg = os.path.join(root, "run.ini")
         with open(cfg, "w") as f:
             f.write("[run]\ninput = in\nwork = work\noutput = out\nlogs = logs\n"
-                    "[export]\nlod_percents = 100\nbudgets =\nformats = ply\nthumbnail_size = 0\n"
+                    "[lod]\nmethod = octree\n[levels]\npercents = 100\nbudgets =\ntop = method\noversample = 1\n"
+                    "[refine]\ncollapse = false\nfit = false\n[export]\nformats = ply\nthumbnail_size = 0\n"
                     "fidelity = false\n")
         model = os.path.join(root, "out", name + ".ply", "model.slod")
         if not os.path.exists(model):

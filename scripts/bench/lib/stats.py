@@ -75,12 +75,83 @@ def parse_extract(text):
 
 
 def fidelity(compare_json):
-    """The figures the tables use from `scanlod compare --json`."""
+    """The figures the tables use from `scanlod compare --json`: B's triangles, the
+    symmetric RMS and Hausdorff (fractions of A's diagonal), B's topology (boundary
+    edges, watertight, connected parts and the largest part's share of B's area)."""
     d = compare_json if isinstance(compare_json, dict) else json.loads(compare_json)
     topo = d.get("b_topology", {})
     return {"triangles": d["b_triangles"], "rms": d["rms"], "hausdorff": d["hausdorff"],
             "boundary_edges": topo.get("boundary_edges"),
-            "watertight": topo.get("watertight")}
+            "watertight": topo.get("watertight"), "components": topo.get("components"),
+            "largest_area": topo.get("largest_component_area_fraction")}
+
+
+# --- the fidelity anchor (lib/fidelity.py) ---------------------------------------------
+ANCHOR_RATIO = 1.5      # an RMS ratio ours / simplifyWithUpdate above this is counted
+BUDGET_TOLERANCE = 0.01  # |count - budget| / budget beyond this is a budget miss
+PART_FLOOR = 0.99       # the largest part's area share below this is a part lost
+
+
+def budget_targets(triangles, percents):
+    """[(percent, name, count)]: P % of the input's triangles as the named budget pP
+    (at least 1 triangle)."""
+    return [(p, "p%g" % p, max(1, int(round(p / 100.0 * triangles)))) for p in percents]
+
+
+def budget_setting(targets):
+    """The `levels.budgets` value of budget_targets: "p1:129,p2:259,..."."""
+    return ",".join("%s:%d" % (name, n) for _, name, n in targets)
+
+
+def budget_error(count, budget):
+    return abs(count - budget) / float(budget) if budget else None
+
+
+def ratio(a, b):
+    return a / b if a is not None and b else None
+
+
+def cached_at(entries, count, tolerance=0.0):
+    """(count used, entry) from {count as str: entry}: the exact count, else (tolerance
+    > 0) the nearest cached count within tolerance of it (relative), else None."""
+    if str(count) in entries:
+        return count, entries[str(count)]
+    near = [(abs(int(k) - count), int(k)) for k in entries]
+    near = [x for x in near if x[0] <= tolerance * count]
+    if not near:
+        return None
+    k = min(near)[1]
+    return k, entries[str(k)]
+
+
+def anchor_summary(pairs, inputs):
+    """The anchor's figures over pairs (rows of lib/fidelity.py; inputs: {name: facts}):
+    RMS ratio ours / simplifyWithUpdate (median, max and its pair, pairs above
+    ANCHOR_RATIO), Hausdorff ratio median, RMS ratio medians against simplify and
+    meshoptimizer 0.18, budget misses beyond BUDGET_TOLERANCE, pairs whose largest part
+    holds less than PART_FLOOR of the area where the input's holds at least that, pairs
+    not watertight where the input is."""
+    rr = [(p["rms_ratio"], p) for p in pairs if p.get("rms_ratio") is not None]
+    worst = max(rr, key=lambda x: x[0]) if rr else (None, None)
+    part_pairs = [p for p in pairs if (inputs[p["input"]].get("largest_area") or 0) >= PART_FLOOR]
+    wt_pairs = [p for p in pairs if inputs[p["input"]].get("watertight")]
+    return {
+        "pairs": len(pairs),
+        "rms_ratio": summary([x[0] for x in rr]),
+        "rms_worst": {"input": worst[1]["input"], "percent": worst[1]["percent"]}
+        if worst[1] else None,
+        "rms_above": sum(1 for x in rr if x[0] > ANCHOR_RATIO),
+        "hausdorff_ratio": summary([p.get("hausdorff_ratio") for p in pairs]),
+        "rms_ratio_simplify": summary([p.get("rms_ratio_simplify") for p in pairs]),
+        "rms_ratio_mo18": summary([p.get("rms_ratio_mo18") for p in pairs]),
+        "budget_error": summary([p.get("budget_error") for p in pairs]),
+        "budget_misses": sum(1 for p in pairs if (p.get("budget_error") or 0) > BUDGET_TOLERANCE),
+        "part_pairs": len(part_pairs),
+        "part_losses": sum(1 for p in part_pairs
+                           if (p["ours"].get("largest_area") or 0) < PART_FLOOR),
+        "watertight_pairs": len(wt_pairs),
+        "not_watertight": sum(1 for p in wt_pairs if not p["ours"].get("watertight")),
+    }
 
 
 def loglog_slope(xs, ys):

@@ -27,7 +27,7 @@
 #include <time.h>
 
 #include "core/json.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 
 #define MAX_LEVELS 64
 

@@ -1,4 +1,4 @@
-// vdb_remesh: the OpenVDB peer of the benchmark (issue 3, ARCHITECTURE section 8).
+// vdb_remesh: the OpenVDB peer of the benchmark (issue 3; docs/benchmarks.md).
 //
 //   vdb_remesh IN.ply -o OUT.ply (--voxel SIZE | --voxel-fraction F) [--adaptivity A]
 //              [--unsigned] [--half-width W] [--threads N]
@@ -42,7 +42,7 @@
 
 extern "C" {
 #include "core/json.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 }
 
 namespace {

@@ -37,7 +37,7 @@
 
 extern "C" {
 #include "core/json.h"
-#include "geometry/ply.h"
+#include "formats/ply.h"
 }
 
 namespace {

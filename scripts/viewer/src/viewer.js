@@ -10,13 +10,17 @@
 //
 // Page contract (docs/formats.md, "The HTML report"): every <figure class="sl-view"
 // data-src="URL of a .glb.js"> holding a <canvas> becomes a view; buttons inside it with
-// data-src switch the level shown. A view loads when it comes near the viewport, one at a
-// time. Its figure's data-state is "loading", then "drawn" (data-triangles set) or
-// "error"; the tests wait for those. One WebGL context serves every view (a page may hold
-// hundreds; browsers allow about 16 contexts): each view is rendered there and copied
-// into its own 2D canvas, again whenever it is orbited. A level whose GLB has a morph
-// target (docs/morphing.md) blends into the next coarser level as the camera moves away
-// (morph_blend.js); its figure's data-morph says the weight drawn.
+// data-src switch the level shown, loading its GLB script only then. A view loads when it
+// comes near the viewport, or with data-load="click" when its canvas or a level button is
+// clicked; one load at a time. One view per page is live: when a view is drawn, the one
+// live before is released (its scene freed, its canvas back to the thumbnail behind it),
+// so a collection page holds one decoded model, not hundreds. A figure's data-state is
+// "waiting", "loading", then "drawn" (data-triangles set, data-drawn-ms: milliseconds
+// from the page's start to its first draw) or "error"; the tests wait for those. One
+// WebGL context serves every view (browsers allow about 16): a view is rendered there and
+// copied into its own 2D canvas, again whenever it is orbited. A level whose GLB has a
+// morph target (docs/morphing.md) blends into the next coarser level as the camera moves
+// away (morph_blend.js); its figure's data-morph says the weight drawn.
 import {
   Box3, Color, DirectionalLight, HemisphereLight, PerspectiveCamera, SRGBColorSpace, Scene,
   Sphere, Vector3, WebGLRenderer,
@@ -140,9 +144,13 @@ class View {
     this.figure.dataset.state = 'loading';
     try {
       const gltf = await parseGlb(decodeBase64(await loadScript(src)));
+      if (live && live !== this) live.release();
+      live = this;
       this.show(gltf.scene);
       this.shown = src;
       this.figure.dataset.triangles = String(countTriangles(gltf.scene));
+      if (!this.figure.dataset.drawnMs)
+        this.figure.dataset.drawnMs = String(Math.round(performance.now()));
       this.figure.dataset.state = 'drawn';
     } catch (e) {
       this.figure.dataset.state = 'error';
@@ -152,6 +160,18 @@ class View {
       this.figure.appendChild(why);
       console.error('scanlod viewer: ' + why.textContent);
     }
+  }
+
+  // Back to the thumbnail: the scene freed, the canvas cleared (its CSS background shows).
+  release() {
+    if (this.scene) disposeScene(this.scene);
+    this.scene = null;
+    this.shown = null;
+    this.morphs = [];
+    this.canvas.getContext('2d').clearRect(0, 0, this.canvas.width, this.canvas.height);
+    delete this.figure.dataset.triangles;
+    delete this.figure.dataset.morph;
+    this.figure.dataset.state = 'waiting';
   }
 
   show(root) {
@@ -184,6 +204,7 @@ class View {
     this.center = sphere.center.clone();
     this.framing = distance;
     this.morphs = morphMeshes(root);
+    if (!this.morphs.length) delete this.figure.dataset.morph; // the level before had one
     this.controls.target.copy(sphere.center);
     this.controls.update(); // may draw ('change')
     this.draw();
@@ -218,8 +239,9 @@ class View {
   }
 }
 
-// One load at a time: a collection page must not decode every item at once.
+// One load at a time: a collection page must not decode every item at once; one view live.
 let queue = Promise.resolve();
+let live = null;
 function enqueue(view) {
   queue = queue.then(() => view.load());
   return queue;
@@ -230,8 +252,14 @@ export function start(root = document) {
     .filter((f) => f.querySelector('canvas'))
     .map((f) => new View(f));
   for (const v of views) v.figure.dataset.state = 'waiting';
+  // Click-to-load views: the canvas is the button until its model is live (then a click
+  // or drag turns it).
+  const onClick = views.filter((v) => v.figure.dataset.load === 'click');
+  for (const v of onClick)
+    v.canvas.addEventListener('click', () => { if (!v.scene) enqueue(v); });
+  const auto = views.filter((v) => v.figure.dataset.load !== 'click');
   if (!('IntersectionObserver' in self)) {
-    views.forEach(enqueue);
+    auto.forEach(enqueue);
     return views.length;
   }
   const seen = new IntersectionObserver((entries) => {
@@ -241,7 +269,7 @@ export function start(root = document) {
       enqueue(e.target.slViewer);
     }
   }, { rootMargin: '300px' });
-  for (const v of views) {
+  for (const v of auto) {
     v.figure.slViewer = v;
     seen.observe(v.figure);
   }

@@ -1,0 +1,47 @@
+/* refine stage: every method's levels -> the published levels (docs/levels.md).
+ *
+ * For each rung of the ladder ([levels], levels/ladder.h) the stage makes the level the
+ * export publishes:
+ *   - a mesh input's rung asking for its whole count or more is the scan itself
+ *     ([levels] top = scan): welded, its own vertices and colours;
+ *   - else each candidate the item has: the octree's cut (from model.slod, at
+ *     [levels] oversample times the count, less the shards coarse cells cut loose), the
+ *     segment or cluster method's level of that name, and under [lod] method = best the
+ *     scan simplified; each brought to the rung's exact count by quadric edge collapse
+ *     ([refine] collapse; geometry/qem_simplify.h) and its vertices fitted to the input
+ *     surface ([refine] fit; geometry/surface_fit.h);
+ *   - with several candidates, each is measured against the input and the most faithful
+ *     (the least RMS distance) is published; every candidate's count, RMS, Hausdorff
+ *     distance and time are in the report.
+ * An expansions rung (paper 1, Table 1) is the octree's cut as the paper makes it. With
+ * collapse and fit off, every level is the method's own (the papers' behaviour).
+ * Output: a level list (levels/level.h) in the stage's folder, the ladder's order.
+ */
+#ifndef SCANLOD_STAGES_REFINE_H
+#define SCANLOD_STAGES_REFINE_H
+
+#include <stdint.h>
+
+#include "levels/ladder.h"
+#include "pipeline/stage.h"
+
+extern const sl_stage sl_refine_stage;
+
+/* The resolved [refine] section, with the ladder and the method it serves. */
+typedef struct sl_refine_config {
+    sl_ladder ladder;        /* [levels] */
+    int best;                /* [lod] method = best: the scan simplified is a candidate */
+    int collapse;            /* quadric edge collapse to the rung's count */
+    int relax_topology;      /* ... giving up the topology when it alone stops above it */
+    int fit;                 /* vertices fitted to the input surface */
+    int fit_rounds;          /* the fit's projection and solve rounds */
+    uint64_t select_samples; /* area samples per surface when candidates are compared */
+    double min_part_area;    /* octree cuts: parts below this share of the area go */
+    double shard_reach;      /* ... when within this many mean edges of the rest */
+    int cap_at_input;        /* octree cuts: never above the input mesh's count */
+} sl_refine_config;
+
+/* The section at its option tables' defaults (sl_stage_default_config). */
+sl_refine_config sl_refine_default_config(void);
+
+#endif

@@ -1,0 +1,406 @@
+/* refine stage entry: options, the item's inputs, the ladder's levels (refine.h). */
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "geometry/mesh_distance.h"
+#include "geometry/surface_fit.h"
+#include "runtime/lod_io.h"
+#include "stages/refine/refine_internal.h"
+
+/* 1: the first refine stage (levels from every method, the scan at the top). 2: a level
+ * the collapse keeping the topology leaves above its count is collapsed again with the
+ * topology rules relaxed ([refine] relax_topology); the report says which. 3: levels made
+ * from the scan's vertices (the scan, its collapses) keep its texture coordinates. */
+#define REFINE_STAGE_VERSION 3u
+
+static const sl_option refine_options[] = {
+    {"refine", "collapse", SL_OPT_BOOL, "true", 0, 0, NULL,
+     "Bring every level a method leaves above its count to exactly that count (within 1 %) "
+     "by quadric edge collapse with optimal vertex placement, keeping the topology (no part "
+     "breaks off, closed stays closed, borders stay) and the colours (docs/levels.md). false: "
+     "each method's own level, as its paper makes it."},
+    {"refine", "relax_topology", SL_OPT_BOOL, "true", 0, 0, NULL,
+     "When the collapse keeping the topology stops above a level's count (an open or "
+     "non-manifold level: segment and cluster on usnm_1145291 at 1-5 %), collapse the "
+     "method's level again to the count with the topology rules lifted: non-manifold points "
+     "move, holes, handles and specks may close, borders may join; still no triangle turns "
+     "over (docs/simplify.md; 'topology_relaxed' in the report). false: such a level stays "
+     "above its count."},
+    {"refine", "fit", SL_OPT_BOOL, "true", 0, 0, NULL,
+     "Move every refined level's vertices to fit the input surface (the squared distance of "
+     "dense samples both ways, connectivity fixed, no fold; Hoppe et al. 1993): what the "
+     "RMS distance measures. false: the vertices where the method or the collapse put "
+     "them."},
+    {"refine", "fit_rounds", SL_OPT_INT, "4", 1, 100, NULL,
+     "Rounds of the fit (each projects dense samples both ways and solves for the vertices; "
+     "docs/surface-fit.md): more fit closer, each costs about as much as the first. 4 keep "
+     "about 90 % of 8 rounds' gain at half their cost (docs/levels.md)."},
+    {"refine", "select_samples", SL_OPT_INT, "100000", 1000, 100000000, NULL,
+     "Area samples per surface when candidates of one level are measured against the input "
+     "to choose the most faithful ([lod] method = best)."},
+    {"refine", "min_part_area", SL_OPT_DOUBLE, "0.01", 0, 0.5, NULL,
+     "Shards (docs/lod.md): when the octree's finest cut is one body (its largest part "
+     "holds 99 % of its area), each coarser cut leaves out the connected parts holding less "
+     "than this share of its area (never its largest): pieces of thin parts that the coarse "
+     "cells cut loose, and specks. 0 keeps every part as the octree draws it (paper 1). A "
+     "scan of several pieces keeps all its parts."},
+    {"refine", "shard_reach", SL_OPT_DOUBLE, "2", 0, 1e9, NULL,
+     "A small part (min_part_area) is left out only when each of its vertices lies within "
+     "this many of the cut's mean triangle edges of the rest of it: a speck the body covers "
+     "goes, a part farther out (the only surface there) stays."},
+    {"refine", "cap_at_input", SL_OPT_BOOL, "true", 0, 0, NULL,
+     "No octree cut has more triangles than the input mesh (the largest cut within it "
+     "instead; 'capped' in the report). false: the octree's finest level whatever its "
+     "count (paper 1)."},
+    SL_OPTION_END,
+};
+
+static const char *const refine_sections[] = {"refine", SL_LADDER_SECTION, "lod", NULL};
+static const sl_option *const refine_shared[] = {sl_ladder_options, NULL};
+
+static int refine_configure(const sl_config *cfg, void **out, sl_error *err)
+{
+    sl_refine_config *c = calloc(1, sizeof *c);
+    if (!c)
+        return sl_error_nomem(err, NULL, "out of memory");
+    int rc = sl_ladder_read(cfg, &c->ladder, err);
+    c->best = !strcmp(sl_config_string(cfg, "lod", "method"), "best");
+    c->collapse = sl_config_bool(cfg, "refine", "collapse");
+    c->relax_topology = sl_config_bool(cfg, "refine", "relax_topology");
+    c->fit = sl_config_bool(cfg, "refine", "fit");
+    c->fit_rounds = (int)sl_config_int(cfg, "refine", "fit_rounds");
+    c->select_samples = (uint64_t)sl_config_int(cfg, "refine", "select_samples");
+    c->min_part_area = sl_config_double(cfg, "refine", "min_part_area");
+    c->shard_reach = sl_config_double(cfg, "refine", "shard_reach");
+    c->cap_at_input = sl_config_bool(cfg, "refine", "cap_at_input");
+    if (rc == 0 && !c->collapse && c->ladder.oversample != 1) {
+        char where[1024];
+        sl_config_where(cfg, "refine", "collapse", where, sizeof where);
+        rc = sl_error_set(err, SL_E_CONFIG, 0, where,
+                          "[refine] collapse = false needs [levels] oversample = 1: nothing would "
+                          "bring the methods' levels, made at %g times their counts, down to them",
+                          c->ladder.oversample);
+    }
+    if (rc) {
+        free(c);
+        return rc;
+    }
+    *out = c;
+    return 0;
+}
+
+sl_refine_config sl_refine_default_config(void)
+{
+    sl_refine_config c;
+    sl_stage_default_config(&sl_refine_stage, &c, sizeof c);
+    return c;
+}
+
+/* --- the item's inputs -------------------------------------------------------------------- */
+
+static int open_model(refine_item *it, const char *dir, sl_error *err)
+{
+    char path[PATH_MAX];
+    int rc = sl_stage_path(path, dir, SL_MODEL_FILE, err);
+    if (rc == 0)
+        rc = sl_lod_model_open(path, &it->model, err);
+    if (rc)
+        return rc;
+    it->have_model = 1;
+    it->cutter.model = &it->model;
+    it->cutter.one_body = -1;
+    it->cutter.cap = it->c->cap_at_input && it->is_mesh ? it->points.triangle_count : 0;
+    it->cutter.min_part_area = it->c->min_part_area;
+    it->cutter.shard_reach = it->c->shard_reach;
+    return 0;
+}
+
+/* The inputs found by the artifacts the earlier stages left: the range stage's points, an
+ * LOD model, and level lists (the stage names no method). */
+static int open_item(refine_item *it, sl_error *err)
+{
+    const char *range_dir = sl_stage_dir(it->io, "range");
+    char path[PATH_MAX];
+    int rc = range_dir ? sl_stage_path(path, range_dir, SL_POINTSET_FILE, err)
+                       : sl_error_set(err, SL_E_INTERNAL, 0, NULL, "refine needs the range stage");
+    if (rc == 0)
+        rc = sl_pointset_read(path, &it->points, err);
+    if (rc)
+        return rc;
+    const sl_pointset *ps = &it->points;
+    it->is_mesh = ps->triangle_count > 0;
+    it->surface = sl_mesh_view(ps->count, ps->positions, NULL, NULL, ps->triangle_count,
+                               ps->triangles);
+    if (it->is_mesh) { /* what the levels should keep of it */
+        sl_mesh_topology topo;
+        rc = sl_mesh_topology_compute(&it->surface, &topo, err);
+        if (rc)
+            return rc;
+        it->input_watertight = topo.watertight;
+        it->input_one_body = topo.area > 0 &&
+                             topo.largest_component_area >= SL_REFINE_ONE_BODY * topo.area;
+    }
+    double d2 = 0;
+    for (int k = 0; k < 3; k++)
+        d2 += ((double)ps->bbox_max[k] - ps->bbox_min[k]) * ((double)ps->bbox_max[k] - ps->bbox_min[k]);
+    it->diagonal = sqrt(d2);
+    for (const struct sl_stage_dir_entry *u = it->io->upstream; rc == 0 && u && u->stage; u++) {
+        if (sl_stage_path(path, u->dir, SL_MODEL_FILE, err) == 0 && !it->have_model &&
+            access(path, F_OK) == 0)
+            rc = open_model(it, u->dir, err);
+        if (rc == 0 && sl_level_list_present(u->dir) && it->method_count < 2) {
+            struct refine_method_list *m = &it->methods[it->method_count++];
+            m->method = u->stage;
+            m->dir = u->dir;
+            rc = sl_level_list_read(u->dir, &m->list, err);
+        }
+    }
+    it->input_triangles = it->is_mesh ? ps->triangle_count
+                          : it->have_model ? it->model.accumulation[it->model.expansion_count]
+                                           : 0;
+    if (rc == 0 && !it->have_model && it->method_count == 0 && !it->is_mesh)
+        rc = sl_error_set(err, SL_E_UNSUPPORTED, 0, it->io->source_path,
+                          "a point set (no faces) needs the octree method for its levels");
+    return rc;
+}
+
+static void close_item(refine_item *it)
+{
+    for (int m = 0; m < it->method_count; m++)
+        sl_level_list_release(&it->methods[m].list);
+    if (it->have_model)
+        sl_lod_model_release(&it->model);
+    sl_level_release_mesh(&it->scan_chain);
+    sl_fit_reference_free(it->fit_reference);
+    sl_pointset_release(&it->points);
+}
+
+/* --- the levels ----------------------------------------------------------------------------- */
+
+/* The rungs in the order they are made: most triangles first (a scan candidate is
+ * simplified from the one before), expansions rungs last; ties in the ladder's order. */
+static void making_order(const refine_item *it, int *order, uint64_t *target)
+{
+    const sl_ladder *l = &it->c->ladder;
+    for (int i = 0; i < l->count; i++) {
+        target[i] = sl_rung_triangles(&l->rungs[i], it->input_triangles);
+        int at = i;
+        while (at > 0 && target[order[at - 1]] < target[i])
+            order[at] = order[at - 1], at--;
+        order[at] = i;
+    }
+}
+
+/* The cluster method's intermediate models after its level `name`, into the list: only
+ * when that level is published as the method made it (they lead to it). */
+static int pass_intermediates(refine_item *it, const sl_level *chosen, sl_level_list *out,
+                              sl_error *err)
+{
+    for (int m = 0; m < it->method_count; m++) {
+        struct refine_method_list *ml = &it->methods[m];
+        if (strcmp(chosen->method, ml->method) || (chosen->flags & SL_LEVEL_REFINED))
+            continue;
+        for (uint32_t i = 0; i < ml->list.count; i++) {
+            const sl_level *rec = &ml->list.levels[i];
+            size_t n = strlen(chosen->name);
+            if (!(rec->flags & SL_LEVEL_INTERMEDIATE) || strncmp(rec->name, chosen->name, n) ||
+                rec->name[n] != '.')
+                continue;
+            sl_level *lv = &out->levels[out->count];
+            sl_level_copy_record(lv, rec);
+            int rc = sl_level_read_mesh(ml->dir, lv, it->points.count, err);
+            if (rc == 0)
+                rc = sl_level_write_mesh(it->io->out_dir, lv, err);
+            sl_level_release_mesh(lv);
+            if (rc)
+                return rc;
+            out->count++;
+        }
+    }
+    return 0;
+}
+
+static void report_level(sl_json *r, const sl_level *lv, const refine_candidate *cands, int count,
+                         int chosen)
+{
+    sl_json_object_begin(r, NULL);
+    sl_json_string(r, "name", lv->name);
+    sl_json_string(r, "method", lv->method);
+    sl_json_u64(r, "budget", lv->budget);
+    sl_json_u64(r, "triangles", lv->triangle_count);
+    sl_json_bool(r, "reached", (lv->flags & SL_LEVEL_REACHED) != 0);
+    sl_json_bool(r, "scan", (lv->flags & SL_LEVEL_SCAN) != 0);
+    if (count > 0) /* the chosen one's collapse gave up the topology to reach the count */
+        sl_json_bool(r, "topology_relaxed", cands[chosen].strict_triangles > 0);
+    if (count > 0)
+        refine_report_candidates(r, cands, count, chosen);
+    sl_json_object_end(r);
+}
+
+void refine_report_candidates(sl_json *r, const refine_candidate *cands, int count, int chosen)
+{
+    sl_json_array_begin(r, "candidates");
+    for (int i = 0; i < count; i++) {
+        const refine_candidate *c = &cands[i];
+        sl_json_object_begin(r, NULL);
+        sl_json_string(r, "method", c->level.method);
+        sl_json_bool(r, "chosen", i == chosen);
+        sl_json_u64(r, "base_triangles", c->base_triangles);
+        sl_json_u64(r, "triangles", c->level.triangle_count);
+        sl_json_bool(r, "refined", (c->level.flags & SL_LEVEL_REFINED) != 0);
+        sl_json_bool(r, "topology_relaxed", c->strict_triangles > 0);
+        if (c->strict_triangles > 0) { /* docs/levels.md, step 3 */
+            sl_json_u64(r, "strict_triangles", c->strict_triangles);
+            sl_json_u64(r, "relaxed_collapses", c->relaxed_collapses);
+        }
+        if (!strcmp(c->level.method, "octree")) {
+            sl_json_u64(r, "expansions", c->level.expansions);
+            sl_json_bool(r, "capped", c->capped);
+            sl_json_object_begin(r, "shards_dropped");
+            sl_json_u64(r, "parts", c->dropped.parts);
+            sl_json_u64(r, "triangles", c->dropped.triangles);
+            sl_json_double(r, "area_fraction", c->dropped.area_fraction);
+            sl_json_object_end(r);
+        }
+        sl_json_bool(r, "fitted", c->fitted);
+        if (c->measured) { /* after the collapse; after the fit too when it was compared
+                              after it (docs/levels.md) */
+            if (c->rms_collapsed > 0)
+                sl_json_double(r, "rms_before_fit", c->rms_collapsed);
+            sl_json_double(r, "rms", c->rms);
+            sl_json_double(r, "hausdorff", c->hausdorff);
+            sl_json_bool(r, "watertight", c->watertight);
+            sl_json_double(r, "largest_part", c->largest_part);
+        }
+        sl_json_object_end(r);
+    }
+    sl_json_array_end(r);
+}
+
+/* Rung i's level: made, written to its file, its record kept in out->levels[i]. */
+static int make_level(refine_item *it, int i, uint64_t target, sl_level_list *out, sl_error *err)
+{
+    const sl_rung *r = &it->c->ladder.rungs[i];
+    sl_level *lv = &out->levels[i];
+    refine_candidate cands[SL_REFINE_MAX_CANDIDATES];
+    int count = 0, chosen = 0, rc;
+    memset(cands, 0, sizeof cands);
+    if (it->is_mesh && it->c->ladder.top_is_scan && r->kind != SL_RUNG_EXPANSIONS &&
+        target >= it->points.triangle_count) {
+        rc = refine_scan_level(it, r, target, &cands[0].level, err);
+    } else {
+        rc = refine_make_candidates(it, r, target, cands, &count, &chosen, err);
+    }
+    if (rc == 0) {
+        sl_level_copy_record(lv, &cands[chosen].level);
+        lv->vertex_count = cands[chosen].level.vertex_count;
+        lv->triangle_count = cands[chosen].level.triangle_count;
+        rc = sl_level_write_mesh(it->io->out_dir, &cands[chosen].level, err);
+    }
+    if (rc == 0)
+        report_level(it->io->report, lv, cands, count, chosen);
+    if (rc == 0 && it->io->timings && count > 0) { /* seconds per candidate: timings.json */
+        sl_json_array_begin(it->io->timings, lv->name);
+        for (int c = 0; c < count; c++)
+            sl_json_double(it->io->timings, NULL, cands[c].seconds);
+        sl_json_array_end(it->io->timings);
+    }
+    for (int c = 0; c < SL_REFINE_MAX_CANDIDATES; c++)
+        refine_candidate_release(&cands[c]);
+    return rc;
+}
+
+static int make_levels(refine_item *it, sl_level_list *out, sl_error *err)
+{
+    const sl_ladder *l = &it->c->ladder;
+    int order[SL_LADDER_MAX];
+    uint64_t target[SL_LADDER_MAX];
+    making_order(it, order, target);
+    unsigned char made[SL_LADDER_MAX] = {0};
+    sl_json_array_begin(it->io->report, "levels");
+    int rc = 0;
+    for (int at = 0; at < l->count && rc == 0; at++) {
+        int i = order[at];
+        if (l->rungs[i].kind == SL_RUNG_EXPANSIONS && !it->have_model)
+            continue; /* paper 1's Table 1 needs the octree: reported as skipped below */
+        rc = sl_stage_step(it->io, "refine", (double)at / (l->count ? l->count : 1), err);
+        if (rc == 0)
+            rc = make_level(it, i, target[i], out, err);
+        made[i] = rc == 0;
+    }
+    sl_json_array_end(it->io->report);
+    /* The list in the ladder's order, intermediates after the level they lead to. */
+    sl_level_list final = *out;
+    sl_level *records = calloc((size_t)l->count * 101 + 1, sizeof *records);
+    if (rc == 0 && !records)
+        rc = sl_error_nomem(err, NULL, "level records");
+    final.levels = records;
+    final.count = 0;
+    for (int i = 0; i < l->count && rc == 0; i++) {
+        if (!made[i])
+            continue;
+        final.levels[final.count++] = out->levels[i];
+        rc = pass_intermediates(it, &out->levels[i], &final, err);
+    }
+    if (rc == 0)
+        rc = sl_level_list_write(it->io->out_dir, &final, err);
+    free(records);
+    return rc;
+}
+
+static int refine_run(const void *config, const sl_stage_io *io, sl_error *err)
+{
+    refine_item it;
+    memset(&it, 0, sizeof it);
+    it.c = config;
+    it.io = io;
+    sl_lod_model_init(&it.model);
+    int rc = open_item(&it, err);
+    sl_level_list out;
+    memset(&out, 0, sizeof out);
+    out.levels = calloc(SL_LADDER_MAX, sizeof *out.levels);
+    if (rc == 0 && !out.levels)
+        rc = sl_error_nomem(err, NULL, "level records");
+    if (rc == 0) {
+        out.input_triangles = it.points.triangle_count;
+        out.input_points = it.points.count;
+        out.diagonal = it.diagonal;
+        out.model_expansions = it.have_model ? it.model.expansion_count : 0;
+        out.model_triangles =
+            it.have_model ? it.model.accumulation[it.model.expansion_count] : 0;
+        sl_json *r = io->report;
+        sl_json_string(r, "method", it.c->best ? "best" : it.have_model ? "octree"
+                                    : it.method_count ? it.methods[0].method : "scan");
+        sl_json_u64(r, "input_triangles", it.input_triangles);
+        if (it.have_model)
+            sl_json_u64(r, "triangles_finest", out.model_triangles);
+        if (it.cutter.cap)
+            sl_json_u64(r, "triangles_cap", it.cutter.cap);
+        sl_json_bool(r, "collapse", it.c->collapse);
+        sl_json_bool(r, "relax_topology", it.c->relax_topology);
+        sl_json_bool(r, "fit", it.c->fit);
+        rc = make_levels(&it, &out, err);
+    }
+    free(out.levels);
+    close_item(&it);
+    return rc;
+}
+
+const sl_stage sl_refine_stage = {
+    .name = "refine",
+    .methods = SL_METHODS_ALL,
+    .description = "every method's levels -> the published levels: the scan at the top, the "
+                   "rest collapsed to their exact counts and fitted to the input",
+    .version = REFINE_STAGE_VERSION,
+    .options = refine_options,
+    .shared_options = refine_shared,
+    .sections = refine_sections,
+    .configure = refine_configure,
+    .release_config = free,
+    .run = refine_run,
+};

@@ -1,0 +1,112 @@
+#!/usr/bin/env bash
+# The published levels (docs/levels.md, issue 36): with the default config ([lod] method =
+# best) every level asked by a count or a share has that many triangles within 1 % (never
+# above), a closed input's levels stay watertight, a level whose input is one body holds
+# together (its largest part >= 99 % of the area), the top rung is the scan itself, and
+# the refine stage's report lists each candidate (method, count, RMS, Hausdorff, topology)
+# with the chosen one first by the rule of docs/levels.md (reached its count, keeps the
+# input's one body and closed surface, then the least RMS); each candidate's seconds are
+# in timings.json, not in report.json. The refined levels are closer to the input than
+# paper 1's own cuts at the same counts. Each method alone, refined, meets every count.
+# Inputs: cow and rocker_arm (closed), fandisk (closed, sharp), bun_zipper_res3 (open,
+# holes, non-manifold edges). SCANLOD_LIGHT=1: cow and rocker_arm.
+source "$(dirname "$0")/../lib.sh"
+
+scans=(cow rocker_arm fandisk bun_zipper_res3)
+light && scans=(cow rocker_arm)
+mkdir -p "$TMP/in"
+for s in "${scans[@]}"; do cp "$SCANS/$s.ply" "$TMP/in/"; done
+ladder=("[levels]" "percents = 100" "budgets = b1:1%,b5:5%,b20:20%,thumb:500")
+export_lines=("[export]" "formats = ply" "thumbnail_size = 0" "fidelity_samples = 50000")
+write_config "$TMP/best.ini" "$TMP/in" "$TMP/work-best" "$TMP/out-best" "${ladder[@]}" \
+  "${export_lines[@]}"
+run_scanlod run "$TMP/best.ini" -q
+check "default config: run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
+# Paper 1's own cuts at the same counts, for the comparison.
+write_config "$TMP/paper.ini" "$TMP/in" "$TMP/work-paper" "$TMP/out-paper" "[lod]" \
+  "method = octree" "${ladder[@]}" "top = method" "oversample = 1" "[refine]" "collapse = false" "fit = false" \
+  "${export_lines[@]}"
+run_scanlod run "$TMP/paper.ini" -q
+check "paper 1's cuts: run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
+
+cat >"$TMP/check.py" <<'EOF'
+import json, os, sys
+out, paper, item, scan_ply = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
+def stages(folder):
+    return json.load(open(os.path.join(folder, item, "report.json")))["stages"]
+s, p = stages(out), stages(paper)
+bad = []
+def need(ok, what):
+    if not ok:
+        bad.append(what)
+n = s["refine"]["input_triangles"]
+levels = {l["name"]: l for l in s["export"]["levels"]}
+plain = {l["name"]: l for l in p["export"]["levels"]}
+top = levels["lod100"]
+one_body = top["largest_component_area_fraction"] >= 0.99  # the scan's: the input's
+need(top["scan"] and top["method"] == "scan" and top["triangles"] == n,
+     "lod100 is the scan (%s, %d of %d triangles)" % (top["method"], top["triangles"], n))
+need(top["rms"] < 1e-9, "the scan's RMS to itself is 0 (%g)" % top["rms"])
+for name in ("b1", "b5", "b20", "thumb"):
+    l = levels[name]
+    b = l["budget"]
+    need(l["triangles"] <= b and l["triangles"] >= 0.99 * b,
+         "%s: %d triangles for %d" % (name, l["triangles"], b))
+    if top["watertight"]:
+        need(l["watertight"], "%s: watertight like the input" % name)
+    if one_body:
+        need(l["largest_component_area_fraction"] >= 0.99, "%s: in one piece (%.3f)" % (
+            name, l["largest_component_area_fraction"]))
+    if name in plain and plain[name]["triangles"] > 0:
+        ratio = l["rms"] / plain[name]["rms"]
+        need(ratio < 1, "%s: RMS %.3g of paper 1's cut's at %d triangles" % (
+            name, ratio, plain[name]["triangles"]))
+for r in s["refine"]["levels"]:
+    c = r.get("candidates", [])
+    if not c:
+        continue
+    need(all("rms" in x and "hausdorff" in x and "triangles" in x for x in c),
+         "%s: every candidate measured" % r["name"])
+    chosen = [x for x in c if x["chosen"]]
+    def rank(x):
+        keeps = 2 * (one_body and x["largest_part"] >= 0.99) + (top["watertight"] and x["watertight"])
+        return (x["triangles"] <= 1.01 * r["budget"], keeps, -x["rms"])
+    need(len(chosen) == 1 and rank(chosen[0]) == max(rank(x) for x in c),
+         "%s: the chosen candidate comes first by the rule (%s)" % (r["name"], c))
+    need("seconds" not in json.dumps(c), "%s: no time in the report" % r["name"])
+t = json.load(open(os.path.join(out, item, "timings.json")))["stages"]["refine"]
+need(all(len(v) >= 1 for v in t.get("detail", {"x": []}).values()) and t.get("detail"),
+     "timings.json gives each candidate's seconds")
+print("\n".join(bad))
+EOF
+for s in "${scans[@]}"; do
+  problems=$(python3 "$TMP/check.py" "$TMP/out-best" "$TMP/out-paper" "$s.ply" "$SCANS/$s.ply")
+  check "$s: levels as asked, whole and closer than paper 1's cuts (${problems:-ok})" [ -z "$problems" ]
+done
+
+# Each method alone, refined: every count met within 1 % (segment and cluster stop above
+# the small ones on their own; octree cuts never land on a count exactly; on the open,
+# non-manifold bun_zipper_res3 the collapse keeping the topology stops above 1 and 5 %:
+# [refine] relax_topology, tests/e2e/test_refine_open.sh).
+for method in octree segment cluster; do
+  write_config "$TMP/$method.ini" "$TMP/in" "$TMP/work-$method" "$TMP/out-$method" \
+    "[lod]" "method = $method" "[segment]" "search_samples = 0" "${ladder[@]}" "${export_lines[@]}"
+  run_scanlod run "$TMP/$method.ini" -q
+  check "$method: run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
+  for s in "${scans[@]}"; do
+    counts=$(python3 - "$TMP/out-$method/$s.ply/report.json" <<'EOF'
+import json, sys
+r = json.load(open(sys.argv[1]))["stages"]["export"]["levels"]
+print(" ".join("%s:%d/%d" % (l["name"], l["triangles"], l["budget"]) for l in r
+               if l["name"] != "lod100" and not (l["budget"] * 0.99 <= l["triangles"] <= l["budget"])))
+EOF
+)
+    check "$method $s: every count met (${counts:-all})" [ -z "$counts" ]
+  done
+done
+# The paper's mode needs each method's own level at its count: collapse off with the
+# default oversample would leave levels at twice their counts, so it is refused.
+run_scanlod run "$TMP/best.ini" -q -s refine.collapse=false
+check "collapse off with oversample 2: a config error naming the key (rc $rc: $err)" \
+  [ "$rc" -eq 78 ] && contains "\[refine\] collapse = false needs \[levels\] oversample = 1" "$err"
+finish

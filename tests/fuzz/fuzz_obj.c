@@ -1,0 +1,14 @@
+/* libFuzzer target (build: -DSCANLOD_FUZZ=ON with clang; tests/fuzz/README.md) for
+ * the OBJ reader (with its MTL logic: the file names an MTL it cannot open).
+ * The promises checked are scan_promises.h's; crashes, leaks, hangs and allocations beyond
+ * -malloc_limit_mb are findings too. */
+#include <stddef.h>
+#include <stdint.h>
+
+#include "tests/fuzz/scan_promises.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    scan_fuzz_one(data, size, "fuzz.obj", "obj");
+    return 0;
+}
