@@ -152,6 +152,21 @@ static int choose_method(sl_engine *e, const sl_stage *const *stages, sl_error *
                         "[lod] method = %s: this build has no stages for it yet", method);
 }
 
+/* [run] threads = 0: the OMP_NUM_THREADS a job script or Slurm's --cpus-per-task set, as
+ * every OpenMP program honours it; without it (or unreadable), 0 stays "all cores". */
+static int threads_from_environment(void)
+{
+    const char *text = getenv("OMP_NUM_THREADS");
+    if (!text || !*text)
+        return 0;
+    char *end;
+    errno = 0;
+    long n = strtol(text, &end, 10);
+    if (errno || *end != '\0' || n < 1 || n > 1024)
+        return 0;
+    return (int)n;
+}
+
 int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err)
 {
     *out = NULL;
@@ -172,6 +187,8 @@ int sl_engine_open(sl_engine **out, const sl_engine_options *opts, sl_error *err
     e->output = sl_config_string(e->cfg, "run", "output");
     e->logs = sl_config_string(e->cfg, "run", "logs");
     e->threads = (int)sl_config_int(e->cfg, "run", "threads");
+    if (e->threads == 0)
+        e->threads = threads_from_environment();
     e->memory_limit_mb = sl_config_int(e->cfg, "run", "memory_limit_mb");
     e->memory_check = sl_config_bool(e->cfg, "run", "memory_check");
     e->expected_peak_mb = opts->expected_peak_mb;

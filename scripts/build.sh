@@ -7,7 +7,8 @@ dir=${1:-$root/build}
 shift || true
 gen=()
 command -v ninja >/dev/null && gen=(-G Ninja)
-if [ ! -f "$dir/CMakeCache.txt" ]; then
+# Configured when new, and again when given options (an existing tree takes them too).
+if [ ! -f "$dir/CMakeCache.txt" ] || [ $# -gt 0 ]; then
   cmake -S "$root" -B "$dir" "${gen[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSCANLOD_WERROR=ON "$@"
 fi
 cmake --build "$dir" --parallel "$(nproc)"

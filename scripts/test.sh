@@ -27,11 +27,14 @@ echo "test.sh: Release pass (build, ctest, demo) $((release / 60)) min $((releas
 
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=0:halt_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-# The unoptimised sanitizer build checks memory safety on small data: its tests get
+# The sanitizer build checks memory safety on small data: its tests get
 # SCANLOD_LIGHT=1 (tests/CMakeLists.txt); the large inputs and every K are the first pass's.
 # It is also the coverage build: gcov counts every line and branch the tests run.
+# Debug keeps the asserts; -O1 (not Debug's -O0) because the unoptimised build ran the
+# pass 3-4x slower, past CI's time (docs/testing.md, "Sanitizer pass").
 "$root/scripts/build.sh" "$root/build-asan" -DSCANLOD_SANITIZE=ON -DSCANLOD_BENCH=OFF \
-  -DCMAKE_BUILD_TYPE=Debug -DSCANLOD_COVERAGE=ON
+  -DCMAKE_BUILD_TYPE=Debug -DCMAKE_C_FLAGS_DEBUG="-g -O1" -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" \
+  -DSCANLOD_COVERAGE=ON
 find "$root/build-asan" -name '*.gcda' -delete
 # Tests labelled release-only (a Slurm cluster of their own) run in the first pass only.
 (cd "$root/build-asan" && ctest --output-on-failure -j "$jobs" -LE release-only)
