@@ -152,7 +152,7 @@ static int choose_method(sl_engine *e, const sl_stage *const *stages, sl_error *
                         "[lod] method = %s: this build has no stages for it yet", method);
 }
 
-/* [run] threads = 0: the OMP_NUM_THREADS a job script or Slurm's --cpus-per-task set, as
+/* [run] threads = 0: the OMP_NUM_THREADS a job script set (a batch system's CPU share), as
  * every OpenMP program honours it; without it (or unreadable), 0 stays "all cores". */
 static int threads_from_environment(void)
 {

@@ -26,7 +26,7 @@ static const sl_option run_options[] = {
      "Folder for the human log and the JSON-lines event log of each run (relative to the "
      "current directory when left at the default)."},
     {"run", "threads", SL_OPT_INT, "0", 0, 1024, NULL,
-     "OpenMP threads per item; 0 = OMP_NUM_THREADS when set (as a Slurm job sets it), else all cores."},
+     "OpenMP threads per item; 0 = OMP_NUM_THREADS when set (as job scripts set it), else all cores."},
     {"run", "memory_limit_mb", SL_OPT_INT, "0", 0, 1 << 30, NULL,
      "Memory limit per item process in MiB (setrlimit RLIMIT_DATA: the heap and other "
      "private writable memory, not mapped libraries); 0 = none. An item over it fails as "

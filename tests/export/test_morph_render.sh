@@ -28,7 +28,12 @@ def diff(a, b): return sum(1 for x, y in zip(a, b) if sum(abs(u - v) for u, v in
 w0, wh, w1, coarse = (load(p) for p in sys.argv[1:5])
 print(diff(w0, coarse), diff(wh, coarse), diff(w1, coarse), diff(w0, wh), diff(w0, w1))
 PY
-for comp in meshopt draco; do
+comps="meshopt draco"
+if light; then
+  comps=meshopt
+  echo "LIGHT: the Draco GLB's pictures are the Release pass's (the Draco morph's bytes: test_morph)"
+fi
+for comp in $comps; do
   write_config "$TMP/$comp.ini" "$TMP/in" "$TMP/work-$comp" "$TMP/out-$comp" "[levels]" \
     "percents = 30,60" "budgets =" "[export]" "formats = glb" "thumbnail_size = 0" "fidelity = false" \
     "compression = $comp" "morph = true"
