@@ -52,6 +52,13 @@ run_scanlod plan "$TMP/run.ini" -s queue.part_mb=0.2
 check "parts: the table says them" contains "rocker_arm.ply .*samples in 2 parts" "$out"
 run_scanlod plan "$TMP/run.ini" -s no.such=1
 check "bad config key: exit 78" [ "$rc" -eq 78 ]
+# [run] threads = 0 takes OMP_NUM_THREADS, as job scripts set it; a number in the config wins.
+plan_threads() { # plan_threads THREADS: the plan's threads with OMP_NUM_THREADS=3
+  OMP_NUM_THREADS=3 "$SCANLOD" plan "$TMP/run.ini" --json -s "run.threads=$1" 2>/dev/null |
+    python3 -c 'import json, sys; print(json.load(sys.stdin)["threads"])'
+}
+check "threads = 0 honours OMP_NUM_THREADS=3 (plan: $(plan_threads 0))" [ "$(plan_threads 0)" = 3 ]
+check "threads = 2 wins over OMP_NUM_THREADS=3 (plan: $(plan_threads 2))" [ "$(plan_threads 2)" = 2 ]
 
 # The prediction against the run: the item's largest stage peak (timings.json).
 rm "$TMP/in/broken.ply" "$TMP/in/cow.ply"
