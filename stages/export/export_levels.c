@@ -10,6 +10,7 @@
 #include <omp.h>
 
 #include "core/atomicfile.h"
+#include "core/log.h"
 #include "core/markdown.h"
 #include "geometry/mesh_distance.h"
 #include "stages/export/export_internal.h"
@@ -271,6 +272,12 @@ int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
         row->texture_bytes = texture->original_size;
     } else {
         rc = bake_level(c, texture, lv, mesh, row, &baked, err);
+        /* A textured scan published untextured is what a curator notices first: said where
+         * runs are watched, not only in report.json. */
+        if (rc == 0 && row->texture < 0)
+            SL_LOG(SL_LOG_WARN, "export", io->item, "%s: %llu triangles do not fit one atlas "
+                   "chart each at %d px: vertex colours only, no texture", lv->name,
+                   (unsigned long long)mesh->triangle_count, sl_export_texture_size(c, lv->name));
     }
     sl_lod_mesh textured = glb_geometry(mesh, &baked, keep ? texcoords : NULL, texture, &glb);
     if (rc == 0 && mesh->triangle_count)

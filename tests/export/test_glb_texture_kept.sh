@@ -82,4 +82,20 @@ for name in ('lod100', 'lod20'):
     print(name, [i.get('mimeType') for i in j.get('images', [])], end=' ')")
 check "octree: lod100 (the scan) keeps the PNG, lod20 (an octree cut) is baked ($kinds)" \
   [ "$kinds" = "lod100 ['image/png'] lod20 ['image/jpeg'] " ]
+
+# A level whose triangles do not fit one atlas chart each (a 64 px atlas here; venus's
+# 238k-triangle levels at 2048 px in the benchmark) keeps vertex colours: said in the log
+# where runs are watched, not only in report.json.
+write_config "$TMP/small.ini" "$TMP/in" "$TMP/work-small" "$TMP/out-small" "[levels]" \
+  "percents = 100" "budgets =" "[export]" "texture = bake" "texture_size = 64" \
+  "thumbnail_size = 0" "fidelity = false"
+rm -rf "$TMP/logs"
+run_scanlod run "$TMP/small.ini" -q
+check "64 px atlas: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
+check "64 px atlas: the report says vertex colours only" \
+  grep -q '"warning": *"too many triangles for the atlas: vertex colours only"' \
+  "$TMP/out-small/cow_textured.ply/report.json"
+check "64 px atlas: the log warns that lod100 has no texture" \
+  grep -q 'WARN.*lod100: 5804 triangles do not fit one atlas chart each at 64 px: vertex colours only' \
+  "$TMP"/logs/*.log
 finish
