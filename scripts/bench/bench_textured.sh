@@ -101,11 +101,14 @@ python3 - "$work" "$GP" "$GT" "$out" <<'EOF'
 import glob, json, os, re, struct, subprocess, sys
 work, gp, gt, out = sys.argv[1:5]
 
+def glb_json(path):
+    """The JSON chunk of a GLB."""
+    d = open(path, "rb").read()
+    return json.loads(d[20:20 + struct.unpack("<I", d[12:16])[0]])
+
 def glb_triangles(path):
     """Triangles of a GLB's primitives (from the index accessors' counts)."""
-    d = open(path, "rb").read()
-    n = struct.unpack("<I", d[12:16])[0]
-    j = json.loads(d[20:20 + n])
+    j = glb_json(path)
     return sum(j["accessors"][p["indices"]]["count"] // 3
                for m in j["meshes"] for p in m["primitives"])
 
@@ -113,8 +116,7 @@ def gltf_extensions(path):
     if path.endswith(".gltf"):
         return json.load(open(path)).get("extensionsUsed", [])
     if path.endswith(".glb"):
-        d = open(path, "rb").read()
-        return json.loads(d[20:20 + struct.unpack("<I", d[12:16])[0]]).get("extensionsUsed", [])
+        return glb_json(path).get("extensionsUsed", [])
     return []
 
 decoded = {}
