@@ -38,7 +38,7 @@ static const char usage[] =
     "usage: scanlod extract MODEL.slod (--expansions K | --triangles N | --lod-percent P |\n"
     "                                   --max-error E) -o OUT.{ply,glb,obj} [--repeat R [--hot]]\n"
     "       scanlod extract MODEL.slod (--triangles N | ...) --morph-to M [--morph-weight W]\n"
-    "                                   -o OUT.{ply,glb,obj}\n"
+    "                                   [--morph-tears] -o OUT.{ply,glb,obj}\n"
     "       scanlod extract OCTREE.slot --level L -o OUT.{ply,glb,obj}\n"
     "Cuts one level of detail from a model built by `scanlod run` (published as\n"
     "OUTPUT/ITEM/model.slod): K expansions of the LOD array, the largest level within N\n"
@@ -56,7 +56,9 @@ static const char usage[] =
     "level, and the level is cut along that level's edges so that its surface, not only\n"
     "its vertices, lies on it at weight 1. A .glb gets the morph target (weight 0: the\n"
     "level's surface, 1: on the coarser level); a .ply or .obj is the mesh at weight W\n"
-    "(--morph-weight, in [0, 1], default 1; 0 writes the level itself).\n";
+    "(--morph-weight, in [0, 1], default 1; 0 writes the level itself). --morph-tears\n"
+    "tears the triangles the cut cannot bring onto the coarser level, as [export]\n"
+    "morph_tears does: weight 1 then lies on it exactly, with cracks in between.\n";
 
 typedef struct request {
     const char *input, *output;
@@ -69,6 +71,7 @@ typedef struct request {
     uint64_t morph_to; /* its triangle count */
     int has_weight; /* --morph-weight given */
     double weight;  /* its value (default 1) */
+    int morph_tears; /* --morph-tears: tear what the refinement cannot mend */
 } request;
 
 static int bad_request(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
@@ -164,9 +167,11 @@ static int check_value(const request *r)
  * only where the output is one mesh at that weight (not a .glb, which holds the target). */
 static int check_morph(request *r)
 {
-    if (!r->morph && !r->has_weight)
+    if (!r->morph && !r->has_weight && !r->morph_tears)
         return 0;
     const char *dot = strrchr(r->output, '.');
+    if (!r->morph && r->morph_tears)
+        return bad_request("--morph-tears needs --morph-to");
     if (!r->morph)
         return bad_request("--morph-weight needs --morph-to");
     if (r->kind == 'l' || r->repeat)
@@ -230,6 +235,8 @@ static int parse(int argc, char **argv, request *r)
             if (parse_number("--morph-weight", argv[++i], &r->weight))
                 return SL_EXIT_USAGE;
             r->has_weight = 1;
+        } else if (!strcmp(argv[i], "--morph-tears")) {
+            r->morph_tears = 1;
         } else if (argv[i][0] != '-' && !r->input)
             r->input = argv[i];
         else
@@ -365,7 +372,7 @@ static int write_weighted(const request *r, const sl_lod_mesh *mesh, const sl_lo
     sl_mesh level = sl_mesh_view(mesh->vertex_count, mesh->positions, NULL, NULL,
                                  mesh->triangle_count, mesh->indices);
     sl_morph_refined m;
-    int rc = sl_morph_refine(&to, &level, &m, err);
+    int rc = sl_morph_refine(&to, &level, r->morph_tears ? SL_MORPH_REFINE_TEAR : 0, &m, err);
     if (rc)
         return rc;
     size_t n = (size_t)(m.vertex_count ? m.vertex_count : 1);
@@ -413,6 +420,7 @@ static int write_morph(const request *r, sl_lod_model *m, const sl_lod_mesh *mes
     if (dot && !strcasecmp(dot, ".glb")) {
         sl_export_glb glb = sl_export_default_glb();
         glb.morph_to = &coarser;
+        glb.morph_tears = r->morph_tears;
         rc = sl_export_write_mesh(r->output, mesh, extras, &glb, NULL, err);
         snprintf(note, note_size, ", morph target to expansions %u (%llu triangles)", k,
                  (unsigned long long)coarser.triangle_count);

@@ -96,6 +96,8 @@ typedef struct sl_glb_stats {
     uint64_t morph_unresolved;      /* triangles it added, those it left spanning, */
     uint64_t morph_torn_triangles;  /* those it tore, and the widest tear at weight 1 */
     double morph_tear_max;          /* (metres, glTF frame) */
+    double morph_unresolved_max;    /* how far the spanning ones stand off the coarser
+                                       surface at weight 1 (metres, glTF frame) */
 } sl_glb_stats;
 
 /* `extras_json`: a JSON object text ("{...}") for mesh.extras, or NULL. `options`: NULL

@@ -65,9 +65,9 @@ static uint64_t edge_key(uint32_t a, uint32_t b)
  * 1 splits each failing edge at its first coarser edge. The two alternate: a triangle
  * around a coarser vertex gets that vertex before its edges are split, or the splits
  * would close in on the vertex without reaching it. *changed: whether anything was.
- * *failing_edges: in: the failing edges of the last edge round (UINT64_MAX: none yet);
- * out: this one's. An edge round with no fewer failing edges than the last makes no
- * progress (splits chasing a fold of the closest-point map): it splits nothing. */
+ * *failing_edges: in: the fewest failing edges of an edge round so far (UINT64_MAX: none
+ * yet); out: updated. The second edge round in a row without a new fewest splits nothing
+ * (splits chasing a fold of the closest-point map). */
 static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *changed,
                       sl_error *err)
 {
@@ -114,11 +114,19 @@ static int round_once(refine *R, int split_edges, uint64_t *failing_edges, int *
             bad[nu++] = bad[i];
     *changed = 0;
     if (split_edges && nu >= *failing_edges) {
-        free(bad), free(old), free(test);
-        return 0;
-    }
-    if (split_edges)
+        /* one edge round may add failing edges on the way (a chord over several coarser
+         * triangles is split once per round, and its halves fail until the last); two in
+         * a row without a new fewest is a fold of the closest-point map, where splits
+         * make new failing chords as fast as they mend old ones */
+        if (R->stale_rounds >= 1) {
+            free(bad), free(old), free(test);
+            return 0;
+        }
+        R->stale_rounds++;
+    } else if (split_edges) {
+        R->stale_rounds = 0;
         *failing_edges = nu;
+    }
     uint32_t *split = malloc((nu + 1) * sizeof *split);
     /* at most one vertex per failing edge and per triangle; at most 4 triangles each */
     int rc = split ? mr_reserve(R, r->vertex_count + nu + tn, 4 * tn, err) : mr_nomem(err);
@@ -231,8 +239,47 @@ static int start(refine *R, sl_error *err)
     return rc;
 }
 
-int sl_morph_refine(const sl_mesh *coarser, const sl_mesh *level, sl_morph_refined *out,
-                    sl_error *err)
+/* How far triangle t[0..2] is from the coarser surface, squared: the farthest of its
+ * corners, edge midpoints and centre (a chord bulges off the surface between its
+ * corners). */
+static double triangle_distance2(const refine *R, const double t[3][3])
+{
+    static const double at[7][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {.5, .5, 0},
+                                    {0, .5, .5}, {.5, 0, .5}, {1 / 3., 1 / 3., 1 / 3.}};
+    double worst = 0;
+    for (int i = 0; i < 7; i++) {
+        double q[3];
+        sl_closest hit;
+        for (int k = 0; k < 3; k++)
+            q[k] = at[i][0] * t[0][k] + at[i][1] * t[1][k] + at[i][2] * t[2][k];
+        sl_triangle_bvh_closest(&R->bvh, q, UINT32_MAX, &hit);
+        worst = hit.distance_sq > worst ? hit.distance_sq : worst;
+    }
+    return worst;
+}
+
+/* The travel bound (squared): how far the level is from the coarser surface (sampled as
+ * triangle_distance2), at least "lies in". A new, retargeted or torn vertex travels no
+ * farther: each triangle then moves into one coarser triangle by at most that, so at
+ * weight w the blend is within (1 - w) times the level's own distance of the coarser
+ * surface: it never strays farther than weight 0 is, and comes closer as w grows. */
+static double travel_bound2(const refine *R)
+{
+    const sl_mesh *l = R->level;
+    double worst = R->eps2;
+#pragma omp parallel for schedule(dynamic, 1024) reduction(max : worst)
+    for (int64_t i = 0; i < (int64_t)l->triangle_count; i++) {
+        double t[3][3];
+        for (int k = 0; k < 3; k++)
+            mr_corner(l, (uint32_t)i, k, t[k]);
+        double d2 = triangle_distance2(R, t);
+        worst = d2 > worst ? d2 : worst;
+    }
+    return worst;
+}
+
+int sl_morph_refine(const sl_mesh *coarser, const sl_mesh *level, unsigned flags,
+                    sl_morph_refined *out, sl_error *err)
 {
     memset(out, 0, sizeof *out);
     if (coarser->triangle_count == 0)
@@ -244,6 +291,9 @@ int sl_morph_refine(const sl_mesh *coarser, const sl_mesh *level, sl_morph_refin
     int rc = build_coarse(&R, err);
     if (rc == 0)
         rc = start(&R, err);
+    if (rc == 0)
+        R.travel2 = travel_bound2(&R);
+    R.tear = (flags & SL_MORPH_REFINE_TEAR) != 0;
     int idle = 0; /* rounds in a row that changed nothing */
     uint64_t failing = UINT64_MAX;
     for (int round = 0; rc == 0 && idle < 2 && round < SL_MORPH_REFINE_ROUNDS &&
@@ -255,15 +305,24 @@ int sl_morph_refine(const sl_mesh *coarser, const sl_mesh *level, sl_morph_refin
     }
     if (rc == 0)
         rc = mr_retarget(&R, err);
-    if (rc == 0)
+    if (rc == 0 && R.tear)
         rc = mr_tear(&R, err);
     uint64_t unresolved = 0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(+ : unresolved)
+    double far2 = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : unresolved) reduction(max : far2)
     for (int64_t t = 0; t < (rc == 0 ? (int64_t)out->triangle_count : 0); t++) {
         const uint32_t *v = out->triangles + 3 * t;
-        unresolved += !mr_share(&R, v[0], v[1], v[2]);
+        if (mr_share(&R, v[0], v[1], v[2]))
+            continue;
+        unresolved++;
+        double at1[3][3]; /* the triangle at weight 1 */
+        for (int k = 0; k < 3; k++)
+            mr_target_of(&R, v[k], at1[k]);
+        double d2 = triangle_distance2(&R, at1);
+        far2 = d2 > far2 ? d2 : far2;
     }
     out->unresolved = unresolved;
+    out->unresolved_max = sqrt(far2);
     sl_triangle_bvh_release(&R.bvh);
     free(R.ring_start), free(R.ring), free(R.hint);
     free(R.dist), free(R.prev), free(R.stamp), free(R.heap_v), free(R.heap_k);

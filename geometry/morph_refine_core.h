@@ -18,6 +18,10 @@ typedef struct refine {
     sl_triangle_bvh bvh;
     uint32_t *ring_start, *ring; /* coarser vertex -> its triangles */
     double eps2;                 /* "lies in": squared distance bound, world^2 */
+    double travel2;              /* the farthest a new or retargeted vertex may travel
+                                    between weights 0 and 1, squared (world^2) */
+    int tear;                    /* SL_MORPH_REFINE_TEAR: tear what no split mends */
+    int stale_rounds;            /* edge rounds in a row without a new fewest failing */
     sl_morph_refined *r;
     uint32_t *hint;              /* per vertex: a coarser triangle its target lies in */
     /* Per vertex, the coarser triangles its target lies in (mr_members), computed once
@@ -46,6 +50,13 @@ static inline void mr_target_of(const refine *R, uint32_t v, double out[3])
 {
     const float *t = R->r->targets + 3 * (uint64_t)v;
     out[0] = t[0], out[1] = t[1], out[2] = t[2];
+}
+
+/* Vertex v's weight-0 position (world). */
+static inline void mr_position_of(const refine *R, uint32_t v, double out[3])
+{
+    const float *p = R->r->positions + 3 * (uint64_t)v;
+    out[0] = p[0], out[1] = p[1], out[2] = p[2];
 }
 
 static inline int mr_lies_in(const refine *R, const double p[3], uint32_t g)

@@ -198,9 +198,35 @@ static double path_step(refine *R, uint32_t u, uint32_t w, uint32_t *p, uint32_t
     return 0;
 }
 
+/* The fraction along edge (u, w) at weight 0 closest to point t, inside (0, 1): where a
+ * new vertex of the edge targeting t goes, so that it travels as little as the edge
+ * allows (any fraction keeps the weight-0 surface, and the targets decide the splits). */
+static double nearest_fraction(const refine *R, uint32_t u, uint32_t w, const double t[3])
+{
+    double pu[3], pw[3], d[3], rel[3];
+    mr_position_of(R, u, pu), mr_position_of(R, w, pw);
+    for (int k = 0; k < 3; k++)
+        d[k] = pw[k] - pu[k], rel[k] = t[k] - pu[k];
+    double dd = sl_dot3(d, d), s = dd > 0 ? sl_dot3(rel, d) / dd : 0.5;
+    return s < 1e-6 ? 1e-6 : s > 1 - 1e-6 ? 1 - 1e-6 : s;
+}
+
+/* Whether a vertex at fraction s of edge (u, w) may target t: travels no farther than
+ * the bound. */
+static int travel_ok(const refine *R, uint32_t u, uint32_t w, double s, const double t[3])
+{
+    double pu[3], pw[3], d2 = 0;
+    mr_position_of(R, u, pu), mr_position_of(R, w, pw);
+    for (int k = 0; k < 3; k++) {
+        double d = pu[k] + s * (pw[k] - pu[k]) - t[k];
+        d2 += d * d;
+    }
+    return d2 <= R->travel2;
+}
+
 /* The vertex splitting edge (u, w) where its weight-1 chord crosses the first coarser
  * edge from u's end (or, failing that, the last before w's): its target is that point of
- * the coarser edge, its weight-0 position the same fraction along (u, w). NONE when the
+ * the coarser edge, its weight-0 position the point of (u, w) nearest to it. NONE when the
  * chord crosses no coarser edge from either end: the targets are on sheets of the coarser
  * surface that do not meet there (a fold, a thin part), which no split mends. */
 uint32_t mr_split_edge(refine *R, uint32_t u, uint32_t w)
@@ -221,15 +247,49 @@ uint32_t mr_split_edge(refine *R, uint32_t u, uint32_t w)
         const float *c = R->c->positions + 3 * (uint64_t)pv;
         for (int k = 0; k < 3; k++)
             t[k] = c[k];
-        s = s < 1e-6 ? 1e-6 : s > 1 - 1e-6 ? 1 - 1e-6 : s;
+        s = nearest_fraction(R, u, w, t);
+        if (!travel_ok(R, u, w, s, t))
+            return NONE;
         double f[2] = {1 - s, s};
         return mr_add_vertex(R, 2, v, f, t, g);
     }
     mr_corner(R->c, g, e, a), mr_corner(R->c, g, (e + 1) % 3, b);
     sl_closest_point_triangle(q, a, b, b, t); /* onto the coarser edge itself */
-    s = s < 1e-6 ? 1e-6 : s > 1 - 1e-6 ? 1 - 1e-6 : s;
+    s = nearest_fraction(R, u, w, t);
+    if (!travel_ok(R, u, w, s, t))
+        return NONE;
     double f[2] = {1 - s, s};
     return mr_add_vertex(R, 2, v, f, t, g);
+}
+
+/* The barycentrics in triangle v[0..2] at weight 0 of its point nearest to p, each at
+ * least 1e-6 (the new vertex stays inside): where a vertex targeting p goes. */
+static void weight0_barycentrics(const refine *R, const uint32_t v[3], const double p[3],
+                                 double l[3])
+{
+    double x[3][3], q[3], n[3], e1[3], e2[3], sum = 0;
+    for (int j = 0; j < 3; j++)
+        mr_position_of(R, v[j], x[j]);
+    sl_closest_point_triangle(p, x[0], x[1], x[2], q);
+    for (int k = 0; k < 3; k++)
+        e1[k] = x[1][k] - x[0][k], e2[k] = x[2][k] - x[0][k];
+    sl_cross3(e1, e2, n);
+    for (int j = 0; j < 3; j++) { /* sub-triangle areas, signed along n */
+        double u[3], w[3], c[3];
+        for (int k = 0; k < 3; k++)
+            u[k] = x[(j + 1) % 3][k] - q[k], w[k] = x[(j + 2) % 3][k] - q[k];
+        sl_cross3(u, w, c);
+        l[j] = sl_dot3(c, n);
+        l[j] = l[j] > 0 ? l[j] : 0;
+        sum += l[j];
+    }
+    for (int j = 0; j < 3; j++)
+        l[j] = sum > 0 ? l[j] / sum : 1.0 / 3;
+    sum = 0;
+    for (int j = 0; j < 3; j++)
+        sum += l[j] = l[j] < 1e-6 ? 1e-6 : l[j];
+    for (int j = 0; j < 3; j++)
+        l[j] /= sum;
 }
 
 /* Triangle (a, b, c) spans a coarser vertex that a triangle of each target's has: a
@@ -279,9 +339,20 @@ uint32_t mr_split_triangle(refine *R, uint32_t a, uint32_t b, uint32_t c)
             /* the weight-1 triangle reaches over the vertex, or nothing else mends it */
             if (!inside && !(mr_share(R, a, b, NONE) && mr_share(R, b, c, NONE) && mr_share(R, c, a, NONE)))
                 continue;
-            for (int j = 0; j < 3; j++)
-                l[j] = l[j] > 0 ? l[j] / sum : 0;
             uint32_t v[3] = {a, b, c};
+            weight0_barycentrics(R, v, p, l);
+            { /* no farther than the travel bound */
+                double x[3] = {0, 0, 0}, y[3], d2 = 0;
+                for (int j = 0; j < 3; j++) {
+                    mr_position_of(R, v[j], y);
+                    for (int h = 0; h < 3; h++)
+                        x[h] += l[j] * y[h];
+                }
+                for (int h = 0; h < 3; h++)
+                    d2 += (x[h] - p[h]) * (x[h] - p[h]);
+                if (d2 > R->travel2)
+                    continue;
+            }
             return mr_add_vertex(R, 3, v, l, p, ma[i]);
         }
     return NONE;

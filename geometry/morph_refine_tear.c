@@ -98,9 +98,11 @@ int mr_retarget(refine *R, sl_error *err)
                 memcpy(was, r->targets + 3 * (uint64_t)x, sizeof was);
                 uint32_t was_hint = R->hint[x];
                 uint64_t was_members = R->members_at[x];
-                double p[3] = {was[0], was[1], was[2]}, a[3], b[3], c[3], q[3];
+                double p[3], a[3], b[3], c[3], q[3];
+                mr_position_of(R, x, p); /* the point of g it travels least to */
                 mr_corner(R->c, g, 0, a), mr_corner(R->c, g, 1, b), mr_corner(R->c, g, 2, c);
-                sl_closest_point_triangle(p, a, b, c, q);
+                if (sl_closest_point_triangle(p, a, b, c, q) > R->travel2)
+                    continue; /* farther than the travel bound (morph_refine.c) */
                 now[0] = (float)q[0], now[1] = (float)q[1], now[2] = (float)q[2];
                 if (set_target(R, x, now, g)) {
                     rc = mr_nomem(err);
@@ -132,6 +134,41 @@ int mr_retarget(refine *R, sl_error *err)
     return rc;
 }
 
+/* The coarser triangle a failing triangle v tears to: of the coarser triangles its targets
+ * lie in, the one its torn corners travel least to (the largest distance from a corner
+ * whose target is not in it to its closest point there; ties: more corners held, then
+ * the first); *held a bit per corner whose target it holds. */
+static uint32_t tear_face(const refine *R, const uint32_t *v, int *held)
+{
+    uint32_t best = R->hint[v[0]];
+    double best_cost = INFINITY;
+    int best_count = -1;
+    *held = 0;
+    for (int c = 0; c < 3; c++) {
+        uint32_t m[MEMBERS_MAX];
+        int n = mr_members(R, v[c], m);
+        for (int i = 0; i < n; i++) {
+            int bits = 0, count = 0;
+            double cost = 0, a[3], b[3], cc[3];
+            mr_corner(R->c, m[i], 0, a), mr_corner(R->c, m[i], 1, b), mr_corner(R->c, m[i], 2, cc);
+            for (int k = 0; k < 3; k++) {
+                double p[3], q[3];
+                mr_target_of(R, v[k], p);
+                if (mr_lies_in(R, p, m[i])) {
+                    bits |= 1 << k, count++;
+                    continue;
+                }
+                mr_position_of(R, v[k], p);
+                double d2 = sl_closest_point_triangle(p, a, b, cc, q);
+                cost = d2 > cost ? d2 : cost;
+            }
+            if (cost < best_cost || (cost == best_cost && count > best_count))
+                best_cost = cost, best_count = count, best = m[i], *held = bits;
+        }
+    }
+    return best;
+}
+
 /* Tears what no split mends (targets on pieces of the coarser surface that do not meet:
  * a fold, a thin part, another component): in each such triangle, the corners whose
  * targets are not in the coarser triangle holding most of them get a copy (same bytes at
@@ -152,7 +189,7 @@ int mr_tear(refine *R, sl_error *err)
     for (int64_t t = 0; t < (int64_t)tn; t++) {
         const uint32_t *v = r->triangles + 3 * t;
         int held = 7;
-        face[t] = mr_share(R, v[0], v[1], v[2]) ? NONE : mr_best_face(R, v, &held);
+        face[t] = mr_share(R, v[0], v[1], v[2]) ? NONE : tear_face(R, v, &held);
         holds[t] = (uint8_t)held;
     }
     for (uint64_t t = 0; t < tn; t++)
@@ -168,12 +205,15 @@ int mr_tear(refine *R, sl_error *err)
     int rc = copy ? mr_reserve(R, r->vertex_count + nu, tn, err) : mr_nomem(err);
     for (uint64_t i = 0; rc == 0 && i < nu; i++) {
         uint32_t v = (uint32_t)(keys[i] >> 32), g = (uint32_t)keys[i];
-        double p[3], a[3], b[3], c[3], t[3], f = 1;
-        mr_target_of(R, v, p);
+        double p[3], a[3], b[3], c[3], t[3], was[3], f = 1, d2 = 0;
+        mr_position_of(R, v, p); /* the point of g the copy travels least to */
+        mr_target_of(R, v, was);
         mr_corner(R->c, g, 0, a), mr_corner(R->c, g, 1, b), mr_corner(R->c, g, 2, c);
-        double d2 = sl_closest_point_triangle(p, a, b, c, t);
+        sl_closest_point_triangle(p, a, b, c, t);
+        for (int k = 0; k < 3; k++)
+            d2 += (t[k] - was[k]) * (t[k] - was[k]);
         copy[i] = mr_add_vertex(R, 1, &v, &f, t, g);
-        r->tear_max = fmax(r->tear_max, sqrt(d2));
+        r->tear_max = fmax(r->tear_max, sqrt(d2)); /* the crack between the two at weight 1 */
     }
     for (uint64_t t = 0; rc == 0 && t < tn; t++) {
         uint32_t *v = r->triangles + 3 * t, g = face[t];

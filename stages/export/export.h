@@ -46,6 +46,7 @@ typedef struct sl_export_glb {
     /* The next coarser level, or NULL: the GLB then carries a morph target moving each
      * vertex to its closest point on this level's surface (docs/morphing.md). */
     const sl_lod_mesh *morph_to;
+    int morph_tears; /* tear what the refinement cannot mend (SL_MORPH_REFINE_TEAR) */
 } sl_export_glb;
 
 /* [export] texture: none; bake every level's atlas; keep (default): a level with the
@@ -75,6 +76,7 @@ typedef struct sl_export_config {
     char texture_sizes[256];                    /* "name:edge,..." */
     int viewer; /* index.html gets a 3D view per level: viewer bundle + NAME.glb.js copies */
     int morph;  /* each published level's GLB morphs to the next coarser published level */
+    int morph_tears; /* [export] morph_tears: exact weight 1, cracks in between */
 } sl_export_config;
 
 /* The section at its option table's defaults (sl_stage_default_config). */

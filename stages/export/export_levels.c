@@ -115,6 +115,7 @@ static void report_glb(sl_json *r, const sl_export_config *c, const sl_glb_stats
         sl_json_u64(r, "morph_unresolved_triangles", g->morph_unresolved);
         sl_json_u64(r, "morph_torn_triangles", g->morph_torn_triangles);
         sl_json_double(r, "morph_tear_world", g->morph_tear_max / to_metres);
+        sl_json_double(r, "morph_unresolved_world", g->morph_unresolved_max / to_metres);
     }
     if (measured)
         sl_json_double(r, "hausdorff", hausdorff + bound / diagonal);
@@ -258,7 +259,8 @@ int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
                           const sl_export_frame *frame, const sl_export_texture *texture,
                           const sl_stage_io *io, sl_export_result *row, sl_error *err)
 {
-    sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z', NULL, morph_to};
+    sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z', NULL, morph_to,
+                         c->morph_tears};
     row->triangles = mesh->triangle_count;
     row->vertices = mesh->vertex_count;
     sl_export_baked baked;

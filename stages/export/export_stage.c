@@ -24,8 +24,9 @@
  * level list for every method; normals from each level's own faces. 12: the item's manifest
  * row (titles, credit, frame), an estimated frame when nobody gives it, pages for curators,
  * the Voyager scene's meta. 13: [export] texture = keep (default): a level with the input's
- * texture coordinates embeds the input's image instead of a baked atlas. */
-#define EXPORT_STAGE_VERSION 13u
+ * texture coordinates embeds the input's image instead of a baked atlas. 14: the morph
+ * refinement bounds how far a vertex travels and tears only with [export] morph_tears. */
+#define EXPORT_STAGE_VERSION 14u
 
 static const sl_option export_options[] = {
     {"export", "formats", SL_OPT_LIST, "ply,glb", 0, 0, "ply|glb|obj",
@@ -96,9 +97,18 @@ static const sl_option export_options[] = {
      "Each published level's GLB carries one glTF morph target (docs/morphing.md) that "
      "moves every vertex to its closest point on the next coarser published level, so a "
      "viewer can blend between levels instead of popping (the 3D views do, by camera "
-     "distance). At weight 0 the GLB is the level, at weight 1 it lies on the coarser level. "
+     "distance). At weight 0 the GLB is the level, at weight 1 it lies on the coarser level "
+     "(see morph_tears for the few triangles the cut cannot bring onto it). "
      "The coarsest level has none. Works with every compression (Draco: the target is "
      "stored uncompressed beside the Draco stream)."},
+    {"export", "morph_tears", SL_OPT_BOOL, "false", 0, 0, NULL,
+     "With morph: where the morph refinement cannot cut a level's triangle along the "
+     "coarser level (a fold of the closest-point map, a thin part), tear it so that weight "
+     "1 lies exactly on the coarser level, at the price of cracks and of vertices that "
+     "travel farther mid-blend. false: leave it whole, its corners on their closest "
+     "points; the blend then comes closer to the coarser level at every weight, and at "
+     "weight 1 those few triangles stand off it by morph_unresolved_world in report.json "
+     "(docs/morphing.md)."},
     SL_OPTION_END,
 };
 
@@ -152,6 +162,7 @@ static int export_configure(const sl_config *cfg, void **out, sl_error *err)
     }
     c->viewer = sl_config_bool(cfg, "export", "viewer");
     c->morph = sl_config_bool(cfg, "export", "morph");
+    c->morph_tears = sl_config_bool(cfg, "export", "morph_tears");
     if (rc) {
         free(c);
         return rc;
@@ -169,7 +180,7 @@ sl_export_config sl_export_default_config(void)
 
 sl_export_glb sl_export_default_glb(void)
 {
-    sl_export_glb g = {sl_export_default_config().glb, 1.0, 0, NULL, NULL};
+    sl_export_glb g = {sl_export_default_config().glb, 1.0, 0, NULL, NULL, 0};
     return g;
 }
 

@@ -115,7 +115,8 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
         return write_glb_mesh(path, m, glb->texcoords, NULL, extras, glb, stats, err);
     sl_mesh coarser = sl_export_mesh_view(glb->morph_to), level = sl_export_mesh_view(m);
     sl_morph_refined r;
-    int rc = sl_morph_refine(&coarser, &level, &r, err);
+    int rc = sl_morph_refine(&coarser, &level, glb->morph_tears ? SL_MORPH_REFINE_TEAR : 0, &r,
+                             err);
     if (rc) {
         if (!err->file[0])
             snprintf(err->file, sizeof err->file, "%s", path);
@@ -137,7 +138,8 @@ static int write_glb(const char *path, const sl_lod_mesh *m, const char *extras,
         if (rc == 0 && stats)
             stats->morph_added_triangles = r.triangle_count - r.level_triangles,
             stats->morph_unresolved = r.unresolved, stats->morph_torn_triangles = r.torn_triangles,
-            stats->morph_tear_max = r.tear_max * glb->to_metres; /* metres, as the rest */
+            stats->morph_tear_max = r.tear_max * glb->to_metres, /* metres, as the rest */
+            stats->morph_unresolved_max = r.unresolved_max * glb->to_metres;
     }
     free(nrm), free(uv), free(col);
     sl_morph_refined_release(&r);
