@@ -54,6 +54,7 @@ static const char style[] =
     "button.level.on{border-color:#1a6e3a;box-shadow:0 0 0 2px #1a6e3a inset}\n"
     ".level img{width:128px;height:128px;margin-bottom:.3em;background:#f0f0f0}\n"
     ".level .q{font-weight:bold;font-size:1.1em}.level .e{color:#333}\n"
+    ".level .w{color:#8a5a00}\n"
     ".ids{margin:.2em 0}.credit{color:#444;margin:.2em 0}.description p{margin:.4em 0;"
     "max-width:48em}\n"
     ".frame{font-size:.92em;color:#444}\n"

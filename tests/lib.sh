@@ -33,6 +33,15 @@ gltf_validator_ready() {
     [ -f "$SCANLOD_SOURCE_DIR/scripts/gltf/node_modules/gltf-validator/package.json" ]
 }
 
+# need_renderer: headless Chromium and scripts/viewer's three.js and playwright-core
+# (scripts/viewer/render.cjs) are test dependencies: a missing one FAILs the test.
+need_renderer() {
+  [ -x "${CHROMIUM:-/usr/bin/chromium}" ] || { echo "FAIL: no chromium (scripts/install-deps.sh)" >&2; exit 1; }
+  local viewer="$SCANLOD_SOURCE_DIR/scripts/viewer/node_modules"
+  [ -f "$viewer/three/package.json" ] && [ -f "$viewer/playwright-core/package.json" ] ||
+    { echo "FAIL: npm ci --prefix scripts/viewer (scripts/install-deps.sh)" >&2; exit 1; }
+}
+
 contains() { # contains REGEX TEXT: for checks on a command's message
   grep -q -- "$1" <<<"$2"
 }

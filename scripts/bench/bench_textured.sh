@@ -47,15 +47,23 @@ mkdir -p "$out" "$work/in"
 # point cloud of these folders have no texture and are left out).
 cp "$root/tests/data/textured/cow_textured.ply" "$root/tests/data/textured/cow_texture.png" "$work/in/"
 t=$data/textured
-mkdir -p "$work/in/mask_gltf" "$work/in/mask_obj" "$work/in/food_vessel" "$work/in/venus" \
-  "$work/in/sea_turtle" "$work/in/usnm"
-cp "$t"/mask_bali_blm/*.gltf "$t"/mask_bali_blm/*.bin "$t"/mask_bali_blm/*.jpg "$work/in/mask_gltf/"
-cp "$t"/mask_bali_blm_obj/* "$work/in/mask_obj/"
-cp "$t"/gui_food_vessel_mia/*.gltf "$t"/gui_food_vessel_mia/*.bin "$t"/gui_food_vessel_mia/*.jpg \
-  "$t"/gui_food_vessel_mia/*.png "$work/in/food_vessel/"
-cp "$t"/venus_noe3d/*.gltf "$t"/venus_noe3d/*.bin "$t"/venus_noe3d/*.jpg "$work/in/venus/"
-cp "$t"/sea_turtle_nmnh/sea_turtle-150k-2048-medium.glb "$work/in/sea_turtle/"
-cp "$t"/usnm_1145291/*.glb "$work/in/usnm/"
+# take FOLDER FILES...: the scan's files into in/FOLDER, or a note when this copy of the
+# shared data lacks them (the table then has no rows for it).
+take() {
+  local folder=$1; shift
+  if ls "$@" >/dev/null 2>&1; then
+    mkdir -p "$work/in/$folder" && cp "$@" "$work/in/$folder/"
+  else
+    echo "bench_textured.sh: $folder: not in $t on this machine, left out" >&2
+  fi
+}
+take mask_gltf "$t"/mask_bali_blm/*.gltf "$t"/mask_bali_blm/*.bin "$t"/mask_bali_blm/*.jpg
+take mask_obj "$t"/mask_bali_blm_obj/*
+take food_vessel "$t"/gui_food_vessel_mia/*.gltf "$t"/gui_food_vessel_mia/*.bin \
+  "$t"/gui_food_vessel_mia/*.jpg "$t"/gui_food_vessel_mia/*.png
+take venus "$t"/venus_noe3d/*.gltf "$t"/venus_noe3d/*.bin "$t"/venus_noe3d/*.jpg
+take sea_turtle "$t"/sea_turtle_nmnh/sea_turtle-150k-2048-medium.glb
+take usnm "$t"/usnm_1145291/*.glb
 printf '[run]\ninput = in\nwork = work\noutput = out\n' >"$work/bench.ini"
 start=$SECONDS
 (cd "$work" && "$scanlod" run bench.ini -q)
@@ -119,6 +127,12 @@ def gltf_extensions(path):
         return glb_json(path).get("extensionsUsed", [])
     return []
 
+def texture_kind(t):
+    """baked, input (the scan's coordinates kept) or projected (coordinates from the
+    input's), with the image's edge where it was scaled down to the level's size."""
+    kind = "projected" if t.get("texcoords") == "projected" else t.get("source")
+    return kind + (" %d px" % t["size"] if kind == "projected" and t.get("size") else "")
+
 decoded = {}
 def peer_input(src):
     """gltfpack reads no Draco: such a file goes to it decoded by gltf-transform (its
@@ -156,7 +170,7 @@ for report in sorted(glob.glob(os.path.join(work, "out", "**", "report.json"), r
         ratio = lv["triangles"] / ex["input_triangles"]
         row = {"item": item, "level": lv["name"], "triangles": lv["triangles"],
                "input_triangles": ex["input_triangles"], "bytes": os.path.getsize(ours),
-               "texture": (lv.get("texture") or {}).get("source"),
+               "texture": texture_kind(lv.get("texture") or {}),
                "image_bytes": (lv.get("texture") or {}).get("image_bytes")}
         p = peer(src, ratio, os.path.join(work, "peer.glb"), False)
         row["gltfpack"] = p and {"bytes": p[0], "triangles": p[1]}

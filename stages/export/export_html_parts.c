@@ -243,6 +243,9 @@ static void level_card(FILE *out, const sl_html_page *p, int i, int shown)
     }
     fputs("</span><span class=\"e\">", out);
     level_error(out, it, i);
+    if (it->results[i].texture < 0) /* a textured scan published untextured: say so here */
+        fputs("</span><span class=\"w\">no texture: too many triangles for an atlas, "
+              "vertex colours only", out);
     fputs(p->views ? "</span></button>\n" : "</span></div>\n", out);
 }
 

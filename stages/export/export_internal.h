@@ -56,7 +56,22 @@ typedef struct sl_export_texture {
     size_t original_size;
     const char *original_mime; /* "image/jpeg" or "image/png" */
     void *original_owned;      /* what to free: the bytes read from the file */
+    uint32_t *chart;           /* per input triangle: its chart of the input's atlas (the
+                                  lowest triangle of the region its texture coordinates
+                                  join without a seam); with `original` only */
 } sl_export_texture;
+
+/* export_uv.c: each input triangle's chart (see `chart`), OUT: *chart (free() it); 0, or
+ * -1 out of memory. */
+int sl_export_texture_charts(const sl_mesh *input, uint32_t **chart);
+/* The input's texture coordinate at corner k of input triangle `tri` (per corner or per
+ * vertex, as the input has them). */
+void sl_export_input_uv(const sl_mesh *in, uint32_t tri, int k, double uv[2]);
+/* Barycentric weights of p's projection onto the plane of (a, b, c), least squares (1/3
+ * each for a degenerate triangle); negative for p beyond an edge: the affine map
+ * continued. */
+void sl_export_plane_weights(const double p[3], const double a[3], const double b[3],
+                             const double c[3], double w[3]);
 
 /* 1 when `input` (read by sl_scan_read from a file in `dir`) has a texture to bake from (a
  * file or an embedded image), else 0 with the reason in `why` (a warning in the report,
@@ -83,6 +98,22 @@ int sl_export_bake(const sl_export_texture *src, const sl_lod_mesh *level, int m
                    int png, int quality, sl_export_baked *out, sl_error *err);
 void sl_export_baked_release(sl_export_baked *b);
 
+/* The level with texture coordinates taken from the input's (export_uv.c): per corner,
+ * the input's coordinate where it lies on the input surface, in the chart of the input
+ * triangle nearest to its triangle's centre; level vertices whose corners differ are
+ * split. OUT: *out without an image (the GLB embeds the input's), *continued the corners
+ * that lay across a seam of that chart (their coordinate is the chart's continued). 0 or
+ * SL_E_NOMEM. */
+int sl_export_project_uvs(const sl_export_texture *src, const sl_lod_mesh *level,
+                          sl_export_baked *out, uint64_t *continued, sl_error *err);
+
+/* The input's image scaled down to at most max_edge texels on its longer side (a box
+ * filter) and encoded (PNG, else JPEG at `quality`) into out->image, out->mime_type,
+ * out->size; nothing when the image is no larger (the level embeds the input's bytes).
+ * 0, SL_E_NOMEM or the encoder's error. */
+int sl_export_texture_scaled(const sl_export_texture *src, int max_edge, int png, int quality,
+                             sl_export_baked *out, sl_error *err);
+
 /* 1 when a level with these texture coordinates (the input's, carried by the refine
  * stage) keeps them and the original image in its GLB ([export] texture = keep): the
  * texture has its original JPEG/PNG bytes and every coordinate lies in [0, 1] (the GLB
@@ -105,8 +136,11 @@ typedef struct sl_export_result {
     double diagonal;             /* the input's bounding-box diagonal (world), when measured */
     sl_glb_stats glb;            /* what the GLB writer did (compression, quantisation) */
     /* The level's texture: 1 a baked atlas, 2 the input's image and texture coordinates
-     * kept, -1 too many triangles for an atlas, 0 no texture. */
+     * kept, 3 the input's image with coordinates projected from the input's
+     * (texture_continued corners across a seam), -1 too many triangles for an atlas, 0 no
+     * texture. */
     int texture, texture_size, texture_cell;
+    uint64_t texture_continued;
     const char *texture_mime;
     uint64_t texture_bytes;
     double texel_efficiency;

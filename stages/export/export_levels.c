@@ -16,27 +16,30 @@
 #include "stages/export/export_internal.h"
 
 /* The level's GLB geometry: the level itself; with a baked atlas its per-triangle charts
- * (three vertices per triangle) with texture coordinates and the image; with the input's
- * texture kept, the level with its own texture coordinates and the input's image. */
+ * (three vertices per triangle) with texture coordinates and the image; with coordinates
+ * projected from the input's, the level split at its seams and the input's image; with
+ * the input's texture kept, the level with its own texture coordinates and the input's
+ * image. */
 static sl_lod_mesh glb_geometry(const sl_lod_mesh *mesh, const sl_export_baked *baked,
                                 const float *kept_texcoords, const sl_export_texture *texture,
                                 sl_export_glb *glb)
 {
-    if (kept_texcoords) {
+    if (kept_texcoords) { /* the input's image, or scaled to the level's size (baked->image) */
         glb->texcoords = kept_texcoords;
-        glb->options.image = texture->original;
-        glb->options.image_size = texture->original_size;
-        glb->options.image_mime_type = texture->original_mime;
+        glb->options.image = baked->image ? baked->image : texture->original;
+        glb->options.image_size = baked->image ? baked->image_size : texture->original_size;
+        glb->options.image_mime_type = baked->image ? baked->mime_type : texture->original_mime;
         sl_lod_mesh g = *mesh;
         g.colors = NULL; /* vertex colours would multiply the texture */
         return g;
     }
-    if (!baked || !baked->image)
+    if (!baked || !baked->texcoords)
         return *mesh;
     glb->texcoords = baked->texcoords;
-    glb->options.image = baked->image;
-    glb->options.image_size = baked->image_size;
-    glb->options.image_mime_type = baked->mime_type;
+    /* without an image of its own: coordinates projected from the input's, its image */
+    glb->options.image = baked->image ? baked->image : texture->original;
+    glb->options.image_size = baked->image ? baked->image_size : texture->original_size;
+    glb->options.image_mime_type = baked->image ? baked->mime_type : texture->original_mime;
     sl_lod_mesh g = {baked->vertex_count, baked->triangle_count, baked->positions,
                      baked->normals, NULL, baked->triangles};
     return g; /* vertex colours would multiply the texture: left out */
@@ -209,10 +212,15 @@ static int bake_level(const sl_export_config *c, const sl_export_texture *textur
 static void report_texture(const sl_export_result *row, sl_json *r)
 {
     sl_json_object_begin(r, "texture");
-    if (row->texture == 2) {
+    if (row->texture == 2 || row->texture == 3) {
         sl_json_string(r, "source", "input");
+        sl_json_string(r, "texcoords", row->texture == 2 ? "input" : "projected");
         sl_json_string(r, "mime_type", row->texture_mime);
         sl_json_u64(r, "image_bytes", row->texture_bytes);
+        if (row->texture == 3)
+            sl_json_u64(r, "corners_across_seams", row->texture_continued);
+        if (row->texture_size) /* scaled down to the level's size */
+            sl_json_u64(r, "size", (uint64_t)row->texture_size);
     } else if (row->texture < 0) {
         sl_json_string(r, "warning", "too many triangles for the atlas: vertex colours only");
     } else {
@@ -269,9 +277,22 @@ int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
                sl_export_texture_keeps(c, texture, texcoords, mesh->vertex_count);
     int rc = 0;
     if (keep) {
+        rc = sl_export_texture_scaled(texture, sl_export_texture_size(c, lv->name),
+                                      c->texture_png, c->texture_quality, &baked, err);
         row->texture = 2;
-        row->texture_mime = texture->original_mime;
-        row->texture_bytes = texture->original_size;
+        row->texture_mime = baked.image ? baked.mime_type : texture->original_mime;
+        row->texture_bytes = baked.image ? baked.image_size : texture->original_size;
+        row->texture_size = baked.image ? baked.size : 0;
+    } else if (c->write_glb && mesh->triangle_count && c->texture == SL_EXPORT_TEXTURE_KEEP &&
+               texture && texture->original) {
+        rc = sl_export_project_uvs(texture, mesh, &baked, &row->texture_continued, err);
+        if (rc == 0) /* the image at most the level's size (thumb: 512) */
+            rc = sl_export_texture_scaled(texture, sl_export_texture_size(c, lv->name),
+                                          c->texture_png, c->texture_quality, &baked, err);
+        row->texture = 3;
+        row->texture_mime = baked.image ? baked.mime_type : texture->original_mime;
+        row->texture_bytes = baked.image ? baked.image_size : texture->original_size;
+        row->texture_size = baked.image ? baked.size : 0;
     } else {
         rc = bake_level(c, texture, lv, mesh, row, &baked, err);
         /* A textured scan published untextured is what a curator notices first: said where

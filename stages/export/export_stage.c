@@ -76,7 +76,9 @@ static const sl_option export_options[] = {
      "with texture coordinates) gives each level's GLB a baseColorTexture with TEXCOORD_0 "
      "(PLY files keep vertex colours). keep: a level made of the scan's own vertices (the "
      "scan at the top, the scan simplified by the refine stage) keeps their texture "
-     "coordinates and embeds the input's JPEG/PNG unchanged; the others get a baked atlas. "
+     "coordinates and embeds the input's JPEG/PNG unchanged; the others take coordinates "
+     "projected from the input's (docs/glb.md) and embed its image, scaled down to the "
+     "level's texture_sizes / texture_size when larger. "
      "bake: every level gets a baked atlas. none: vertex colours only. auto: keep (the "
      "old name)."},
     {"export", "texture_format", SL_OPT_ENUM, "jpeg", 0, 0, "jpeg|png",

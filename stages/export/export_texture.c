@@ -115,6 +115,10 @@ int sl_export_texture_open(const sl_mesh *input, const char *dir, sl_export_text
     }
     t->input = input;
     read_original(input, dir, t);
+    if (t->original && sl_export_texture_charts(input, &t->chart)) {
+        free(t->original_owned); /* no memory for the charts: every level is baked */
+        t->original = t->original_owned = NULL;
+    }
     return 1;
 }
 
@@ -124,6 +128,7 @@ void sl_export_texture_close(sl_export_texture *t)
         sl_image_release(&t->image);
         sl_triangle_bvh_release(&t->bvh);
         free(t->original_owned);
+        free(t->chart);
     }
     memset(t, 0, sizeof *t);
 }
@@ -133,18 +138,6 @@ void sl_export_baked_release(sl_export_baked *b)
     free(b->positions), free(b->normals), free(b->texcoords), free(b->triangles);
     free(b->image);
     memset(b, 0, sizeof *b);
-}
-
-/* The input's texture coordinate at corner k of input triangle `tri`. */
-static void corner_uv(const sl_mesh *in, uint32_t tri, int k, double uv[2])
-{
-    if (in->face_texcoords) {
-        uv[0] = in->face_texcoords[6 * (uint64_t)tri + 2 * k];
-        uv[1] = in->face_texcoords[6 * (uint64_t)tri + 2 * k + 1];
-    } else {
-        uint32_t v = in->triangles[3 * (uint64_t)tri + k];
-        uv[0] = in->texcoords[2 * (uint64_t)v], uv[1] = in->texcoords[2 * (uint64_t)v + 1];
-    }
 }
 
 static int wrap(int64_t i, int n)
@@ -172,28 +165,6 @@ static void sample(const sl_image *img, double u, double v, float rgb[3])
             }
         rgb[c] = (float)acc;
     }
-}
-
-/* Barycentric weights of p in triangle (a, b, c) (any dimension 3), least squares. */
-static void barycentric(const double p[3], const double a[3], const double b[3],
-                        const double c[3], double w[3])
-{
-    double e0[3], e1[3], d[3];
-    for (int k = 0; k < 3; k++)
-        e0[k] = b[k] - a[k], e1[k] = c[k] - a[k], d[k] = p[k] - a[k];
-    double d00 = 0, d01 = 0, d11 = 0, d20 = 0, d21 = 0;
-    for (int k = 0; k < 3; k++) {
-        d00 += e0[k] * e0[k], d01 += e0[k] * e1[k], d11 += e1[k] * e1[k];
-        d20 += d[k] * e0[k], d21 += d[k] * e1[k];
-    }
-    double den = d00 * d11 - d01 * d01;
-    if (!(fabs(den) > 0)) {
-        w[0] = 1, w[1] = w[2] = 0;
-        return;
-    }
-    w[1] = (d11 * d20 - d01 * d21) / den;
-    w[2] = (d00 * d21 - d01 * d20) / den;
-    w[0] = 1 - w[1] - w[2];
 }
 
 /* The chart corners of triangle t in texel space (x right, y down). */
@@ -232,7 +203,7 @@ static void bake_triangle(const sl_export_texture *src, const sl_lod_mesh *level
                 continue;
             double p[3] = {x0 + i + 0.5, y0 + j + 0.5, 0}, on[3], w[3], x[3] = {0, 0, 0};
             sl_closest_point_triangle(p, q[0], q[1], q[2], on);
-            barycentric(on, q[0], q[1], q[2], w);
+            sl_export_plane_weights(on, q[0], q[1], q[2], w);
             for (int k = 0; k < 3; k++)
                 for (int d = 0; d < 3; d++)
                     x[d] += w[k] * v[k][d];
@@ -242,11 +213,11 @@ static void bake_triangle(const sl_export_texture *src, const sl_lod_mesh *level
             const float *corner = src->bvh.corners + 9 * (uint64_t)hit.triangle;
             double a[3] = {corner[0], corner[1], corner[2]}, b[3] = {corner[3], corner[4], corner[5]};
             double cc[3] = {corner[6], corner[7], corner[8]}, wi[3], uv[2] = {0, 0};
-            barycentric(hit.point, a, b, cc, wi);
+            sl_export_plane_weights(hit.point, a, b, cc, wi);
             uint32_t tri = src->bvh.source[hit.triangle];
             for (int k = 0; k < 3; k++) {
                 double cuv[2];
-                corner_uv(src->input, tri, k, cuv);
+                sl_export_input_uv(src->input, tri, k, cuv);
                 uv[0] += wi[k] * cuv[0], uv[1] += wi[k] * cuv[1];
             }
             sample(&src->image, uv[0], uv[1], rgb + 3 * ((uint64_t)(y0 + j) * size + x0 + i));
@@ -312,6 +283,48 @@ int sl_export_bake(const sl_export_texture *src, const sl_lod_mesh *level, int m
     out->size = size;
     out->cell = c;
     out->texel_efficiency = (double)t_count / 2 * (c - 4) * (c - 4) / ((double)size * size);
+    return 0;
+}
+
+int sl_export_texture_scaled(const sl_export_texture *src, int max_edge, int png, int quality,
+                             sl_export_baked *out, sl_error *err)
+{
+    const sl_image *im = &src->image;
+    int big = im->width > im->height ? im->width : im->height;
+    if (max_edge <= 0 || big <= max_edge)
+        return 0; /* within the level's size: the input's own bytes */
+    double scale = (double)big / max_edge; /* source texels per output texel, > 1 */
+    int w = (int)fmax(1, floor(im->width / scale + 0.5)), h = (int)fmax(1, floor(im->height / scale + 0.5));
+    float *rgb = malloc((size_t)w * h * 3 * sizeof *rgb);
+    if (!rgb)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory for a %d x %d texture", w, h);
+    double sx = (double)im->width / w, sy = (double)im->height / h;
+    /* a box filter: each output texel the mean of the source texels whose centres fall
+     * in its footprint (in the stored, sRGB, values) */
+#pragma omp parallel for schedule(dynamic, 16)
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            int x0 = (int)ceil(x * sx - 0.5), x1 = (int)ceil((x + 1) * sx - 0.5);
+            int y0 = (int)ceil(y * sy - 0.5), y1 = (int)ceil((y + 1) * sy - 0.5);
+            x1 = x1 > x0 ? x1 : x0 + 1, y1 = y1 > y0 ? y1 : y0 + 1;
+            double acc[3] = {0, 0, 0};
+            int n = 0;
+            for (int j = y0; j < y1 && j < im->height; j++)
+                for (int i = x0; i < x1 && i < im->width; i++, n++) {
+                    const float *px = im->pixels + ((uint64_t)j * im->width + i) * im->channels;
+                    for (int c = 0; c < 3; c++)
+                        acc[c] += px[im->channels >= 3 ? c : 0];
+                }
+            for (int c = 0; c < 3; c++)
+                rgb[((uint64_t)y * w + x) * 3 + c] = (float)(n ? acc[c] / n : 0);
+        }
+    int rc = sl_image_encode(png ? "png" : "jpg", w, h, 3, rgb, quality, &out->image,
+                             &out->image_size, err);
+    free(rgb);
+    if (rc)
+        return rc;
+    out->mime_type = png ? "image/png" : "image/jpeg";
+    out->size = w > h ? w : h;
     return 0;
 }
 

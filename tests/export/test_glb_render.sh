@@ -16,9 +16,7 @@ export PYTHONDONTWRITEBYTECODE=1 # png_pixels.py: no __pycache__ in the source t
 gltf="$SCANLOD_SOURCE_DIR/scripts/gltf"
 render="$SCANLOD_SOURCE_DIR/scripts/viewer"
 gltf_validator_ready || { echo "FAIL: the glTF validator is not installed (scripts/install-deps.sh)" >&2; exit 1; }
-[ -x "${CHROMIUM:-/usr/bin/chromium}" ] || { echo "FAIL: no chromium (scripts/install-deps.sh)" >&2; exit 1; }
-[ -f "$render/node_modules/three/package.json" ] && [ -f "$render/node_modules/playwright-core/package.json" ] ||
-  { echo "FAIL: npm ci --prefix scripts/viewer (scripts/install-deps.sh)" >&2; exit 1; }
+need_renderer
 
 mkdir -p "$TMP/in"
 cp "$SCANLOD_SOURCE_DIR/tests/data/textured/cow_textured.ply" "$SCANLOD_SOURCE_DIR/tests/data/textured/cow_texture.png" "$TMP/in/"

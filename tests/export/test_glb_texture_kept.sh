@@ -8,17 +8,16 @@
 # nearest input vertex's (lod100: within a 12-bit step; lod20, whose vertices moved in the
 # collapse and the fit: within 0.1, where a baked atlas's charts are anywhere in [0, 1]).
 # The GLBs pass the validator, and three.js in headless Chromium draws lod20 textured.
-# With [lod] method = octree the octree's levels are not the scan's: they keep the baked
-# atlas (a JPEG), while the scan at lod100 keeps the input's PNG.
+# With [lod] method = octree the octree's levels are not the scan's: their texture
+# coordinates are projected from the input's (test_glb_texture_projected), with the input's
+# PNG, while the scan at lod100 keeps its own.
 # Fails under [export] texture = bake (every check on the image and the UVs).
 source "$(dirname "$0")/../lib.sh"
 gltf="$SCANLOD_SOURCE_DIR/scripts/gltf"
 render="$SCANLOD_SOURCE_DIR/scripts/viewer"
 uv_check="${SCANLOD_BUILD_DIR:?}/tests/glb_uv_check"
 gltf_validator_ready || { echo "FAIL: the glTF validator is not installed (scripts/install-deps.sh)" >&2; exit 1; }
-[ -x "${CHROMIUM:-/usr/bin/chromium}" ] || { echo "FAIL: no chromium (scripts/install-deps.sh)" >&2; exit 1; }
-[ -f "$render/node_modules/three/package.json" ] && [ -f "$render/node_modules/playwright-core/package.json" ] ||
-  { echo "FAIL: npm ci --prefix scripts/viewer (scripts/install-deps.sh)" >&2; exit 1; }
+need_renderer
 
 data="$SCANLOD_SOURCE_DIR/tests/data/textured"
 mkdir -p "$TMP/in"
@@ -69,7 +68,7 @@ info=$(node "$render/render.cjs" "$dir/lod20.glb" "$TMP/lod20.png" unlit 2>&1) |
 check "lod20: three.js draws it with its texture ($info)" grep -q '"textured":true' <<<"$info"
 [ -z "${SCANLOD_RENDER_OUT:-}" ] || cp "$TMP/lod20.png" "$SCANLOD_RENDER_OUT/cow_kept_lod20.png"
 
-# The octree's levels: baked, the scan at the top: kept.
+# The octree's levels: projected, the scan at the top: kept.
 write_config "$TMP/octree.ini" "$TMP/in" "$TMP/work-octree" "$TMP/out-octree" "[lod]" \
   "method = octree" "[levels]" "[export]" "thumbnail_size = 0" "fidelity = false"
 run_scanlod run "$TMP/octree.ini" -q
@@ -80,12 +79,31 @@ for name in ('lod100', 'lod20'):
     d = open('$TMP/out-octree/cow_textured.ply/' + name + '.glb', 'rb').read()
     n = struct.unpack('<I', d[12:16])[0]; j = json.loads(d[20:20 + n])
     print(name, [i.get('mimeType') for i in j.get('images', [])], end=' ')")
-check "octree: lod100 (the scan) keeps the PNG, lod20 (an octree cut) is baked ($kinds)" \
-  [ "$kinds" = "lod100 ['image/png'] lod20 ['image/jpeg'] " ]
+check "octree: lod100 (the scan) and lod20 (an octree cut) embed the input's PNG ($kinds)" \
+  [ "$kinds" = "lod100 ['image/png'] lod20 ['image/png'] " ]
+coords=$(python3 -c "
+import json; r = json.load(open('$TMP/out-octree/cow_textured.ply/report.json'))
+print(' '.join(l['name'] + ':' + str(l['texture'].get('texcoords')) for l in r['stages']['export']['levels']
+               if l['name'] in ('lod100', 'lod20')))")
+check "octree: lod20's texture coordinates are projected from the input's, lod100 keeps them ($coords)" \
+  [ "$coords" = "lod20:projected lod100:input" -o "$coords" = "lod100:input lod20:projected" ]
 
-# A level whose triangles do not fit one atlas chart each (a 64 px atlas here; venus's
-# 238k-triangle levels at 2048 px in the benchmark) keeps vertex colours: said in the log
-# where runs are watched, not only in report.json.
+# A kept level whose size is below the image's: the input's coordinates, the image scaled.
+write_config "$TMP/small-kept.ini" "$TMP/in" "$TMP/work-small-kept" "$TMP/out-small-kept" "[levels]" \
+  "percents =" "budgets = thumb:2000" "[export]" "texture_sizes = thumb:128" "thumbnail_size = 0" \
+  "fidelity = false"
+run_scanlod run "$TMP/small-kept.ini" -q
+check "thumb at 128 px: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
+got=$(python3 -c "
+import json; r = json.load(open('$TMP/out-small-kept/cow_textured.ply/report.json'))
+t = [l for l in r['stages']['export']['levels'] if l['name'] == 'thumb'][0]['texture']
+print(t.get('texcoords'), t.get('size'), t.get('mime_type'))")
+check "thumb at 128 px: the input's coordinates, the image scaled to 128, a JPEG ($got)" \
+  [ "$got" = "input 128 image/jpeg" ]
+
+# A baked level whose triangles do not fit one atlas chart each (a 64 px atlas here)
+# keeps vertex colours: said in the log where runs are watched and on the item page, not
+# only in report.json.
 write_config "$TMP/small.ini" "$TMP/in" "$TMP/work-small" "$TMP/out-small" "[levels]" \
   "percents = 100" "budgets =" "[export]" "texture = bake" "texture_size = 64" \
   "thumbnail_size = 0" "fidelity = false"
@@ -95,6 +113,9 @@ check "64 px atlas: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
 check "64 px atlas: the report says vertex colours only" \
   grep -q '"warning": *"too many triangles for the atlas: vertex colours only"' \
   "$TMP/out-small/cow_textured.ply/report.json"
+check "64 px atlas: the item page says lod100 has no texture" \
+  grep -q 'no texture: too many triangles for an atlas, vertex colours only' \
+  "$TMP/out-small/cow_textured.ply/index.html"
 check "64 px atlas: the log warns that lod100 has no texture" \
   grep -q 'WARN.*lod100: 5804 triangles do not fit one atlas chart each at 64 px: vertex colours only' \
   "$TMP"/logs/*.log

@@ -15,9 +15,7 @@
 source "$(dirname "$0")/../lib.sh"
 export PYTHONDONTWRITEBYTECODE=1
 render="$SCANLOD_SOURCE_DIR/scripts/viewer"
-[ -x "${CHROMIUM:-/usr/bin/chromium}" ] || { echo "FAIL: no chromium (scripts/install-deps.sh)" >&2; exit 1; }
-[ -f "$render/node_modules/three/package.json" ] && [ -f "$render/node_modules/playwright-core/package.json" ] ||
-  { echo "FAIL: npm ci --prefix scripts/viewer (scripts/install-deps.sh)" >&2; exit 1; }
+need_renderer
 
 mkdir -p "$TMP/in"
 cp "$SCANS/bun_zipper_res3.ply" "$TMP/in/"
