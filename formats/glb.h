@@ -58,11 +58,16 @@ typedef struct sl_glb_options {
     int normal_bits;   /* 4..16: <= 8 stored as bytes, else shorts */
     int color_bits;    /* 8..16: 8 stored as bytes, else shorts holding that precision */
     int texcoord_bits; /* 8..16: shorts holding that precision (uv in [0, 1]) */
-    /* The base colour texture: an encoded JPEG or PNG image embedded in the file and used
-     * with the mesh's texcoords. NULL or no texcoords: none. */
+    /* The base colour texture: an encoded JPEG, PNG or WebP image embedded in the file and
+     * used with the mesh's texcoords. NULL or no texcoords: none. A WebP image is the
+     * texture's EXT_texture_webp source; with a fallback (a JPEG of it) the texture's core
+     * source is the fallback and the extension is used, not required; without one it is
+     * required. */
     const void *image;
     uint64_t image_size;
-    const char *image_mime_type; /* "image/jpeg" or "image/png" */
+    const char *image_mime_type; /* "image/jpeg", "image/png" or "image/webp" */
+    const void *fallback_image;  /* with image/webp: its JPEG, or NULL */
+    uint64_t fallback_image_size;
     /* One morph target (docs/morphing.md): where each vertex of the mesh goes at weight 1
      * (3 floats per vertex, the mesh's frame), or NULL for none. Written as the primitive's
      * targets[0].POSITION, a displacement: float in float files; in quantised files

@@ -4,6 +4,7 @@
 #define SCANLOD_GEOMETRY_GLB_INTERNAL_H
 
 #include <stdint.h>
+#include <string.h>
 
 #include "core/error.h"
 #include "formats/glb.h"
@@ -62,6 +63,7 @@ typedef struct glb_doc {
     int accessor_count;
     int indices;           /* accessor index of the indices */
     int image_view;        /* bufferView of the embedded image, or -1 */
+    int fallback_view;     /* bufferView of a WebP image's JPEG fallback, or -1 */
     int draco_view;        /* bufferView of the Draco stream, or -1 */
     int quantized;         /* KHR_mesh_quantization is used */
     int node_transform;    /* the node dequantises positions: */
@@ -87,6 +89,12 @@ glb_accessor *glb_add_accessor(glb_doc *d, const char *semantic, int view, int c
  * (quantised or not) are built, before meshopt packs the views, after Draco replaced
  * them. SL_E_NOMEM. */
 int glb_morph_target(glb_doc *d, const sl_mesh *m, sl_error *err);
+
+/* Whether the embedded image is WebP (EXT_texture_webp). */
+static inline int glb_webp(const glb_doc *d)
+{
+    return d->opt->image_mime_type && !strcmp(d->opt->image_mime_type, "image/webp");
+}
 
 /* Linear value of an sRGB byte (IEC 61966-2-1), and its inverse on [0, 1]. */
 double glb_srgb_to_linear(double srgb);

@@ -331,6 +331,13 @@ static int image(glb_doc *d, sl_error *err)
         return sl_error_nomem(err, NULL, "GLB: out of memory");
     memcpy(data, d->opt->image, d->opt->image_size);
     d->image_view = glb_add_view(d, data, d->opt->image_size, 0, 0, 0, NULL);
+    if (!glb_webp(d) || !d->opt->fallback_image || !d->opt->fallback_image_size)
+        return 0;
+    data = malloc(d->opt->fallback_image_size);
+    if (!data)
+        return sl_error_nomem(err, NULL, "GLB: out of memory");
+    memcpy(data, d->opt->fallback_image, d->opt->fallback_image_size);
+    d->fallback_view = glb_add_view(d, data, d->opt->fallback_image_size, 0, 0, 0, NULL);
     return 0;
 }
 
@@ -484,7 +491,8 @@ static int draco_pack(glb_doc *d, const sl_mesh *m, sl_error *err)
         if (d->views[i].data)
             d->views[kept++] = d->views[i];
     d->view_count = kept;
-    d->image_view = d->image_view >= 0 ? 0 : -1;
+    d->image_view = d->image_view >= 0 ? 0 : -1; /* the images stay, in their order */
+    d->fallback_view = d->fallback_view >= 0 ? 1 : -1;
     d->draco_view = d->view_count++;
     memset(&d->views[d->draco_view], 0, sizeof d->views[0]);
     d->views[d->draco_view].data = bytes;
@@ -503,7 +511,7 @@ static int bits_ok(const sl_glb_options *o)
 int glb_doc_build(glb_doc *d, const sl_mesh *m, sl_error *err)
 {
     const sl_glb_options *o = d->opt;
-    d->image_view = d->draco_view = -1;
+    d->image_view = d->fallback_view = d->draco_view = -1;
     d->stats.vertices = m->vertex_count;
     d->stats.triangles = m->triangle_count;
     if (!bits_ok(o))

@@ -35,7 +35,7 @@ static uint64_t pad4(uint64_t n)
 
 sl_glb_options sl_glb_default_options(void)
 {
-    sl_glb_options o = {SL_GLB_UNCOMPRESSED, 0, 14, 8, 12, 12, NULL, 0, NULL, NULL};
+    sl_glb_options o = {SL_GLB_UNCOMPRESSED, 0, 14, 8, 12, 12, NULL, 0, NULL, NULL, 0, NULL};
     return o;
 }
 
@@ -71,8 +71,13 @@ static int is_object_text(const char *s)
     return n >= 2 && first[0] == '{' && first[n - 1] == '}';
 }
 
-static void json_extension_names(sl_json *j, const char *key, const glb_doc *d)
+/* The extensions the file uses (required: those a viewer must know to read it; a WebP
+ * texture with a JPEG fallback is used, not required). The array only when not empty. */
+static void json_extension_names(sl_json *j, const char *key, const glb_doc *d, int required)
 {
+    int webp = d->image_view >= 0 && glb_webp(d) && (!required || d->fallback_view < 0);
+    if (!d->quantized && d->opt->compression == SL_GLB_UNCOMPRESSED && !webp)
+        return;
     sl_json_array_begin(j, key);
     if (d->quantized)
         sl_json_string(j, NULL, "KHR_mesh_quantization");
@@ -80,6 +85,8 @@ static void json_extension_names(sl_json *j, const char *key, const glb_doc *d)
         sl_json_string(j, NULL, "EXT_meshopt_compression");
     if (d->opt->compression == SL_GLB_DRACO)
         sl_json_string(j, NULL, "KHR_draco_mesh_compression");
+    if (webp)
+        sl_json_string(j, NULL, "EXT_texture_webp");
     sl_json_array_end(j);
 }
 
@@ -195,7 +202,17 @@ static void json_material(sl_json *j, const glb_doc *d)
     sl_json_array_begin(j, "textures");
     sl_json_object_begin(j, NULL);
     sl_json_u64(j, "sampler", 0);
-    sl_json_u64(j, "source", 0);
+    if (!glb_webp(d)) {
+        sl_json_u64(j, "source", 0);
+    } else { /* images[0] the WebP, images[1] its JPEG fallback when there is one */
+        if (d->fallback_view >= 0)
+            sl_json_u64(j, "source", 1);
+        sl_json_object_begin(j, "extensions");
+        sl_json_object_begin(j, "EXT_texture_webp");
+        sl_json_u64(j, "source", 0);
+        sl_json_object_end(j);
+        sl_json_object_end(j);
+    }
     sl_json_object_end(j);
     sl_json_array_end(j);
     sl_json_array_begin(j, "images");
@@ -203,6 +220,12 @@ static void json_material(sl_json *j, const glb_doc *d)
     sl_json_u64(j, "bufferView", (uint64_t)d->image_view);
     sl_json_string(j, "mimeType", d->opt->image_mime_type);
     sl_json_object_end(j);
+    if (d->fallback_view >= 0) {
+        sl_json_object_begin(j, NULL);
+        sl_json_u64(j, "bufferView", (uint64_t)d->fallback_view);
+        sl_json_string(j, "mimeType", "image/jpeg");
+        sl_json_object_end(j);
+    }
     sl_json_array_end(j);
 }
 
@@ -285,10 +308,8 @@ static void build_json(sl_json *j, const glb_doc *d, const char *extras_json, ui
     sl_json_string(j, "version", "2.0");
     sl_json_string(j, "generator", "scanlod");
     sl_json_object_end(j);
-    if (d->quantized || d->opt->compression != SL_GLB_UNCOMPRESSED) {
-        json_extension_names(j, "extensionsUsed", d);
-        json_extension_names(j, "extensionsRequired", d);
-    }
+    json_extension_names(j, "extensionsUsed", d, 0);
+    json_extension_names(j, "extensionsRequired", d, 1);
     json_scene_and_node(j, d);
     json_mesh(j, d, extras_json);
     json_material(j, d);

@@ -246,6 +246,8 @@ int encode_image(const char *format, int width, int height, int channels, const 
     OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
     if (!std::strcmp(format, "jpg"))
         spec.attribute("Compression", "jpeg:" + std::to_string(quality));
+    if (!std::strcmp(format, "webp")) // lossy at that quality (OpenImageIO's WebP writer)
+        spec.attribute("Compression", "webp:" + std::to_string(quality));
     bool ok = o->open(name, spec) &&
               o->write_image(OIIO::TypeDesc::FLOAT, pixels);
     ok = o->close() && ok;

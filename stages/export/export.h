@@ -57,6 +57,14 @@ enum sl_export_texture_mode {
     SL_EXPORT_TEXTURE_KEEP = 2
 };
 
+/* [export] texture_format: how the images scanlod encodes (baked atlases, images scaled
+ * to a level's size) are stored; an image embedded as the input has it stays as it is. */
+enum sl_export_image_format {
+    SL_EXPORT_IMAGE_JPEG = 0,
+    SL_EXPORT_IMAGE_PNG = 1,
+    SL_EXPORT_IMAGE_WEBP = 2 /* EXT_texture_webp, with a JPEG fallback unless told not */
+};
+
 /* The resolved [export] section (options: stages/export/export_stage.c). */
 typedef struct sl_export_config {
     int level_count;                            /* the published levels, once read */
@@ -70,7 +78,8 @@ typedef struct sl_export_config {
     char units[8];                              /* its name: "auto", "mm", ... */
     char up;                                    /* [export] up: 'y', 'z', or 0 = auto */
     int texture;                                /* [export] texture: enum sl_export_texture_mode */
-    int texture_png;                            /* texture_format png, else jpeg */
+    int texture_format;                         /* enum sl_export_image_format */
+    int texture_webp_fallback;                  /* webp: a JPEG beside it */
     int texture_quality;                        /* JPEG quality */
     int texture_size;                           /* atlas edge of levels not listed below */
     char texture_sizes[256];                    /* "name:edge,..." */

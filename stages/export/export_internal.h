@@ -88,14 +88,16 @@ typedef struct sl_export_baked {
     void *image;                            /* the encoded atlas */
     size_t image_size;
     const char *mime_type;
+    void *fallback_image;                   /* a WebP image's JPEG fallback, or NULL */
+    size_t fallback_image_size;
     int size, cell;                         /* atlas edge, chart cell edge (texels) */
     double texel_efficiency;                /* texels on the surface / all texels */
 } sl_export_baked;
 
 /* Bakes `level`'s atlas, at most `max_size` texels wide: 0, 1 when the level has too many
  * triangles for that atlas (it keeps its vertex colours), or SL_E_NOMEM/SL_E_INTERNAL. */
-int sl_export_bake(const sl_export_texture *src, const sl_lod_mesh *level, int max_size,
-                   int png, int quality, sl_export_baked *out, sl_error *err);
+int sl_export_bake(const sl_export_config *c, const sl_export_texture *src,
+                   const sl_lod_mesh *level, int max_size, sl_export_baked *out, sl_error *err);
 void sl_export_baked_release(sl_export_baked *b);
 
 /* The level with texture coordinates taken from the input's (export_uv.c): per corner,
@@ -108,11 +110,11 @@ int sl_export_project_uvs(const sl_export_texture *src, const sl_lod_mesh *level
                           sl_export_baked *out, uint64_t *continued, sl_error *err);
 
 /* The input's image scaled down to at most max_edge texels on its longer side (a box
- * filter) and encoded (PNG, else JPEG at `quality`) into out->image, out->mime_type,
- * out->size; nothing when the image is no larger (the level embeds the input's bytes).
- * 0, SL_E_NOMEM or the encoder's error. */
-int sl_export_texture_scaled(const sl_export_texture *src, int max_edge, int png, int quality,
-                             sl_export_baked *out, sl_error *err);
+ * filter) and encoded as [export] texture_format says into out->image, out->mime_type
+ * (and out->fallback_image), out->size; nothing when the image is no larger (the level
+ * embeds the input's bytes). 0, SL_E_NOMEM or the encoder's error. */
+int sl_export_texture_scaled(const sl_export_config *c, const sl_export_texture *src,
+                             int max_edge, sl_export_baked *out, sl_error *err);
 
 /* 1 when a level with these texture coordinates (the input's, carried by the refine
  * stage) keeps them and the original image in its GLB ([export] texture = keep): the

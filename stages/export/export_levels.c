@@ -20,15 +20,26 @@
  * projected from the input's, the level split at its seams and the input's image; with
  * the input's texture kept, the level with its own texture coordinates and the input's
  * image. */
+/* The image a level's GLB embeds: the one scanlod encoded for it (baked, or scaled to the
+ * level's size; with a WebP's JPEG fallback), else the input's own bytes. */
+static void glb_image(const sl_export_baked *baked, const sl_export_texture *texture,
+                      sl_export_glb *glb)
+{
+    int own = baked && baked->image;
+    glb->options.image = own ? baked->image : texture->original;
+    glb->options.image_size = own ? baked->image_size : texture->original_size;
+    glb->options.image_mime_type = own ? baked->mime_type : texture->original_mime;
+    glb->options.fallback_image = own ? baked->fallback_image : NULL;
+    glb->options.fallback_image_size = own ? baked->fallback_image_size : 0;
+}
+
 static sl_lod_mesh glb_geometry(const sl_lod_mesh *mesh, const sl_export_baked *baked,
                                 const float *kept_texcoords, const sl_export_texture *texture,
                                 sl_export_glb *glb)
 {
-    if (kept_texcoords) { /* the input's image, or scaled to the level's size (baked->image) */
+    if (kept_texcoords) {
         glb->texcoords = kept_texcoords;
-        glb->options.image = baked->image ? baked->image : texture->original;
-        glb->options.image_size = baked->image ? baked->image_size : texture->original_size;
-        glb->options.image_mime_type = baked->image ? baked->mime_type : texture->original_mime;
+        glb_image(baked, texture, glb);
         sl_lod_mesh g = *mesh;
         g.colors = NULL; /* vertex colours would multiply the texture */
         return g;
@@ -36,10 +47,7 @@ static sl_lod_mesh glb_geometry(const sl_lod_mesh *mesh, const sl_export_baked *
     if (!baked || !baked->texcoords)
         return *mesh;
     glb->texcoords = baked->texcoords;
-    /* without an image of its own: coordinates projected from the input's, its image */
-    glb->options.image = baked->image ? baked->image : texture->original;
-    glb->options.image_size = baked->image ? baked->image_size : texture->original_size;
-    glb->options.image_mime_type = baked->image ? baked->mime_type : texture->original_mime;
+    glb_image(baked, texture, glb);
     sl_lod_mesh g = {baked->vertex_count, baked->triangle_count, baked->positions,
                      baked->normals, NULL, baked->triangles};
     return g; /* vertex colours would multiply the texture: left out */
@@ -194,7 +202,7 @@ static int bake_level(const sl_export_config *c, const sl_export_texture *textur
     if (!texture || !c->write_glb || mesh->triangle_count == 0)
         return 0;
     int wanted = sl_export_texture_size(c, lv->name);
-    int rc = sl_export_bake(texture, mesh, wanted, c->texture_png, c->texture_quality, baked, err);
+    int rc = sl_export_bake(c, texture, mesh, wanted, baked, err);
     if (rc < 0)
         return rc;
     row->texture = rc == 1 ? -1 : 1;
@@ -277,8 +285,8 @@ int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
                sl_export_texture_keeps(c, texture, texcoords, mesh->vertex_count);
     int rc = 0;
     if (keep) {
-        rc = sl_export_texture_scaled(texture, sl_export_texture_size(c, lv->name),
-                                      c->texture_png, c->texture_quality, &baked, err);
+        rc = sl_export_texture_scaled(c, texture, sl_export_texture_size(c, lv->name), &baked,
+                                      err);
         row->texture = 2;
         row->texture_mime = baked.image ? baked.mime_type : texture->original_mime;
         row->texture_bytes = baked.image ? baked.image_size : texture->original_size;
@@ -287,8 +295,8 @@ int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
                texture && texture->original) {
         rc = sl_export_project_uvs(texture, mesh, &baked, &row->texture_continued, err);
         if (rc == 0) /* the image at most the level's size (thumb: 512) */
-            rc = sl_export_texture_scaled(texture, sl_export_texture_size(c, lv->name),
-                                          c->texture_png, c->texture_quality, &baked, err);
+            rc = sl_export_texture_scaled(c, texture, sl_export_texture_size(c, lv->name),
+                                          &baked, err);
         row->texture = 3;
         row->texture_mime = baked.image ? baked.mime_type : texture->original_mime;
         row->texture_bytes = baked.image ? baked.image_size : texture->original_size;

@@ -136,7 +136,7 @@ void sl_export_texture_close(sl_export_texture *t)
 void sl_export_baked_release(sl_export_baked *b)
 {
     free(b->positions), free(b->normals), free(b->texcoords), free(b->triangles);
-    free(b->image);
+    free(b->image), free(b->fallback_image);
     memset(b, 0, sizeof *b);
 }
 
@@ -237,8 +237,25 @@ static int atlas_size(uint64_t triangles, int configured, int *n, int *c)
     return *c >= MIN_CELL ? size : 0;
 }
 
-int sl_export_bake(const sl_export_texture *src, const sl_lod_mesh *level, int max_size,
-                   int png, int quality, sl_export_baked *out, sl_error *err)
+/* Encodes `rgb` (w x h x 3) as [export] texture_format says into out->image and
+ * out->mime_type, and for WebP with its fallback the JPEG into out->fallback_image. */
+static int encode(const sl_export_config *c, int w, int h, const float *rgb,
+                  sl_export_baked *out, sl_error *err)
+{
+    static const char *const ext[] = {"jpg", "png", "webp"};
+    static const char *const mime[] = {"image/jpeg", "image/png", "image/webp"};
+    int f = c->texture_format;
+    int rc = sl_image_encode(ext[f], w, h, 3, rgb, c->texture_quality, &out->image,
+                             &out->image_size, err);
+    if (rc == 0 && f == SL_EXPORT_IMAGE_WEBP && c->texture_webp_fallback)
+        rc = sl_image_encode("jpg", w, h, 3, rgb, c->texture_quality, &out->fallback_image,
+                             &out->fallback_image_size, err);
+    out->mime_type = mime[f];
+    return rc;
+}
+
+int sl_export_bake(const sl_export_config *cfg, const sl_export_texture *src,
+                   const sl_lod_mesh *level, int max_size, sl_export_baked *out, sl_error *err)
 {
     memset(out, 0, sizeof *out);
     int n, c, size = atlas_size(level->triangle_count, max_size, &n, &c);
@@ -272,22 +289,20 @@ int sl_export_bake(const sl_export_texture *src, const sl_lod_mesh *level, int m
     }
     out->vertex_count = v_count;
     out->triangle_count = t_count;
-    int rc = sl_image_encode(png ? "png" : "jpg", size, size, 3, rgb, quality, &out->image,
-                             &out->image_size, err);
+    int rc = encode(cfg, size, size, rgb, out, err);
     free(rgb);
     if (rc) {
         sl_export_baked_release(out);
         return rc;
     }
-    out->mime_type = png ? "image/png" : "image/jpeg";
     out->size = size;
     out->cell = c;
     out->texel_efficiency = (double)t_count / 2 * (c - 4) * (c - 4) / ((double)size * size);
     return 0;
 }
 
-int sl_export_texture_scaled(const sl_export_texture *src, int max_edge, int png, int quality,
-                             sl_export_baked *out, sl_error *err)
+int sl_export_texture_scaled(const sl_export_config *cfg, const sl_export_texture *src,
+                             int max_edge, sl_export_baked *out, sl_error *err)
 {
     const sl_image *im = &src->image;
     int big = im->width > im->height ? im->width : im->height;
@@ -318,12 +333,10 @@ int sl_export_texture_scaled(const sl_export_texture *src, int max_edge, int png
             for (int c = 0; c < 3; c++)
                 rgb[((uint64_t)y * w + x) * 3 + c] = (float)(n ? acc[c] / n : 0);
         }
-    int rc = sl_image_encode(png ? "png" : "jpg", w, h, 3, rgb, quality, &out->image,
-                             &out->image_size, err);
+    int rc = encode(cfg, w, h, rgb, out, err);
     free(rgb);
     if (rc)
         return rc;
-    out->mime_type = png ? "image/png" : "image/jpeg";
     out->size = w > h ? w : h;
     return 0;
 }

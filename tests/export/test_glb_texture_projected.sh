@@ -14,6 +14,8 @@
 #     a triangle reading across the atlas, as without the charts, makes 34 % and 30 %);
 #   - the validator finds 0 errors;
 #   - texture_sizes = thumb:128: the thumb's image is the input's scaled to 128 px (JPEG);
+#     with texture_format = webp a WebP (EXT_texture_webp) with a JPEG fallback, or alone
+#     (the extension then required), both valid and drawn by three.js;
 #   - texture = bake keeps the baked atlas (a JPEG, three vertices a triangle).
 source "$(dirname "$0")/../lib.sh"
 gltf="$SCANLOD_SOURCE_DIR/scripts/gltf"
@@ -110,6 +112,34 @@ import json; r = json.load(open('$TMP/out-small/cow_charts.obj/report.json'))
 t = [l for l in r['stages']['export']['levels'] if l['name'] == 'thumb'][0]['texture']
 print(t.get('texcoords'), t.get('size'), t.get('mime_type'))")
 check "thumb at 128 px: projected, the image scaled to 128, a JPEG ($got)" [ "$got" = "projected 128 image/jpeg" ]
+
+# texture_format = webp (EXT_texture_webp): with its JPEG fallback the extension is used,
+# not required, and the texture's core source is the JPEG; without, it is required.
+for fallback in true false; do
+  write_config "$TMP/webp-$fallback.ini" "$TMP/in" "$TMP/work-webp-$fallback" "$TMP/out-webp-$fallback" \
+    "[levels]" "percents =" "budgets = thumb:2000" "[export]" "texture_sizes = thumb:128" \
+    "texture_format = webp" "texture_webp_fallback = $fallback" "thumbnail_size = 0" "fidelity = false"
+  run_scanlod run "$TMP/webp-$fallback.ini" -q
+  check "webp, fallback $fallback: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
+  glb="$TMP/out-webp-$fallback/cow_charts.obj/thumb.glb"
+  got=$(python3 -c "
+import json, struct
+d = open('$glb', 'rb').read(); n = struct.unpack('<I', d[12:16])[0]; j = json.loads(d[20:20 + n])
+t = j['textures'][0]
+print('EXT_texture_webp' in j.get('extensionsUsed', []), 'EXT_texture_webp' in j.get('extensionsRequired', []),
+      [i['mimeType'] for i in j['images']], t.get('source'), t['extensions']['EXT_texture_webp']['source'])")
+  want="True False ['image/webp', 'image/jpeg'] 1 0"
+  [ "$fallback" = true ] || want="True True ['image/webp'] None 0"
+  check "webp, fallback $fallback: extensions, images and sources ($got)" [ "$got" = "$want" ]
+  set +e
+  node "$gltf/validate.mjs" "$glb" >"$TMP/valid-webp.jsonl" 2>&1
+  vrc=$?
+  set -e
+  check "webp, fallback $fallback: validator 0 errors ($(head -c 300 "$TMP/valid-webp.jsonl"))" \
+    [ "$vrc" -eq 0 -a "$(grep -c '"numErrors":0,' "$TMP/valid-webp.jsonl")" -eq 1 ]
+  info=$(node "$render/render.cjs" "$glb" "$TMP/webp-$fallback.png" unlit 2>&1) || true
+  check "webp, fallback $fallback: three.js draws it textured ($info)" grep -q '"textured":true' <<<"$info"
+done
 
 # texture = bake: the baked atlas, as before.
 write_config "$TMP/bake.ini" "$TMP/in" "$TMP/work-bake" "$TMP/out-bake" "[levels]" \
