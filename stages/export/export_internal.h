@@ -58,7 +58,9 @@ typedef struct sl_export_texture {
     void *original_owned;      /* what to free: the bytes read from the file */
     uint32_t *chart;           /* per input triangle: its chart of the input's atlas (the
                                   lowest triangle of the region its texture coordinates
-                                  join without a seam); with `original` only */
+                                  join without a seam); with `original` only, and only
+                                  when every coordinate lies in [0, 1] (a wrapping, tiled
+                                  texture cannot be projected: its levels are baked) */
 } sl_export_texture;
 
 /* export_uv.c: each input triangle's chart (see `chart`), OUT: *chart (free() it); 0, or

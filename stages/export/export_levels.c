@@ -292,7 +292,7 @@ int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
         row->texture_bytes = baked.image ? baked.image_size : texture->original_size;
         row->texture_size = baked.image ? baked.size : 0;
     } else if (c->write_glb && mesh->triangle_count && c->texture == SL_EXPORT_TEXTURE_KEEP &&
-               texture && texture->original) {
+               texture && texture->original && texture->chart) {
         rc = sl_export_project_uvs(texture, mesh, &baked, &row->texture_continued, err);
         if (rc == 0) /* the image at most the level's size (thumb: 512) */
             rc = sl_export_texture_scaled(c, texture, sl_export_texture_size(c, lv->name),

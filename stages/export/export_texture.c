@@ -2,9 +2,10 @@
  *
  * A level made of the scan's vertices carries the input's texture coordinates (range and
  * refine stages): with [export] texture = keep it embeds the input's image as read
- * (sl_export_texture_keeps). An octree level's vertices are not input vertices, so the
- * input's texture coordinates do not carry over: such a level gets its own atlas, baked
- * from the input texture.
+ * (sl_export_texture_keeps). Another level takes coordinates projected from the input's
+ * (export_uv.c) with the input's image; with texture = bake, or when projection is not
+ * possible (the image neither JPEG nor PNG, coordinates outside [0, 1]), it gets its own
+ * atlas, baked from the input texture, as follows.
  *
  * Charts: one per triangle, two triangles per square cell of c x c texels, cells in rows
  * in triangle order (the level's triangles come in vertex-cache order, so neighbours in
@@ -88,6 +89,17 @@ int sl_export_texture_keeps(const sl_export_config *c, const sl_export_texture *
     return 1;
 }
 
+/* Whether every texture coordinate of the input lies in [0, 1]. */
+static int input_uvs_in_unit(const sl_mesh *in)
+{
+    const float *uv = in->face_texcoords ? in->face_texcoords : in->texcoords;
+    uint64_t n = in->face_texcoords ? 6 * in->triangle_count : 2 * in->vertex_count;
+    for (uint64_t i = 0; i < n; i++)
+        if (!(uv[i] >= 0.0f && uv[i] <= 1.0f))
+            return 0;
+    return 1;
+}
+
 int sl_export_texture_open(const sl_mesh *input, const char *dir, sl_export_texture *t,
                            char *why, size_t why_size)
 {
@@ -115,7 +127,7 @@ int sl_export_texture_open(const sl_mesh *input, const char *dir, sl_export_text
     }
     t->input = input;
     read_original(input, dir, t);
-    if (t->original && sl_export_texture_charts(input, &t->chart)) {
+    if (t->original && input_uvs_in_unit(input) && sl_export_texture_charts(input, &t->chart)) {
         free(t->original_owned); /* no memory for the charts: every level is baked */
         t->original = t->original_owned = NULL;
     }

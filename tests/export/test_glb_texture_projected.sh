@@ -16,7 +16,8 @@
 #   - texture_sizes = thumb:128: the thumb's image is the input's scaled to 128 px (JPEG);
 #     with texture_format = webp a WebP (EXT_texture_webp) with a JPEG fallback, or alone
 #     (the extension then required), both valid and drawn by three.js;
-#   - texture = bake keeps the baked atlas (a JPEG, three vertices a triangle).
+#   - texture = bake keeps the baked atlas (a JPEG, three vertices a triangle), and so does
+#     an input whose coordinates leave [0, 1] (a tiled texture).
 source "$(dirname "$0")/../lib.sh"
 gltf="$SCANLOD_SOURCE_DIR/scripts/gltf"
 render="$SCANLOD_SOURCE_DIR/scripts/viewer"
@@ -140,6 +141,21 @@ print('EXT_texture_webp' in j.get('extensionsUsed', []), 'EXT_texture_webp' in j
   info=$(node "$render/render.cjs" "$glb" "$TMP/webp-$fallback.png" unlit 2>&1) || true
   check "webp, fallback $fallback: three.js draws it textured ($info)" grep -q '"textured":true' <<<"$info"
 done
+
+# Coordinates outside [0, 1] (a tiled texture, read with REPEAT) cannot be projected into
+# a CLAMP_TO_EDGE file: such an input's levels are baked.
+mkdir -p "$TMP/in-tiled"
+cp "$data/cow_charts.mtl" "$data/cow_charts.png" "$TMP/in-tiled/"
+awk '$1 == "vt" { printf "vt %.6f %.6f\n", 2 * $2, $3; next } { print }' "$data/cow_charts.obj" \
+  >"$TMP/in-tiled/cow_charts.obj"
+write_config "$TMP/tiled.ini" "$TMP/in-tiled" "$TMP/work-tiled" "$TMP/out-tiled" "[levels]" \
+  "percents = 20" "budgets =" "[export]" "thumbnail_size = 0" "fidelity = false"
+run_scanlod run "$TMP/tiled.ini" -q
+check "tiled: run exits 0 (got $rc: ${err:0:300})" [ "$rc" -eq 0 ]
+got=$(python3 -c "
+import json; r = json.load(open('$TMP/out-tiled/cow_charts.obj/report.json'))
+print([l for l in r['stages']['export']['levels'] if l['name'] == 'lod20'][0]['texture'].get('source'))")
+check "tiled: coordinates outside [0, 1]: lod20 is baked ($got)" [ "$got" = baked ]
 
 # texture = bake: the baked atlas, as before.
 write_config "$TMP/bake.ini" "$TMP/in" "$TMP/work-bake" "$TMP/out-bake" "[levels]" \
