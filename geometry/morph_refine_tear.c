@@ -171,8 +171,8 @@ static uint32_t tear_face(const refine *R, const uint32_t *v, int *held)
 
 /* Tears what no split mends (targets on pieces of the coarser surface that do not meet:
  * a fold, a thin part, another component): in each such triangle, the corners whose
- * targets are not in the coarser triangle holding most of them get a copy (same bytes at
- * weight 0) whose target is the closest point of that coarser triangle; triangles that
+ * targets are not in the coarser triangle it tears to (tear_face) get a copy (same bytes at
+ * weight 0) whose target is the point of that coarser triangle nearest to it; triangles that
  * tear the same vertex towards the same coarser triangle share the copy. */
 int mr_tear(refine *R, sl_error *err)
 {

@@ -321,10 +321,12 @@ int sl_export_texture_scaled(const sl_export_config *cfg, const sl_export_textur
     if (max_edge <= 0 || big <= max_edge)
         return 0; /* within the level's size: the input's own bytes */
     double scale = (double)big / max_edge; /* source texels per output texel, > 1 */
-    int w = (int)fmax(1, floor(im->width / scale + 0.5)), h = (int)fmax(1, floor(im->height / scale + 0.5));
+    int w = (int)fmax(1, floor(im->width / scale + 0.5));
+    int h = (int)fmax(1, floor(im->height / scale + 0.5));
     float *rgb = malloc((size_t)w * h * 3 * sizeof *rgb);
     if (!rgb)
-        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory for a %d x %d texture", w, h);
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory for a %d x %d texture",
+                            w, h);
     double sx = (double)im->width / w, sy = (double)im->height / h;
     /* a box filter: each output texel the mean of the source texels whose centres fall
      * in its footprint (in the stored, sRGB, values) */

@@ -108,7 +108,8 @@ int sl_export_texture_charts(const sl_mesh *in, uint32_t **chart)
     for (uint64_t t = 0; t < tn; t++)
         for (int k = 0; k < 3; k++) {
             uint64_t p = in->triangles[3 * t + k], q = in->triangles[3 * t + (k + 1) % 3];
-            edges[3 * t + k] = (edge_ref){p < q ? p << 32 | q : q << 32 | p, (uint32_t)t, (uint8_t)k};
+            uint64_t key = p < q ? p << 32 | q : q << 32 | p;
+            edges[3 * t + k] = (edge_ref){key, (uint32_t)t, (uint8_t)k};
         }
     qsort(edges, 3 * tn, sizeof *edges, by_key);
     for (uint64_t i = 0; i < 3 * tn;) {
@@ -215,7 +216,8 @@ int sl_export_project_uvs(const sl_export_texture *src, const sl_lod_mesh *level
             float uv[2];
             uv_at(src, across ? home.triangle : hit.triangle, across ? p[k] : hit.point, uv);
             beyond += (uint64_t)across;
-            keys[3 * t + k] = (corner_key){level->indices[3 * t + k], uv[0], uv[1], (uint32_t)(3 * t + k)};
+            uint64_t corner = 3 * (uint64_t)t + (uint64_t)k;
+            keys[corner] = (corner_key){level->indices[corner], uv[0], uv[1], (uint32_t)corner};
         }
     }
     qsort(keys, cn, sizeof *keys, by_vertex_uv);
@@ -227,19 +229,21 @@ int sl_export_project_uvs(const sl_export_texture *src, const sl_lod_mesh *level
         index[keys[i].corner] = (uint32_t)(vn - 1);
     }
     out->positions = malloc((vn + 1) * 3 * sizeof(float));
-    out->normals = malloc((vn + 1) * 3 * sizeof(float));
+    out->normals = level->normals ? malloc((vn + 1) * 3 * sizeof(float)) : NULL;
     out->texcoords = malloc((vn + 1) * 2 * sizeof(float));
     out->triangles = malloc((cn + 1) * sizeof(uint32_t));
-    if (!out->positions || !out->normals || !out->texcoords || !out->triangles) {
+    if (!out->positions || (level->normals && !out->normals) || !out->texcoords ||
+        !out->triangles) {
         free(keys), free(index);
         sl_export_baked_release(out);
         return sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory for texture coordinates");
     }
     for (uint64_t i = 0; i < cn; i++) {
-        uint32_t o = index[keys[i].corner], v = keys[i].vertex;
-        memcpy(out->positions + 3 * (uint64_t)o, level->positions + 3 * (uint64_t)v, 3 * sizeof(float));
-        memcpy(out->normals + 3 * (uint64_t)o, level->normals + 3 * (uint64_t)v, 3 * sizeof(float));
-        out->texcoords[2 * (uint64_t)o] = keys[i].u, out->texcoords[2 * (uint64_t)o + 1] = keys[i].v;
+        uint64_t o = index[keys[i].corner], v = keys[i].vertex;
+        memcpy(out->positions + 3 * o, level->positions + 3 * v, 3 * sizeof(float));
+        if (out->normals)
+            memcpy(out->normals + 3 * o, level->normals + 3 * v, 3 * sizeof(float));
+        out->texcoords[2 * o] = keys[i].u, out->texcoords[2 * o + 1] = keys[i].v;
     }
     memcpy(out->triangles, index, cn * sizeof *index);
     out->vertex_count = vn;
