@@ -93,16 +93,16 @@ int mr_retarget(refine *R, sl_error *err)
                 uint32_t x = v[k], n = start[x + 1] - start[x];
                 if (held >> k & 1 || n > 64)
                     continue;
-                int before = failing_around(R, ring + start[x], n);
-                float was[3], now[3];
-                memcpy(was, r->targets + 3 * (uint64_t)x, sizeof was);
-                uint32_t was_hint = R->hint[x];
-                uint64_t was_members = R->members_at[x];
                 double p[3], a[3], b[3], c[3], q[3];
                 mr_position_of(R, x, p); /* the point of g it travels least to */
                 mr_corner(R->c, g, 0, a), mr_corner(R->c, g, 1, b), mr_corner(R->c, g, 2, c);
                 if (sl_closest_point_triangle(p, a, b, c, q) > R->travel2)
                     continue; /* farther than the travel bound (morph_refine.c) */
+                int before = failing_around(R, ring + start[x], n);
+                float was[3], now[3];
+                memcpy(was, r->targets + 3 * (uint64_t)x, sizeof was);
+                uint32_t was_hint = R->hint[x];
+                uint64_t was_members = R->members_at[x];
                 now[0] = (float)q[0], now[1] = (float)q[1], now[2] = (float)q[2];
                 if (set_target(R, x, now, g)) {
                     rc = mr_nomem(err);

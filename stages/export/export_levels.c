@@ -269,6 +269,20 @@ void sl_export_report_result(const sl_export_config *c, const sl_export_frame *f
                    row->measured);
 }
 
+/* The input's image for a level that embeds it (coordinates kept or projected): scaled to
+ * the level's size when larger (thumb: 512), else its own bytes; what the row reports. */
+static int input_image(const sl_export_config *c, const sl_export_texture *texture,
+                       const sl_export_level *lv, sl_export_result *row, sl_export_baked *baked,
+                       sl_error *err)
+{
+    int rc = sl_export_texture_scaled(c, texture, sl_export_texture_size(c, lv->name), baked,
+                                      err);
+    row->texture_mime = baked->image ? baked->mime_type : texture->original_mime;
+    row->texture_bytes = baked->image ? baked->image_size : texture->original_size;
+    row->texture_size = baked->image ? baked->size : 0;
+    return rc;
+}
+
 int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
                           const sl_lod_mesh *mesh, const float *texcoords,
                           const sl_lod_mesh *morph_to, const char *extras, const sl_mesh *input,
@@ -285,22 +299,14 @@ int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
                sl_export_texture_keeps(c, texture, texcoords, mesh->vertex_count);
     int rc = 0;
     if (keep) {
-        rc = sl_export_texture_scaled(c, texture, sl_export_texture_size(c, lv->name), &baked,
-                                      err);
+        rc = input_image(c, texture, lv, row, &baked, err);
         row->texture = 2;
-        row->texture_mime = baked.image ? baked.mime_type : texture->original_mime;
-        row->texture_bytes = baked.image ? baked.image_size : texture->original_size;
-        row->texture_size = baked.image ? baked.size : 0;
     } else if (c->write_glb && mesh->triangle_count && c->texture == SL_EXPORT_TEXTURE_KEEP &&
                texture && texture->original && texture->chart) {
         rc = sl_export_project_uvs(texture, mesh, &baked, &row->texture_continued, err);
-        if (rc == 0) /* the image at most the level's size (thumb: 512) */
-            rc = sl_export_texture_scaled(c, texture, sl_export_texture_size(c, lv->name),
-                                          &baked, err);
+        if (rc == 0)
+            rc = input_image(c, texture, lv, row, &baked, err);
         row->texture = 3;
-        row->texture_mime = baked.image ? baked.mime_type : texture->original_mime;
-        row->texture_bytes = baked.image ? baked.image_size : texture->original_size;
-        row->texture_size = baked.image ? baked.size : 0;
     } else {
         rc = bake_level(c, texture, lv, mesh, row, &baked, err);
         /* A textured scan published untextured is what a curator notices first: said where
