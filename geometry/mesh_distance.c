@@ -249,6 +249,40 @@ static void prefix_areas(const sl_mesh *m, double *cum, uint64_t chunks)
         cum[c + 1] += cum[c];
 }
 
+/* Inside a parallel loop: whether to skip the rest, the run having been interrupted (by
+ * `progress`, or as seen by another thread through the shared flag). */
+static int stopping(int *interrupted, sl_progress *progress)
+{
+    int stop;
+#pragma omp atomic read
+    stop = *interrupted;
+    if (!stop && !sl_progress_interrupted(progress))
+        return 0;
+#pragma omp atomic write
+    *interrupted = 1;
+    return 1;
+}
+
+/* A side's figures from its chunks' partials, summed in chunk order: the first
+ * `area_chunks` are area samples (mean and RMS), the rest vertices (the maximum alone). */
+static void side_of(const partial *parts, uint64_t area_chunks, uint64_t chunks,
+                    sl_distance_side *side)
+{
+    partial area = {0.0, 0.0, 0.0, 0}, verts = {0.0, 0.0, 0.0, 0};
+    for (uint64_t c = 0; c < chunks; c++) {
+        partial *acc = c < area_chunks ? &area : &verts;
+        acc->max = fmax(acc->max, parts[c].max);
+        acc->sum += parts[c].sum;
+        acc->sum_sq += parts[c].sum_sq;
+        acc->count += parts[c].count;
+    }
+    side->world.hausdorff = fmax(area.max, verts.max);
+    side->world.mean = area.count ? area.sum / (double)area.count : 0.0;
+    side->world.rms = area.count ? sqrt(area.sum_sq / (double)area.count) : 0.0;
+    side->area_samples = area.count;
+    side->vertex_samples = verts.count;
+}
+
 /* One direction: samples of `src` against `target`, into `side` (world units). */
 static int measure_side(const surface *src, const sl_triangle_bvh *target,
                         const sl_mesh_distance_config *cfg, int with_vertices,
@@ -271,14 +305,8 @@ static int measure_side(const surface *src, const sl_triangle_bvh *target,
     int interrupted = 0;
 #pragma omp parallel for schedule(dynamic, 1)
     for (uint64_t c = 0; c < tri_chunks + vert_chunks; c++) {
-        int stop;
-#pragma omp atomic read
-        stop = interrupted;
-        if (stop || sl_progress_interrupted(progress)) {
-#pragma omp atomic write
-            interrupted = 1;
+        if (stopping(&interrupted, progress))
             continue;
-        }
         if (c < tri_chunks) {
             uint64_t end = (c + 1) * CHUNK < m->triangle_count ? (c + 1) * CHUNK
                                                                : m->triangle_count;
@@ -297,20 +325,8 @@ static int measure_side(const surface *src, const sl_triangle_bvh *target,
                             src->name);
     }
 
-    partial area = {0.0, 0.0, 0.0, 0}, verts = {0.0, 0.0, 0.0, 0};
-    for (uint64_t c = 0; c < tri_chunks + vert_chunks; c++) {
-        partial *acc = c < tri_chunks ? &area : &verts;
-        acc->max = fmax(acc->max, parts[c].max);
-        acc->sum += parts[c].sum;
-        acc->sum_sq += parts[c].sum_sq;
-        acc->count += parts[c].count;
-    }
+    side_of(parts, tri_chunks, tri_chunks + vert_chunks, side);
     free(parts);
-    side->world.hausdorff = fmax(area.max, verts.max);
-    side->world.mean = area.count ? area.sum / (double)area.count : 0.0;
-    side->world.rms = area.count ? sqrt(area.sum_sq / (double)area.count) : 0.0;
-    side->area_samples = area.count;
-    side->vertex_samples = verts.count;
     return SL_OK;
 }
 
@@ -466,7 +482,6 @@ struct sl_distance_reference {
     double *points;            /* A's area samples, chunk after chunk */
     uint64_t *chunk_start;     /* chunks + 1 offsets (in samples) into points */
     uint64_t chunks;
-    double diagonal;
 };
 
 void sl_distance_reference_free(sl_distance_reference *r)
@@ -520,10 +535,6 @@ int sl_distance_reference_build(const sl_mesh *a, const sl_mesh_distance_config 
                                            cfg->samples, cfg->seed, NULL, &store);
             r->chunk_start[c + 1] = r->chunk_start[c] + got.count;
         }
-        double d_sq = 0.0;
-        for (int i = 0; i < 3; i++)
-            d_sq += (r->a.hi[i] - r->a.lo[i]) * (r->a.hi[i] - r->a.lo[i]);
-        r->diagonal = sqrt(d_sq);
     }
     free(cum);
     if (rc != SL_OK) {
@@ -534,46 +545,84 @@ int sl_distance_reference_build(const sl_mesh *a, const sl_mesh_distance_config 
     return SL_OK;
 }
 
+/* A's stored area samples (and, `with_vertices`, its used vertices) against B's tree, as
+ * measure_side has them: the same chunks, each from a fresh hint, summed in order. */
+static int reference_side(const sl_distance_reference *r, const sl_triangle_bvh *bvh_b,
+                          int with_vertices, sl_distance_side *side, sl_progress *progress,
+                          sl_error *err)
+{
+    const sl_mesh *m = r->a.mesh;
+    uint64_t vert_chunks = with_vertices ? chunks_of(m->vertex_count) : 0;
+    uint64_t total = r->chunks + vert_chunks;
+    partial *parts = malloc((total ? total : 1) * sizeof *parts);
+    if (!parts)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "sample bookkeeping of mesh A");
+    int interrupted = 0;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (uint64_t c = 0; c < total; c++) {
+        if (stopping(&interrupted, progress))
+            continue;
+        if (c >= r->chunks) {
+            uint64_t v = (c - r->chunks) * CHUNK;
+            uint64_t end = v + CHUNK < m->vertex_count ? v + CHUNK : m->vertex_count;
+            parts[c] = sample_vertices(&r->a, v, end, bvh_b, 0);
+            continue;
+        }
+        partial acc = {0.0, 0.0, 0.0, 0};
+        uint32_t hint = UINT32_MAX;
+        for (uint64_t i = r->chunk_start[c]; i < r->chunk_start[c + 1]; i++) {
+            sl_closest q;
+            sl_triangle_bvh_closest(bvh_b, r->points + 3 * i, hint, &q);
+            hint = q.triangle;
+            accumulate(&acc, q.distance_sq, 1);
+        }
+        parts[c] = acc;
+    }
+    if (interrupted) {
+        free(parts);
+        return sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "distance sampling of mesh A");
+    }
+    side_of(parts, r->chunks, total, side);
+    free(parts);
+    return SL_OK;
+}
+
+/* Both sides against B: with_vertices as in sl_mesh_distance_compute (every figure), or
+ * without (the RMS alone). */
+static int reference_measure(const sl_distance_reference *r, const sl_mesh *b, int with_vertices,
+                             sl_mesh_distance *out, sl_progress *progress, sl_error *err)
+{
+    memset(out, 0, sizeof *out);
+    surface sb = {0};
+    sl_triangle_bvh bvh_b = {0};
+    int rc = check_surface(&sb, b, "B", NULL, err);
+    if (rc == SL_OK)
+        rc = sl_triangle_bvh_build(&bvh_b, b, err);
+    if (rc == SL_OK)
+        rc = reference_side(r, &bvh_b, with_vertices, &out->a_to_b, progress, err);
+    sl_triangle_bvh_release(&bvh_b);
+    if (rc == SL_OK)
+        rc = measure_side(&sb, &r->bvh, &r->cfg, with_vertices, &out->b_to_a, progress, err);
+    if (rc == SL_OK)
+        fill_out(out, &r->a);
+    free(sb.used);
+    return rc;
+}
+
 int sl_distance_reference_rms(const sl_distance_reference *r, const sl_mesh *b, double *rms,
                               sl_progress *progress, sl_error *err)
 {
     *rms = INFINITY;
-    surface sb = {0};
-    sl_triangle_bvh bvh_b = {0};
-    sl_distance_side b_to_a;
-    int rc = check_surface(&sb, b, "B", NULL, err);
+    sl_mesh_distance d;
+    int rc = reference_measure(r, b, 0, &d, progress, err);
     if (rc == SL_OK)
-        rc = sl_triangle_bvh_build(&bvh_b, b, err);
-    partial *parts = rc == SL_OK ? malloc((r->chunks ? r->chunks : 1) * sizeof *parts) : NULL;
-    if (rc == SL_OK && !parts)
-        rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "sample bookkeeping of mesh A");
-    if (rc == SL_OK) { /* A's samples against B, as measure_side has them, chunk by chunk */
-#pragma omp parallel for schedule(dynamic, 1)
-        for (uint64_t c = 0; c < r->chunks; c++) {
-            partial acc = {0.0, 0.0, 0.0, 0};
-            uint32_t hint = UINT32_MAX;
-            for (uint64_t i = r->chunk_start[c]; i < r->chunk_start[c + 1]; i++) {
-                sl_closest q;
-                sl_triangle_bvh_closest(&bvh_b, r->points + 3 * i, hint, &q);
-                hint = q.triangle;
-                accumulate(&acc, q.distance_sq, 1);
-            }
-            parts[c] = acc;
-        }
-        partial all = {0.0, 0.0, 0.0, 0};
-        for (uint64_t c = 0; c < r->chunks; c++) {
-            all.sum_sq += parts[c].sum_sq;
-            all.count += parts[c].count;
-        }
-        double a_rms = all.count ? sqrt(all.sum_sq / (double)all.count) : 0.0;
-        rc = measure_side(&sb, &r->bvh, &r->cfg, 0, &b_to_a, progress, err);
-        if (rc == SL_OK) {
-            double w = fmax(a_rms, b_to_a.world.rms);
-            *rms = r->diagonal > 0.0 ? w * (1.0 / r->diagonal) : 0.0;
-        }
-    }
-    free(parts);
-    sl_triangle_bvh_release(&bvh_b);
-    free(sb.used);
+        *rms = d.fraction.rms;
     return rc;
+}
+
+int sl_distance_reference_compute(const sl_distance_reference *r, const sl_mesh *b,
+                                  int vertices, sl_mesh_distance *out, sl_progress *progress,
+                                  sl_error *err)
+{
+    return reference_measure(r, b, vertices != 0, out, progress, err);
 }

@@ -93,17 +93,22 @@ int sl_mesh_distance_compute(const sl_mesh *a, const sl_mesh *b,
                              sl_error *err);
 
 /* One A measured against many B (a search over candidate levels of one input): A's
- * checks, tree and area samples made once. sl_distance_reference_rms gives the symmetric
- * RMS over area samples as a fraction of A's diagonal, bit-identical to
- * sl_mesh_distance_compute's `fraction.rms` with the same config (the same samples, the
- * same chunks summed in the same order), without the vertex samples, which only the
- * Hausdorff distance uses. A must have triangles (not a point cloud). Errors as for
+ * checks, tree and area samples made once. sl_distance_reference_compute with `vertices`
+ * gives every figure bit-identical to sl_mesh_distance_compute(A, B) with the same config
+ * (the same samples, the same chunks summed in the same order); without, the vertex
+ * samples are left out (they only raise the Hausdorff distance: its figure is then over
+ * the area samples alone, and the cost is bounded by the samples and B's tree, not A's
+ * vertices). sl_distance_reference_rms gives only the symmetric RMS as a fraction of A's
+ * diagonal (no vertex samples). A must have triangles (not a point cloud). Errors as for
  * sl_mesh_distance_compute. The reference is read-only once built: reentrant. */
 typedef struct sl_distance_reference sl_distance_reference;
 int sl_distance_reference_build(const sl_mesh *a, const sl_mesh_distance_config *cfg,
                                 sl_distance_reference **out /* OUT */, sl_error *err);
 int sl_distance_reference_rms(const sl_distance_reference *ref, const sl_mesh *b,
                               double *rms /* OUT */, sl_progress *progress, sl_error *err);
+int sl_distance_reference_compute(const sl_distance_reference *ref, const sl_mesh *b,
+                                  int vertices, sl_mesh_distance *out /* OUT */,
+                                  sl_progress *progress, sl_error *err);
 void sl_distance_reference_free(sl_distance_reference *ref);
 
 /* The area samples that sl_mesh_distance_compute draws on a mesh (the same stratified

@@ -35,6 +35,8 @@ typedef struct sl_refine_config {
     int relax_topology;      /* ... giving up the topology when it alone stops above it */
     int fit;                 /* vertices fitted to the input surface */
     int fit_rounds;          /* the fit's projection and solve rounds */
+    double fit_floor;        /* no fit for a level measured within this of the input
+                                (fraction of the diagonal) */
     uint64_t select_samples; /* area samples per surface when candidates are compared */
     double min_part_area;    /* octree cuts: parts below this share of the area go */
     double shard_reach;      /* ... when within this many mean edges of the rest */

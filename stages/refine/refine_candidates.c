@@ -164,12 +164,18 @@ static int measure(refine_item *it, refine_candidate *cand, sl_error *err)
         return 0;
     sl_mesh view = sl_mesh_view(lv->vertex_count, lv->positions, NULL, NULL, lv->triangle_count,
                                 lv->triangles);
-    sl_mesh_distance_config dc = sl_mesh_distance_default_config();
-    dc.samples = it->c->select_samples;
     sl_mesh_distance d;
     sl_error derr;
     sl_error_init(&derr);
-    int rc = sl_mesh_distance_compute(&it->surface, &view, &dc, &d, it->io->progress, &derr);
+    int rc = 0;
+    if (!it->distance_reference) { /* the input's side, once per item */
+        sl_mesh_distance_config dc = sl_mesh_distance_default_config();
+        dc.samples = it->c->select_samples;
+        rc = sl_distance_reference_build(&it->surface, &dc, &it->distance_reference, &derr);
+    }
+    if (rc == 0)
+        rc = sl_distance_reference_compute(it->distance_reference, &view, 0, &d,
+                                           it->io->progress, &derr);
     if (rc == SL_E_INTERRUPTED || rc == SL_E_NOMEM) {
         sl_error_merge(err, &derr);
         return rc;
@@ -280,7 +286,8 @@ static int fit_one(refine_item *it, refine_candidate *c, int remeasure, sl_error
     return rc;
 }
 
-/* Only the chosen candidate is fitted, unless another ranks alike and is within
+/* Only the chosen candidate is fitted (and none measured within [refine] fit_floor of the
+ * input), unless another ranks alike and is within
  * CLOSE_RMS of it before the fit: the fit gains more on a remesh (an octree cut's even
  * triangles) than on the scan collapsed, so then both are fitted and measured again, and
  * the better one after the fit is chosen (usnm_1145291 at 10 %: the octree's 1.24 times the
@@ -290,6 +297,8 @@ static int fit_chosen(refine_item *it, refine_candidate *cands, int count, uint6
                       int *chosen, sl_error *err)
 {
     refine_candidate *c = &cands[*chosen];
+    if (c->measured && c->rms <= it->c->fit_floor)
+        return 0; /* already closer than the published file can show ([refine] fit_floor) */
     int rival = -1;
     for (int i = 0; i < count && c->measured; i++)
         if (i != *chosen && cands[i].measured && same_rank(it, c, &cands[i], target) &&

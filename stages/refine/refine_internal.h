@@ -85,6 +85,7 @@ typedef struct refine_item {
     int method_count;
     sl_level scan_chain;         /* best: the last scan candidate before its fit */
     struct sl_fit_reference *fit_reference; /* the input prepared for fits, on the first */
+    struct sl_distance_reference *distance_reference; /* ... for measures, on the first */
 } refine_item;
 
 /* The scan itself as rung r's level (its record and mesh). */

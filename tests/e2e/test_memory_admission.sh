@@ -26,8 +26,8 @@ check "the plan expects the 10 M-triangle item over 2048 MB ($need MB)" [ "$need
 
 run_scanlod run "$TMP/c.ini" -q
 check "the batch exits 75 (not done, safe to rerun; got $rc)" [ "$rc" -eq 75 ]
-check "the refusal names the file, what it needs and the budget" \
-  contains "big.ply: not run: expected to need about $need MB .* over the 2048 MB of \[run\] memory_limit_mb" "$err"
+check "the refusal names the file, what it needs, the method and the budget" \
+  contains "big.ply: not run: expected to need about $need MB (method best, .* over the 2048 MB of \[run\] memory_limit_mb" "$err"
 check "one line of error for it" [ "$(grep -c 'big.ply' <<<"$err")" -eq 1 ]
 check "the big item's range stage never started" \
   bash -c "! grep -h 'big.ply' '$TMP'/logs/*.log | grep -q 'start (attempt'"
@@ -42,6 +42,13 @@ check "status lists it as failed for memory" contains "range big.ply: failed (me
 run_scanlod run "$TMP/c.ini" -q
 check "a rerun exits 75 again (got $rc)" [ "$rc" -eq 75 ]
 check "and says why again" contains "big.ply: not run: expected to need about $need MB" "$err"
+
+# Another method: the refusal names it and its own stage (issue 38: segment and cluster
+# at scale, bounded or refused by the plan with the memory they would need).
+run_scanlod run "$TMP/c.ini" -q -s lod.method=segment
+check "segment: refused too (exit $rc)" [ "$rc" -eq 75 ]
+check "the refusal names the method and its stage" \
+  contains "big.ply: not run: expected to need about [0-9]* MB (method segment, its [a-z]* stage" "$err"
 
 # memory_check = false: the old behaviour, the item is tried (and fails by the limit). The
 # range stage would read 190 MB of zeros: only the claim is checked here, then stopped.

@@ -84,6 +84,30 @@ for s in "${scans[@]}"; do
   check "$s: levels as asked, whole and closer than paper 1's cuts (${problems:-ok})" [ -z "$problems" ]
 done
 
+# [refine] fit_floor: a chosen level measured within it of the input is not fitted, one
+# above it is (its candidates measured before the fit). The same items at a floor between
+# their levels' errors (the octree's stages reused): both kinds must show.
+write_config "$TMP/floor.ini" "$TMP/in" "$TMP/work-best" "$TMP/out-floor" "${ladder[@]}" \
+  "${export_lines[@]}" "[refine]" "fit_floor = 3e-4"
+run_scanlod run "$TMP/floor.ini" -q
+check "fit_floor 3e-4: run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
+floor=$(python3 - "$TMP/out-floor" 3e-4 "${scans[@]}" <<'EOF'
+import json, os, sys
+out, floor, kinds, bad = sys.argv[1], float(sys.argv[2]), set(), []
+for s in sys.argv[3:]:
+    for r in json.load(open(os.path.join(out, s + ".ply", "report.json")))["stages"]["refine"]["levels"]:
+        for c in r.get("candidates", []):
+            if c["chosen"] and "rms_before_fit" not in c:
+                kinds.add(c["fitted"])
+                if c["fitted"] != (c["rms"] > floor):
+                    bad.append("%s %s: rms %.3g, fitted %s" % (s, r["name"], c["rms"], c["fitted"]))
+if kinds != {True, False}:
+    bad.append("fitted and unfitted levels both expected, saw %s" % sorted(kinds))
+print("; ".join(bad))
+EOF
+)
+check "fit_floor: fitted exactly the levels above the floor (${floor:-ok})" [ -z "$floor" ]
+
 # Each method alone, refined: every count met within 1 % (segment and cluster stop above
 # the small ones on their own; octree cuts never land on a count exactly; on the open,
 # non-manifold bun_zipper_res3 the collapse keeping the topology stops above 1 and 5 %:

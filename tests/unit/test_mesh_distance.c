@@ -314,7 +314,8 @@ static void test_closest_feature(void)
 }
 
 /* sl_distance_reference: the RMS of many B against one A, bit-identical to
- * sl_mesh_distance_compute's fraction.rms with the same samples and seed, on 1 and 2
+ * sl_mesh_distance_compute's fraction.rms with the same samples and seed, and every figure
+ * (sl_distance_reference_compute) bit-identical to its whole result, on 1 and 2
  * threads: a bundled scan against a coarser copy (every other row of triangles dropped
  * and the gaps' vertices kept), a shifted copy and itself. */
 static void test_reference(void)
@@ -351,6 +352,19 @@ static void test_reference(void)
             CHECK_MSG(rms == d.fraction.rms, "B %d, %d threads: reference RMS %.17g, full %.17g",
                       i, nt, rms, d.fraction.rms);
             CHECK_MSG(i == 2 ? rms < 1e-12 : rms > 1e-4, "B %d: RMS %g", i, rms);
+            sl_mesh_distance e; /* every figure, the vertex samples included */
+            CHECK(sl_distance_reference_compute(ref, bs[i], 1, &e, NULL, &err) == SL_OK);
+            sl_mesh_distance f; /* the area samples alone: the same RMS, no vertex samples */
+            CHECK(sl_distance_reference_compute(ref, bs[i], 0, &f, NULL, &err) == SL_OK);
+            CHECK(f.fraction.rms == d.fraction.rms && f.a_to_b.vertex_samples == 0 &&
+                  f.fraction.hausdorff <= d.fraction.hausdorff &&
+                  f.fraction.hausdorff >= 0.5 * d.fraction.hausdorff);
+            CHECK_MSG(!memcmp(&e, &d, sizeof d),
+                      "B %d, %d threads: reference Hausdorff %.17g / %.17g, mean %.17g / %.17g, "
+                      "vertex samples %llu / %llu", i, nt, e.fraction.hausdorff,
+                      d.fraction.hausdorff, e.fraction.mean, d.fraction.mean,
+                      (unsigned long long)e.a_to_b.vertex_samples,
+                      (unsigned long long)d.a_to_b.vertex_samples);
         }
         sl_distance_reference_free(ref);
     }

@@ -8,7 +8,8 @@ import math
 import re
 import statistics
 
-STAGES = ["range", "samples", "merge", "priority", "crack", "export"]
+# the default method's stages in run order (segment and cluster: their own phases)
+STAGES = ["range", "samples", "merge", "priority", "crack", "refine", "export"]
 
 
 def summary(values):
