@@ -169,12 +169,14 @@ sl_export_digest sl_export_digest_mesh(const sl_lod_mesh *m);
 /* One distinct mesh's work, what the LOD model's levels and a level list share: its atlas
  * baked (with `texture`; or with `texcoords`, the level's own, the input's image kept when
  * sl_export_texture_keeps says so), its files written as [export] asks under lv->name, its topology
- * and (with `input`) fidelity measured; all of it kept in *row (not k, not file). With
+ * and (with `fidelity`, the input's side of the measure made once per item) its distance to
+ * the input measured; all of it kept in *row (not k, not file). With
  * `morph_to` (may be NULL) its GLB morphs to that coarser level ([export] morph). */
 int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
                           const sl_lod_mesh *mesh, const float *texcoords,
-                          const sl_lod_mesh *morph_to, const char *extras, const sl_mesh *input,
-                          const sl_export_frame *frame, const sl_export_texture *texture,
+                          const sl_lod_mesh *morph_to, const char *extras,
+                          const sl_distance_reference *fidelity, const sl_export_frame *frame,
+                          const sl_export_texture *texture,
                           const sl_stage_io *io, sl_export_result *row, sl_error *err);
 
 /* A level's facts in its open JSON object in `r`, after its own fields: topology, fidelity,
@@ -188,7 +190,8 @@ void sl_export_report_result(const sl_export_config *c, const sl_export_frame *f
  * written, measured, deduplicated and reported, with the manifest and the pages
  * (export_list.c). `model` says an LOD model is published beside them. */
 int sl_export_level_list(const sl_export_config *c, const char *list_dir, int model,
-                         const sl_mesh *input, const sl_export_frame *frame,
+                         const sl_mesh *input, const sl_distance_reference *fidelity,
+                         const sl_export_frame *frame,
                          const sl_export_texture *texture, const sl_stage_io *io,
                          sl_error *err);
 

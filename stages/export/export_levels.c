@@ -133,7 +133,7 @@ static void report_glb(sl_json *r, const sl_export_config *c, const sl_glb_stats
     sl_json_object_end(r);
 }
 
-static int measure_level(const sl_export_config *c, const sl_mesh *input, const sl_lod_mesh *mesh,
+static int measure_level(const sl_distance_reference *fidelity, const sl_lod_mesh *mesh,
                          const sl_stage_io *io, sl_export_result *row, sl_error *err)
 {
     sl_mesh view = sl_export_mesh_view(mesh);
@@ -146,14 +146,12 @@ static int measure_level(const sl_export_config *c, const sl_mesh *input, const 
     row->components = topo.components;
     row->largest_area_fraction = topo.area > 0 ? topo.largest_component_area / topo.area : 0;
     row->watertight = topo.watertight;
-    if (!input || mesh->triangle_count == 0)
+    if (!fidelity || mesh->triangle_count == 0)
         return 0;
-    sl_mesh_distance_config dc = sl_mesh_distance_default_config();
-    dc.samples = c->fidelity_samples;
     sl_mesh_distance d;
     sl_error derr;
     sl_error_init(&derr);
-    rc = sl_mesh_distance_compute(input, &view, &dc, &d, io->progress, &derr);
+    rc = sl_distance_reference_compute(fidelity, &view, 1, &d, io->progress, &derr);
     if (rc == SL_E_INTERRUPTED || rc == SL_E_NOMEM) {
         sl_error_merge(err, &derr);
         return rc;
@@ -285,8 +283,8 @@ static int input_image(const sl_export_config *c, const sl_export_texture *textu
 
 int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
                           const sl_lod_mesh *mesh, const float *texcoords,
-                          const sl_lod_mesh *morph_to, const char *extras, const sl_mesh *input,
-                          const sl_export_frame *frame, const sl_export_texture *texture,
+                          const sl_lod_mesh *morph_to, const char *extras,
+                          const sl_distance_reference *fidelity, const sl_export_frame *frame, const sl_export_texture *texture,
                           const sl_stage_io *io, sl_export_result *row, sl_error *err)
 {
     sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z', NULL, morph_to,
@@ -321,6 +319,6 @@ int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
         rc = write_files(c, lv, mesh, &textured, extras, &glb, &row->glb, io, err);
     sl_export_baked_release(&baked);
     if (rc == 0)
-        rc = measure_level(c, input, mesh, io, row, err);
+        rc = measure_level(fidelity, mesh, io, row, err);
     return rc;
 }

@@ -228,7 +228,8 @@ static void drop(sl_level *lv, sl_lod_mesh *mesh)
 
 /* Writes and measures one distinct mesh; its GLB morphs to level `to` (>= 0). */
 static int one_mesh(const sl_export_config *c, const sl_level_list *list, const char *dir,
-                    uint32_t i, int to, const sl_mesh *input, const sl_export_frame *frame,
+                    uint32_t i, int to, const sl_distance_reference *fidelity,
+                    const sl_export_frame *frame,
                     const sl_export_texture *texture, const sl_stage_io *io,
                     sl_export_result *row, sl_error *err)
 {
@@ -257,7 +258,7 @@ static int one_mesh(const sl_export_config *c, const sl_level_list *list, const 
                  lv.name, lv.method);
     if (rc == 0)
         rc = sl_export_write_level(&files, &name, &mesh, lv.texcoords,
-                                   to >= 0 ? &coarser : NULL, extras, input, frame, texture, io,
+                                   to >= 0 ? &coarser : NULL, extras, fidelity, frame, texture, io,
                                    row, err);
     drop(&lv, &mesh);
     drop(&coarser_lv, &coarser);
@@ -346,7 +347,8 @@ static int manifest_and_pages(const sl_export_config *c, const sl_level_list *li
 }
 
 int sl_export_level_list(const sl_export_config *c, const char *list_dir, int model,
-                         const sl_mesh *input, const sl_export_frame *frame,
+                         const sl_mesh *input, const sl_distance_reference *fidelity,
+                         const sl_export_frame *frame,
                          const sl_export_texture *texture, const sl_stage_io *io, sl_error *err)
 {
     sl_level_list list;
@@ -366,7 +368,7 @@ int sl_export_level_list(const sl_export_config *c, const char *list_dir, int mo
     for (uint32_t i = 0; i < list.count && rc == 0; i++) {
         rc = sl_stage_step(io, "export", (double)i / list.count, err);
         if (rc == 0 && rows[i].file == (int)i)
-            rc = one_mesh(c, &list, list_dir, i, morph_coarser(c, &list, rows, i), input, frame,
+            rc = one_mesh(c, &list, list_dir, i, morph_coarser(c, &list, rows, i), fidelity, frame,
                           texture, io, &rows[i], err);
     }
     for (uint32_t i = 0; i < list.count && rc == 0; i++)

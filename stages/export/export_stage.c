@@ -282,8 +282,17 @@ static int export_run(const void *config, const sl_stage_io *io, sl_error *err)
      * texture: otherwise it goes now, not after the levels. */
     if (!measure && !texture.input)
         sl_mesh_release(&input);
-    rc = sl_export_level_list(c, list_dir, model_dir != NULL, measure ? &input : NULL, &frame,
-                              texture.input ? &texture : NULL, io, err);
+    /* The input's side of every level's measure (its tree and samples), made once. */
+    sl_distance_reference *fidelity = NULL;
+    if (measure) {
+        sl_mesh_distance_config dc = sl_mesh_distance_default_config();
+        dc.samples = c->fidelity_samples;
+        rc = sl_distance_reference_build(&input, &dc, &fidelity, err);
+    }
+    if (rc == 0)
+        rc = sl_export_level_list(c, list_dir, model_dir != NULL, measure ? &input : NULL,
+                                  fidelity, &frame, texture.input ? &texture : NULL, io, err);
+    sl_distance_reference_free(fidelity);
     sl_export_texture_close(&texture);
     sl_mesh_release(&input);
     return rc;
