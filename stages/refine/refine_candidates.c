@@ -21,6 +21,10 @@
 #include "geometry/mesh_distance.h"
 #include "stages/refine/refine_internal.h"
 
+/* How much farther from the input than the chosen candidate another may be, before the fit,
+ * and still be fitted to be compared with it (fit_chosen). */
+#define CLOSE_RMS 1.5
+
 void refine_candidate_release(refine_candidate *c)
 {
     sl_level_release_mesh(&c->level);
@@ -243,14 +247,32 @@ static int choose(const refine_item *it, const refine_candidate *cands, int coun
 typedef int (*make_fn)(refine_item *, const sl_rung *, uint64_t, refine_candidate *,
                        sl_error *);
 
+/* Whether a candidate measured before its collapse can be left there: `lead` (may be
+ * NULL), a candidate made before it that reached the count and keeps at least as much of
+ * the input, is already more than CLOSE_RMS times closer to the input than it is with all
+ * its triangles. Collapsing it would only take it farther (its triangles are a superset's
+ * worth of the surface), and a candidate past CLOSE_RMS of the chosen one is not fitted to
+ * be compared (fit_chosen), so it could not be chosen: its collapse, on a large scan the
+ * most of the stage's time, is spared (docs/levels.md, "Choice"). */
+static int outranked(const refine_item *it, const refine_candidate *lead,
+                     const refine_candidate *raw, uint64_t target)
+{
+    return lead && lead->measured && raw->measured && reached(&lead->level, target) &&
+           keeps(it, lead) >= keeps(it, raw) && raw->rms > CLOSE_RMS * lead->rms;
+}
+
 static int one(refine_item *it, const sl_rung *r, uint64_t target, make_fn make,
-               refine_candidate *cand, sl_error *err)
+               const refine_candidate *lead, refine_candidate *cand, sl_error *err)
 {
     double t0 = omp_get_wtime();
     memset(cand, 0, sizeof *cand);
     int rc = make(it, r, target, cand, err);
     int paper = r->kind == SL_RUNG_EXPANSIONS; /* published as paper 1 cuts it */
-    if (rc == 0 && !paper)
+    if (rc == 0 && !paper && lead && it->c->collapse && cand->level.triangle_count > target) {
+        rc = measure(it, cand, err); /* as it comes: is it worth collapsing? */
+        cand->outranked = rc == 0 && outranked(it, lead, cand, target);
+    }
+    if (rc == 0 && !paper && !cand->outranked)
         rc = refine_collapse(it, target, cand, err);
     if (rc == 0 && reached(&cand->level, target))
         cand->level.flags |= SL_LEVEL_REACHED;
@@ -292,7 +314,6 @@ static int fit_one(refine_item *it, refine_candidate *c, int remeasure, sl_error
  * triangles) than on the scan collapsed, so then both are fitted and measured again, and
  * the better one after the fit is chosen (usnm_1145291 at 10 %: the octree's 1.24 times the
  * scan's RMS before the fit, 0.83 times after). */
-#define CLOSE_RMS 1.5
 static int fit_chosen(refine_item *it, refine_candidate *cands, int count, uint64_t target,
                       int *chosen, sl_error *err)
 {
@@ -327,13 +348,20 @@ int refine_make_candidates(refine_item *it, const sl_rung *r, uint64_t target,
         if (it->c->best && it->is_mesh)
             makes[n++] = scan_candidate;
     }
-    *count = 0;
+    *count = n;
     *chosen = 0;
     int rc = 0;
-    for (int i = 0; i < n && rc == 0; i++) {
-        rc = one(it, r, target, makes[i], &cands[i], err);
-        *count = i + 1;
-        if (rc == 0 && n > 1)
+    /* The scan simplified first (the last in the list, so ties still go to the methods):
+     * the others are measured as they come against it, and one it outranks is left
+     * uncollapsed (outranked). */
+    int lead = makes[n - 1] == scan_candidate && n > 1 ? n - 1 : -1;
+    for (int at = 0; at < n && rc == 0; at++) {
+        int i = lead < 0 ? at : (at + n - 1) % n; /* lead, then 0, 1, ... */
+        rc = one(it, r, target, makes[i], i == lead || lead < 0 ? NULL : &cands[lead],
+                 &cands[i], err);
+        /* One candidate is measured too when the fit is to judge it by [refine] fit_floor. */
+        int judge = n > 1 || (it->c->fit && it->c->fit_floor > 0 && r->kind != SL_RUNG_EXPANSIONS);
+        if (rc == 0 && judge && !cands[i].outranked)
             rc = measure(it, &cands[i], err);
         if (rc == 0)
             rc = sl_stage_step(it->io, "refine", 0, err);

@@ -102,6 +102,9 @@ typedef struct refine_candidate {
     double rms, hausdorff;     /* fractions of the diagonal, when measured (after the
                                   collapse, before the fit: only the chosen is fitted) */
     int fitted;                /* the fit ran on it (the chosen one, and a close rival) */
+    int outranked;             /* measured before its collapse, already farther from the
+                                  input than the scan collapsed allows: left uncollapsed,
+                                  above its count (its figures are those before) */
     double rms_collapsed;      /* when it was fitted to be compared: its RMS before the fit */
     int watertight;            /* its topology, when measured */
     double largest_part;       /* the largest connected part's share of its area */

@@ -42,8 +42,8 @@ static const sl_option refine_options[] = {
      "docs/surface-fit.md): more fit closer, each costs about as much as the first. 4 keep "
      "about 90 % of 8 rounds' gain at half their cost (docs/levels.md)."},
     {"refine", "fit_floor", SL_OPT_DOUBLE, "1e-5", 0, 1, NULL,
-     "A level whose RMS distance to the input, measured before the fit (when its rung has "
-     "several candidates), is at most this fraction of the input's diagonal is not fitted: "
+     "A level whose RMS distance to the input, measured before the fit, is at most this "
+     "fraction of the input's diagonal is not fitted: "
      "the fit gains 5-10 % of the RMS there, below what the published GLB shows (its default "
      "14-bit positions alone are at least 1.8e-5 of the diagonal RMS), and on a large scan "
      "the top levels' fits were 70 % of the stage's time (docs/levels.md). 0 fits every "
@@ -277,6 +277,8 @@ void refine_report_candidates(sl_json *r, const refine_candidate *cands, int cou
             sl_json_double(r, "area_fraction", c->dropped.area_fraction);
             sl_json_object_end(r);
         }
+        if (c->outranked) /* measured as the method gave it, not collapsed (docs/levels.md) */
+            sl_json_bool(r, "outranked", 1);
         sl_json_bool(r, "fitted", c->fitted);
         if (c->measured) { /* after the collapse; after the fit too when it was compared
                               after it (docs/levels.md) */
