@@ -484,6 +484,11 @@ struct sl_distance_reference {
     uint64_t chunks;
 };
 
+const sl_triangle_bvh *sl_distance_reference_tree(const sl_distance_reference *r)
+{
+    return &r->bvh;
+}
+
 void sl_distance_reference_free(sl_distance_reference *r)
 {
     if (!r)

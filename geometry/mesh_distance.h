@@ -110,6 +110,9 @@ int sl_distance_reference_compute(const sl_distance_reference *ref, const sl_mes
                                   int vertices, sl_mesh_distance *out /* OUT */,
                                   sl_progress *progress, sl_error *err);
 void sl_distance_reference_free(sl_distance_reference *ref);
+/* A's tree inside the reference (read-only, valid until it is freed): for another user of a
+ * tree over A (geometry/surface_fit.h, `surface_tree`). */
+const struct sl_triangle_bvh *sl_distance_reference_tree(const sl_distance_reference *ref);
 
 /* The area samples that sl_mesh_distance_compute draws on a mesh (the same stratified
  * counts per triangle, the same positions for the same seed), as records for a caller

@@ -48,6 +48,10 @@ typedef struct sl_fit_config {
                                 points instead. */
     uint64_t seed;           /* their positions (default 0x5f17: not `compare`'s seed 1, so
                                 a fit is never judged on the samples it was fitted to) */
+    const struct sl_triangle_bvh *surface_tree; /* NULL, or a tree sl_triangle_bvh_build
+                                made over this input's triangles (sl_distance_reference_tree),
+                                borrowed for the reference's life instead of a second one
+                                (56 bytes per input triangle) */
     /* --- each fit (sl_surface_fit) --------------------------------------------------- */
     uint32_t input_per_triangle; /* input samples used per level triangle (default 8, at
                                     least 100 k, at most all of the reference's) */

@@ -33,7 +33,9 @@ struct sl_fit_reference {
     uint64_t sample_count;
     float *samples;            /* 3 per sample: area samples in triangle order, or the
                                   points */
-    sl_triangle_bvh surface;   /* the input's triangles (empty for a point set) */
+    const sl_triangle_bvh *surface; /* the input's triangles: own_surface or the config's
+                                       surface_tree (empty for a point set) */
+    sl_triangle_bvh own_surface;
     sl_triangle_bvh border;    /* its open edges as triangles (a, b, b): the BVH's closest
                                   point of a degenerate triangle is on its longest edge */
     uint64_t border_sample_count;

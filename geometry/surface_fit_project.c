@@ -140,7 +140,7 @@ static double project_level(const fit_project *p, const round_state *rs, uint64_
     if (p->level_hint[j] != UINT32_MAX)
         *hint = p->level_hint[j];
     sl_closest q;
-    sl_triangle_bvh_closest(&p->ref->surface, x, *hint, &q);
+    sl_triangle_bvh_closest(p->ref->surface, x, *hint, &q);
     *hint = p->level_hint[j] = q.triangle;
     set_residual(term, q.point, x);
     term->weight = (float)rs->weight[s->triangle];

@@ -20,7 +20,7 @@ void sl_fit_reference_free(sl_fit_reference *ref)
     if (!ref)
         return;
     free(ref->samples);
-    sl_triangle_bvh_release(&ref->surface);
+    sl_triangle_bvh_release(&ref->own_surface);
     sl_triangle_bvh_release(&ref->border);
     free(ref->border_samples);
     free(ref);
@@ -202,12 +202,17 @@ static int take_surface(sl_fit_reference *r, const sl_mesh *in, const sl_fit_con
         return sl_error_set(err, SL_E_LIMIT, 0, NULL, "fit input: %llu triangles",
                             (unsigned long long)in->triangle_count);
     uint64_t n = sample_budget(in, cfg);
-    rc = sl_triangle_bvh_build(&r->surface, in, err);
+    if (cfg->surface_tree && cfg->surface_tree->triangle_count == in->triangle_count) {
+        r->surface = cfg->surface_tree; /* borrowed: the same tree this mesh would give */
+    } else {
+        rc = sl_triangle_bvh_build(&r->own_surface, in, err);
+        r->surface = &r->own_surface;
+    }
     if (rc == SL_OK)
         rc = take_area_samples(r, in, n, cfg->seed, err);
     if (rc != SL_OK)
         return rc;
-    const sl_bvh_node *root = &r->surface.nodes[0];
+    const sl_bvh_node *root = &r->surface->nodes[0];
     double lo[3] = {root->lo[0], root->lo[1], root->lo[2]};
     double hi[3] = {root->hi[0], root->hi[1], root->hi[2]};
     r->diagonal = box_diagonal(lo, hi);
@@ -235,6 +240,7 @@ int sl_fit_reference_build(const sl_mesh *input, const sl_fit_config *config,
     sl_fit_reference *r = calloc(1, sizeof *r);
     if (!r)
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "fit reference");
+    r->surface = &r->own_surface;
     int rc = input->triangle_count == 0 ? take_points(r, input, err)
                                         : take_surface(r, input, cfg, err);
     if (rc != SL_OK) {

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry/mesh_distance.h"
 #include "geometry/qem_simplify.h"
 #include "geometry/surface_fit.h"
 #include "stages/refine/refine_internal.h"
@@ -90,6 +91,8 @@ static int fit(refine_item *it, refine_candidate *cand, sl_error *err)
     sl_level *lv = &cand->level;
     sl_fit_config cfg = sl_fit_default_config();
     cfg.iterations = it->c->fit_rounds;
+    if (it->distance_reference) /* one tree over the input for the measures and the fits */
+        cfg.surface_tree = sl_distance_reference_tree(it->distance_reference);
     int rc = it->fit_reference ? 0
                                : sl_fit_reference_build(&it->surface, &cfg, &it->fit_reference,
                                                         err);

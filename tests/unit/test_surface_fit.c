@@ -271,6 +271,22 @@ static void check_gain(const gain_case *c)
         CHECK_EQ_U64(flipped(&p, p.positions, one), 0);
         CHECK_MSG(!memcmp(one, two, 3 * p.vertex_count * sizeof *one) && !memcmp(&st, &st2, sizeof st),
                   "%s: 1 and 2 threads differ", p.name);
+        /* A reference borrowing a distance reference's tree over the same input (the
+         * refine stage's one tree) fits to the same bytes. */
+        sl_distance_reference *dref = NULL;
+        sl_error derr;
+        sl_error_init(&derr);
+        CHECK(sl_distance_reference_build(&p.input, NULL, &dref, &derr) == SL_OK);
+        sl_fit_config borrow = cfg;
+        borrow.surface_tree = dref ? sl_distance_reference_tree(dref) : NULL;
+        sl_fit_reference *bref = dref ? reference_of(&p.input, &borrow) : NULL;
+        sl_fit_stats st3;
+        float *three = bref ? fitted(&p, bref, &borrow, &st3) : NULL;
+        CHECK_MSG(three && !memcmp(one, three, 3 * p.vertex_count * sizeof *one) &&
+                  st3.rms_after == st2.rms_after, "%s: the borrowed tree fits otherwise", p.name);
+        free(three);
+        sl_fit_reference_free(bref);
+        sl_distance_reference_free(dref);
         uint64_t border_vertices;
         double gap = border_gap(&p, one, &border_vertices);
         CHECK_MSG(c->open == (border_vertices > 0), "%s: %llu border vertices", p.name,
