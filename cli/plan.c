@@ -102,13 +102,14 @@ static const stage_cost mesh_costs[] = {
      * octree's samples. plan_calibrate.py --methods best at 20k, 100k, 300k and 1 M (tori,
      * 2 threads, a loaded machine, 2026-12-06): before this line the plan said 0.09-0.26
      * of the measured time and 0.44 of the peak at 1 M, the refine stage's. Refitted when
-     * levels within [refine] fit_floor stopped being fitted and the measure's input side
-     * was made once (issue 38): tori of 0.1, 0.3, 1 and 5 M, 2 threads, one run each on a
-     * quiet machine, 2026-12-07: 9.6 / 14.8 / 27.4 / 86.2 s, 106 / 223 / 514 / 2,151 MB
-     * (at 1 M before: 76.1 s, 923 MB), and rocker_arm's 33 MB (20k triangles) for the
-     * memory's constant; the lines within 0.97-1.01 of the tori's times and 0.92-1.10 of
-     * the five peaks. */
-    {"refine", 6.45, 21.3, 0.82, 9.1, 558, 0.80, 0, 0},
+     * levels within [refine] fit_floor stopped being fitted, the measure's input side was
+     * made once, the fits borrowed its tree and an outranked octree cut stayed uncollapsed
+     * (issue 38): tori of 0.1, 0.3, 1 and 5 M, 2 threads, one run each on a quiet machine,
+     * 2026-12-07: 9.3 / 13.2 / 21.0 / 71.6 s, 100 / 207 / 461 / 1,956 MB (at 1 M before:
+     * 76.1 s, 923 MB). Time fitted (0.94-1.04 of each); memory's exponent set by the 1 -> 5 M
+     * growth (0.9), so it extrapolates to 20 M as the runs grow, not as the small sizes'
+     * fixed costs bend it (0.77 / 0.84 / 1.03 / 1.00 of the four). */
+    {"refine", 8.0, 13.8, 0.94, 20, 454, 0.90, 0, 0},
     /* The segment and cluster methods: plan_calibrate.py at 30k, 100k and 200k triangles on
      * a loaded machine, memory as measured, time from CPU seconds / 1.3 (what the wall
      * time is on a quiet one); their export writes levels from a level list, not a model,
