@@ -106,10 +106,11 @@ static const stage_cost mesh_costs[] = {
      * made once, the fits borrowed its tree and an outranked octree cut stayed uncollapsed
      * (issue 38): tori of 0.1, 0.3, 1 and 5 M, 2 threads, one run each on a quiet machine,
      * 2026-12-07: 9.3 / 13.2 / 21.0 / 71.6 s, 100 / 207 / 461 / 1,956 MB (at 1 M before:
-     * 76.1 s, 923 MB). Time fitted (0.94-1.04 of each); memory's exponent set by the 1 -> 5 M
-     * growth (0.9), so it extrapolates to 20 M as the runs grow, not as the small sizes'
-     * fixed costs bend it (0.77 / 0.84 / 1.03 / 1.00 of the four). */
-    {"refine", 8.0, 13.8, 0.94, 20, 454, 0.90, 0, 0},
+     * 76.1 s, 923 MB); then the growth benchmark's 1, 5 and 20 M (21.3 / 58.8 / 266 s,
+     * 461 / 1,956 / 7,594 MB; docs/benchmarks.md section 4; 380 bytes per input triangle
+     * at 20 M), and rocker_arm's 33 MB (20k): time fitted, within 0.92-1.11 of the five
+     * tori; memory the least largest error over all six, within 0.88-1.14. */
+    {"refine", 9.15, 10.56, 1.04, 18, 505.7, 0.86, 0, 0},
     /* The segment and cluster methods: plan_calibrate.py at 30k, 100k and 200k triangles on
      * a loaded machine, memory as measured, time from CPU seconds / 1.3 (what the wall
      * time is on a quiet one); their export writes levels from a level list, not a model,
@@ -155,8 +156,10 @@ static double thread_factor(int threads)
  * benchmark's 1/5/20 M surfaces on model format 3 (work 378-407, published 106-134 MB per
  * million triangles, default ladder, fidelity off; docs/benchmarks.md section 4), a from
  * the bundled scans (thumbnails, pages); the work's b again when priority.slpri lost the
- * leaves' neighbour links (format 2): 276 and 1,280 MB at 1 and 5 M. */
-static const double work_mb[2] = {1, 265}, published_mb[2] = {1.4, 110};
+ * leaves' neighbour links (format 2): 276 and 1,280 MB at 1 and 5 M; both again with the
+ * refine stage's level files in the work folder (growth benchmark 2026-12-07: work 375 /
+ * 1,729 / 6,759 MB, published 135 / 578 / 2,194 MB at 1, 5 and 20 M). */
+static const double work_mb[2] = {39, 336}, published_mb[2] = {27, 108};
 
 typedef struct plan_state {
     FILE *out;

@@ -342,7 +342,7 @@ def derive(models, st, oc, lod, gr, versions=None):
             for stage, p in per.items():
                 sp.setdefault(stage, []).append(p["speedup"]["median"])
         lines.append("whole pipeline throughput at 2 threads (input triangles per second of "
-                     "all six stages): " + ", ".join(
+                     "every stage, the refine stage included): " + ", ".join(
                          "%s %.3g" % (n, per["total"]["throughput"])
                          for n, per in h["stages"].items() if per.get("total")) + ".")
         lines.append("1 → 2 threads speed-up per stage (range over inputs): " + ", ".join(
