@@ -111,16 +111,25 @@ static const stage_cost mesh_costs[] = {
      * at 20 M), and rocker_arm's 33 MB (20k): time fitted, within 0.92-1.11 of the five
      * tori; memory the least largest error over all six, within 0.88-1.14. */
     {"refine", 9.15, 10.56, 1.04, 18, 505.7, 0.86, 0, 0},
-    /* The segment and cluster methods: plan_calibrate.py at 30k, 100k and 200k triangles on
-     * a loaded machine, memory as measured, time from CPU seconds / 1.3 (what the wall
-     * time is on a quiet one); their export writes levels from a level list, not a model,
-     * hence its own lines. */
-    {"segment", 1.05, 350, 1.0, 10, 318, 1.0, 0, 0},
-    {"cluster", 0.0, 52.1, 1.0, 6.5, 402, 1.0, 0, 0},
+    /* The segment and cluster methods: scripts/bench/bench_methods_scale.sh at 0.1, 0.3, 1
+     * and 5 M triangles (tori, 2 threads, quiet, 2026-12-07; issue 38), each line the least
+     * largest error over the four (segment: 5.4 / 14.4 / 82.7 / 344 s, 33 / 94 / 259 /
+     * 1,211 MB, within 0.77-1.19 and 0.96-1.04; cluster: 1.7 / 6.5 / 23.3 / 87.0 s, 37 /
+     * 117 / 291 / 1,345 MB, within 0.83-1.19 and 0.91-1.11). The lines before (30k-200k on
+     * a loaded machine) said 3.5-4.8 times segment's time at 1 and 5 M, and 1.4 times the
+     * peak of either. Their refine stage has one candidate per rung (no scan chain, no
+     * octree cut): its own lines, fitted alike on both methods (within 0.82-1.21 of the
+     * eight times, 0.93-1.07 of the four peaks). Their export writes levels from a level
+     * list, not a model, hence its own lines; with fidelity (the default) refitted on the
+     * same runs: 0.71-1.37 of the eight times, 1.01-1.07 of the peaks with IMAGES_MB. */
+    {"segment", 0, 63.5, 1.16, 0.9, 268.7, 0.91, 0, 0},
+    {"cluster", 0, 19.4, 1.04, 0, 303.3, 0.87, 0, 0},
+    {"segment:refine", 0, 16.0, 0.58, 57.2, 285.7, 0.94, 0, 0},
+    {"cluster:refine", 0, 16.0, 0.58, 57.2, 285.7, 0.94, 0, 0},
     {"segment:export", 0.45, 3.2, 1.0, 18, 160, 1.0, 0, 0},
-    {"segment:export+fidelity", 2.2, 18.4, 1.0, 16, 198, 1.0, 0, 0},
+    {"segment:export+fidelity", 1.43, 4.9, 0.80, 0, 235.4, 0.91, 0, 0},
     {"cluster:export", 0.45, 3.2, 1.0, 18, 160, 1.0, 0, 0},
-    {"cluster:export+fidelity", 2.2, 18.4, 1.0, 16, 198, 1.0, 0, 0},
+    {"cluster:export+fidelity", 1.43, 4.9, 0.80, 0, 235.4, 0.91, 0, 0},
 };
 
 static const stage_cost *find_cost(const char *key)

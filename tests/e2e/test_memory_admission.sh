@@ -45,7 +45,7 @@ check "and says why again" contains "big.ply: not run: expected to need about $n
 
 # Another method: the refusal names it and its own stage (issue 38: segment and cluster
 # at scale, bounded or refused by the plan with the memory they would need).
-run_scanlod run "$TMP/c.ini" -q -s lod.method=segment
+run_scanlod run "$TMP/c.ini" -q -s lod.method=segment -s run.memory_limit_mb=1024
 check "segment: refused too (exit $rc)" [ "$rc" -eq 75 ]
 check "the refusal names the method and its stage" \
   contains "big.ply: not run: expected to need about [0-9]* MB (method segment, its [a-z]* stage" "$err"
