@@ -188,7 +188,9 @@ void sl_export_report_result(const sl_export_config *c, const sl_export_frame *f
 
 /* Every level of the level list in list_dir (levels/level.h, the refine stage's):
  * written, measured, deduplicated and reported, with the manifest and the pages
- * (export_list.c). `model` says an LOD model is published beside them. */
+ * (export_list.c). `model` says an LOD model is published beside them; `input` (may be
+ * NULL) is the scan the pages describe, `fidelity` (may be NULL: not measured) its side of
+ * every level's measure. */
 int sl_export_level_list(const sl_export_config *c, const char *list_dir, int model,
                          const sl_mesh *input, const sl_distance_reference *fidelity,
                          const sl_export_frame *frame,

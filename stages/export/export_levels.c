@@ -284,7 +284,8 @@ static int input_image(const sl_export_config *c, const sl_export_texture *textu
 int sl_export_write_level(const sl_export_config *c, const sl_export_level *lv,
                           const sl_lod_mesh *mesh, const float *texcoords,
                           const sl_lod_mesh *morph_to, const char *extras,
-                          const sl_distance_reference *fidelity, const sl_export_frame *frame, const sl_export_texture *texture,
+                          const sl_distance_reference *fidelity, const sl_export_frame *frame,
+                          const sl_export_texture *texture,
                           const sl_stage_io *io, sl_export_result *row, sl_error *err)
 {
     sl_export_glb glb = {c->glb, frame->to_metres, frame->up == 'z', NULL, morph_to,

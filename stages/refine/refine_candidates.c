@@ -354,7 +354,7 @@ int refine_make_candidates(refine_item *it, const sl_rung *r, uint64_t target,
     /* The scan simplified first (the last in the list, so ties still go to the methods):
      * the others are measured as they come against it, and one it outranks is left
      * uncollapsed (outranked). */
-    int lead = makes[n - 1] == scan_candidate && n > 1 ? n - 1 : -1;
+    int lead = n > 1 && makes[n - 1] == scan_candidate ? n - 1 : -1;
     for (int at = 0; at < n && rc == 0; at++) {
         int i = lead < 0 ? at : (at + n - 1) % n; /* lead, then 0, 1, ... */
         rc = one(it, r, target, makes[i], i == lead || lead < 0 ? NULL : &cands[lead],
