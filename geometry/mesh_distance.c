@@ -13,24 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "geometry/triangle_bvh.h"
-
-#define CHUNK 4096
-
-typedef struct partial {
-    double max;      /* largest distance */
-    double sum;      /* of distances (area samples) */
-    double sum_sq;   /* of squared distances (area samples) */
-    uint64_t count;  /* samples */
-} partial;
-
-/* What validation learns about one mesh. */
-typedef struct surface {
-    const sl_mesh *mesh;
-    const char *name;      /* "A" or "B" */
-    uint8_t *used;         /* vertex_count flags: the vertex is a triangle corner */
-    double lo[3], hi[3];   /* bounds of the used vertices */
-} surface;
+#include "geometry/mesh_distance_internal.h"
 
 sl_mesh_distance_config sl_mesh_distance_default_config(void)
 {
@@ -98,7 +81,7 @@ static int surface_problem(const sl_mesh *m, uint8_t *used, double lo[3], double
     return SL_OK;
 }
 
-static int check_surface(surface *s, const sl_mesh *m, const char *name, const char *file,
+int md_check_surface(surface *s, const sl_mesh *m, const char *name, const char *file,
                          sl_error *err)
 {
     char why[160];
@@ -118,7 +101,7 @@ static int check_surface(surface *s, const sl_mesh *m, const char *name, const c
 int sl_mesh_check_surface(const sl_mesh *m, const char *file, sl_error *err)
 {
     surface s;
-    int rc = check_surface(&s, m, "", file, err);
+    int rc = md_check_surface(&s, m, "", file, err);
     free(s.used);
     return rc;
 }
@@ -142,7 +125,7 @@ static double unit_random(uint64_t seed, uint64_t triangle, uint64_t index, uint
     return (double)(h >> 11) * 0x1.0p-53;
 }
 
-static void accumulate(partial *acc, double d_sq, int area_sample)
+void md_accumulate(partial *acc, double d_sq, int area_sample)
 {
     double d = sqrt(d_sq);
     if (d > acc->max)
@@ -154,18 +137,12 @@ static void accumulate(partial *acc, double d_sq, int area_sample)
     acc->count++;
 }
 
-/* Where drawn samples go instead of being measured (sl_distance_reference's points,
- * sl_mesh_area_samples' records): either array, written from index 0. */
-typedef struct sample_store {
-    double *points;          /* 3 per sample, or NULL */
-    sl_area_sample *records; /* 1 per sample, or NULL */
-} sample_store;
 
 /* Area samples of the triangles in one chunk. `cum` is the area before the chunk and
  * `cum_end` the area after it as the serial prefix sum has it, so the counts of all
  * chunks telescope to exactly `n` samples. With `store`, the samples are written there
  * (count in the result) instead of measured against `target`. */
-static partial sample_triangles(const sl_mesh *m, uint64_t first, uint64_t end, double cum,
+partial md_sample_triangles(const sl_mesh *m, uint64_t first, uint64_t end, double cum,
                                 double cum_end, double total, uint64_t n, uint64_t seed,
                                 const sl_triangle_bvh *target, const sample_store *store)
 {
@@ -201,7 +178,7 @@ static partial sample_triangles(const sl_mesh *m, uint64_t first, uint64_t end, 
             sl_closest q;
             sl_triangle_bvh_closest(target, p, hint, &q);
             hint = q.triangle;
-            accumulate(&acc, q.distance_sq, 1);
+            md_accumulate(&acc, q.distance_sq, 1);
         }
     }
     return acc;
@@ -209,7 +186,7 @@ static partial sample_triangles(const sl_mesh *m, uint64_t first, uint64_t end, 
 
 /* The used vertices of `src` in [first, end); `in_means`: they also count towards mean
  * and rms (a point cloud's only samples), else towards the maximum alone. */
-static partial sample_vertices(const surface *src, uint64_t first, uint64_t end,
+partial md_sample_vertices(const surface *src, uint64_t first, uint64_t end,
                                const sl_triangle_bvh *target, int in_means)
 {
     partial acc = {0.0, 0.0, 0.0, 0};
@@ -222,19 +199,19 @@ static partial sample_vertices(const surface *src, uint64_t first, uint64_t end,
         sl_closest q;
         sl_triangle_bvh_closest(target, p, hint, &q);
         hint = q.triangle;
-        accumulate(&acc, q.distance_sq, in_means);
+        md_accumulate(&acc, q.distance_sq, in_means);
     }
     return acc;
 }
 
-static uint64_t chunks_of(uint64_t n)
+uint64_t md_chunks_of(uint64_t n)
 {
     return (n + CHUNK - 1) / CHUNK;
 }
 
 /* cum[c] = area of the triangles before chunk c, summed chunk by chunk in order;
  * cum has chunks + 1 entries. */
-static void prefix_areas(const sl_mesh *m, double *cum, uint64_t chunks)
+void md_prefix_areas(const sl_mesh *m, double *cum, uint64_t chunks)
 {
 #pragma omp parallel for schedule(static)
     for (uint64_t c = 0; c < chunks; c++) {
@@ -251,7 +228,7 @@ static void prefix_areas(const sl_mesh *m, double *cum, uint64_t chunks)
 
 /* Inside a parallel loop: whether to skip the rest, the run having been interrupted (by
  * `progress`, or as seen by another thread through the shared flag). */
-static int stopping(int *interrupted, sl_progress *progress)
+int md_stopping(int *interrupted, sl_progress *progress)
 {
     int stop;
 #pragma omp atomic read
@@ -265,7 +242,7 @@ static int stopping(int *interrupted, sl_progress *progress)
 
 /* A side's figures from its chunks' partials, summed in chunk order: the first
  * `area_chunks` are area samples (mean and RMS), the rest vertices (the maximum alone). */
-static void side_of(const partial *parts, uint64_t area_chunks, uint64_t chunks,
+void md_side_of(const partial *parts, uint64_t area_chunks, uint64_t chunks,
                     sl_distance_side *side)
 {
     partial area = {0.0, 0.0, 0.0, 0}, verts = {0.0, 0.0, 0.0, 0};
@@ -284,13 +261,13 @@ static void side_of(const partial *parts, uint64_t area_chunks, uint64_t chunks,
 }
 
 /* One direction: samples of `src` against `target`, into `side` (world units). */
-static int measure_side(const surface *src, const sl_triangle_bvh *target,
+int md_measure_side(const surface *src, const sl_triangle_bvh *target,
                         const sl_mesh_distance_config *cfg, int with_vertices,
                         sl_distance_side *side, sl_progress *progress, sl_error *err)
 {
     const sl_mesh *m = src->mesh;
-    uint64_t tri_chunks = chunks_of(m->triangle_count);
-    uint64_t vert_chunks = with_vertices ? chunks_of(m->vertex_count) : 0;
+    uint64_t tri_chunks = md_chunks_of(m->triangle_count);
+    uint64_t vert_chunks = with_vertices ? md_chunks_of(m->vertex_count) : 0;
     double *cum = malloc((tri_chunks + 1) * sizeof *cum);
     partial *parts = malloc((tri_chunks + vert_chunks) * sizeof *parts);
     if (!cum || !parts) {
@@ -299,23 +276,23 @@ static int measure_side(const surface *src, const sl_triangle_bvh *target,
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "sample bookkeeping of mesh %s",
                             src->name);
     }
-    prefix_areas(m, cum, tri_chunks);
-    double total = cum[tri_chunks]; /* > 0: check_surface() saw a nonzero area */
+    md_prefix_areas(m, cum, tri_chunks);
+    double total = cum[tri_chunks]; /* > 0: md_check_surface() saw a nonzero area */
 
     int interrupted = 0;
 #pragma omp parallel for schedule(dynamic, 1)
     for (uint64_t c = 0; c < tri_chunks + vert_chunks; c++) {
-        if (stopping(&interrupted, progress))
+        if (md_stopping(&interrupted, progress))
             continue;
         if (c < tri_chunks) {
             uint64_t end = (c + 1) * CHUNK < m->triangle_count ? (c + 1) * CHUNK
                                                                : m->triangle_count;
-            parts[c] = sample_triangles(m, c * CHUNK, end, cum[c], cum[c + 1], total,
+            parts[c] = md_sample_triangles(m, c * CHUNK, end, cum[c], cum[c + 1], total,
                                         cfg->samples, cfg->seed, target, NULL);
         } else {
             uint64_t v = (c - tri_chunks) * CHUNK;
             uint64_t end = v + CHUNK < m->vertex_count ? v + CHUNK : m->vertex_count;
-            parts[c] = sample_vertices(src, v, end, target, 0);
+            parts[c] = md_sample_vertices(src, v, end, target, 0);
         }
     }
     free(cum);
@@ -325,7 +302,7 @@ static int measure_side(const surface *src, const sl_triangle_bvh *target,
                             src->name);
     }
 
-    side_of(parts, tri_chunks, tri_chunks + vert_chunks, side);
+    md_side_of(parts, tri_chunks, tri_chunks + vert_chunks, side);
     free(parts);
     return SL_OK;
 }
@@ -337,7 +314,7 @@ static sl_distance_figures figures_over(sl_distance_figures w, double diagonal)
     return f;
 }
 
-static void fill_out(sl_mesh_distance *out, const surface *a)
+void md_fill_out(sl_mesh_distance *out, const surface *a)
 {
     double d_sq = 0.0;
     for (int i = 0; i < 3; i++)
@@ -381,13 +358,13 @@ static int check_points(surface *sa, const sl_mesh *a, sl_error *err)
 static int measure_points(const surface *src, const sl_triangle_bvh *target,
                           sl_distance_side *side, sl_error *err)
 {
-    uint64_t n = src->mesh->vertex_count, chunks = chunks_of(n);
+    uint64_t n = src->mesh->vertex_count, chunks = md_chunks_of(n);
     partial *parts = malloc(chunks * sizeof *parts);
     if (!parts)
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "sample bookkeeping of mesh A");
 #pragma omp parallel for schedule(dynamic, 1)
     for (uint64_t c = 0; c < chunks; c++)
-        parts[c] = sample_vertices(src, c * CHUNK, (c + 1) * CHUNK < n ? (c + 1) * CHUNK : n,
+        parts[c] = md_sample_vertices(src, c * CHUNK, (c + 1) * CHUNK < n ? (c + 1) * CHUNK : n,
                                    target, 1);
     partial all = {0.0, 0.0, 0.0, 0};
     for (uint64_t c = 0; c < chunks; c++) {
@@ -418,9 +395,9 @@ int sl_mesh_distance_compute(const sl_mesh *a, const sl_mesh *b,
     surface sa = {0}, sb = {0};
     sl_triangle_bvh bvh_a = {0}, bvh_b = {0};
     out->a_is_points = a->triangle_count == 0;
-    int rc = out->a_is_points ? check_points(&sa, a, err) : check_surface(&sa, a, "A", NULL, err);
+    int rc = out->a_is_points ? check_points(&sa, a, err) : md_check_surface(&sa, a, "A", NULL, err);
     if (rc == SL_OK)
-        rc = check_surface(&sb, b, "B", NULL, err);
+        rc = md_check_surface(&sb, b, "B", NULL, err);
     if (rc == SL_OK)
         rc = sl_triangle_bvh_build(&bvh_b, b, err);
     if (rc == SL_OK && out->a_is_points) {
@@ -429,21 +406,21 @@ int sl_mesh_distance_compute(const sl_mesh *a, const sl_mesh *b,
             rc = sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "distance of points A");
         sl_triangle_bvh_release(&bvh_b);
         if (rc == SL_OK)
-            fill_out(out, &sa);
+            md_fill_out(out, &sa);
         free(sa.used);
         free(sb.used);
         return rc;
     }
     if (rc == SL_OK)
-        rc = measure_side(&sa, &bvh_b, cfg, 1, &out->a_to_b, progress, err);
+        rc = md_measure_side(&sa, &bvh_b, cfg, 1, &out->a_to_b, progress, err);
     sl_triangle_bvh_release(&bvh_b);
     if (rc == SL_OK)
         rc = sl_triangle_bvh_build(&bvh_a, a, err);
     if (rc == SL_OK)
-        rc = measure_side(&sb, &bvh_a, cfg, 1, &out->b_to_a, progress, err);
+        rc = md_measure_side(&sb, &bvh_a, cfg, 1, &out->b_to_a, progress, err);
     sl_triangle_bvh_release(&bvh_a);
     if (rc == SL_OK)
-        fill_out(out, &sa);
+        md_fill_out(out, &sa);
     free(sa.used);
     free(sb.used);
     return rc;
@@ -451,183 +428,24 @@ int sl_mesh_distance_compute(const sl_mesh *a, const sl_mesh *b,
 
 uint64_t sl_mesh_area_samples_bound(const sl_mesh *m, uint64_t samples)
 {
-    return samples + chunks_of(m->triangle_count);
+    return samples + md_chunks_of(m->triangle_count);
 }
 
 int sl_mesh_area_samples(const sl_mesh *m, uint64_t samples, uint64_t seed,
                          sl_area_sample *out, uint64_t *count, sl_error *err)
 {
-    uint64_t chunks = chunks_of(m->triangle_count);
+    uint64_t chunks = md_chunks_of(m->triangle_count);
     double *cum = malloc((chunks + 1) * sizeof *cum);
     *count = 0;
     if (!cum)
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "area sample bookkeeping");
-    prefix_areas(m, cum, chunks);
+    md_prefix_areas(m, cum, chunks);
     for (uint64_t c = 0; c < chunks; c++) { /* serial: each chunk's samples follow */
         uint64_t end = (c + 1) * CHUNK < m->triangle_count ? (c + 1) * CHUNK : m->triangle_count;
         sample_store store = {NULL, out + *count};
-        *count += sample_triangles(m, c * CHUNK, end, cum[c], cum[c + 1], cum[chunks],
+        *count += md_sample_triangles(m, c * CHUNK, end, cum[c], cum[c + 1], cum[chunks],
                                    samples, seed, NULL, &store).count;
     }
     free(cum);
     return SL_OK;
-}
-
-/* --- one A, many B: the RMS alone ----------------------------------------------------- */
-
-struct sl_distance_reference {
-    surface a;
-    sl_triangle_bvh bvh;       /* A's tree, for B's samples */
-    sl_mesh_distance_config cfg;
-    double *points;            /* A's area samples, chunk after chunk */
-    uint64_t *chunk_start;     /* chunks + 1 offsets (in samples) into points */
-    uint64_t chunks;
-};
-
-const sl_triangle_bvh *sl_distance_reference_tree(const sl_distance_reference *r)
-{
-    return &r->bvh;
-}
-
-void sl_distance_reference_free(sl_distance_reference *r)
-{
-    if (!r)
-        return;
-    sl_triangle_bvh_release(&r->bvh);
-    free(r->a.used);
-    free(r->points);
-    free(r->chunk_start);
-    free(r);
-}
-
-int sl_distance_reference_build(const sl_mesh *a, const sl_mesh_distance_config *cfg,
-                                sl_distance_reference **out, sl_error *err)
-{
-    sl_mesh_distance_config defaults = sl_mesh_distance_default_config();
-    *out = NULL;
-    if (!cfg)
-        cfg = &defaults;
-    if (cfg->samples == 0)
-        return sl_error_set(err, SL_E_USAGE, 0, NULL, "sample count must be at least 1");
-    sl_distance_reference *r = calloc(1, sizeof *r);
-    if (!r)
-        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "distance reference");
-    r->cfg = *cfg;
-    int rc = check_surface(&r->a, a, "A", NULL, err);
-    if (rc == SL_OK)
-        rc = sl_triangle_bvh_build(&r->bvh, a, err);
-    r->chunks = chunks_of(a->triangle_count);
-    double *cum = NULL;
-    if (rc == SL_OK) {
-        cum = malloc((r->chunks + 1) * sizeof *cum);
-        r->chunk_start = malloc((r->chunks + 1) * sizeof *r->chunk_start);
-        /* the counts telescope to `samples`; a chunk never holds more than that */
-        r->points = malloc(3 * (cfg->samples + r->chunks) * sizeof *r->points);
-        if (!cum || !r->chunk_start || !r->points)
-            rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "%llu distance samples",
-                              (unsigned long long)cfg->samples);
-    }
-    if (rc == SL_OK) {
-        prefix_areas(a, cum, r->chunks);
-        double total = cum[r->chunks];
-        /* serial in chunk order: each chunk's samples follow the previous chunk's */
-        r->chunk_start[0] = 0;
-        for (uint64_t c = 0; c < r->chunks; c++) {
-            uint64_t end = (c + 1) * CHUNK < a->triangle_count ? (c + 1) * CHUNK
-                                                               : a->triangle_count;
-            sample_store store = {r->points + 3 * r->chunk_start[c], NULL};
-            partial got = sample_triangles(a, c * CHUNK, end, cum[c], cum[c + 1], total,
-                                           cfg->samples, cfg->seed, NULL, &store);
-            r->chunk_start[c + 1] = r->chunk_start[c] + got.count;
-        }
-    }
-    free(cum);
-    if (rc != SL_OK) {
-        sl_distance_reference_free(r);
-        return rc;
-    }
-    *out = r;
-    return SL_OK;
-}
-
-/* A's stored area samples (and, `with_vertices`, its used vertices) against B's tree, as
- * measure_side has them: the same chunks, each from a fresh hint, summed in order. */
-static int reference_side(const sl_distance_reference *r, const sl_triangle_bvh *bvh_b,
-                          int with_vertices, sl_distance_side *side, sl_progress *progress,
-                          sl_error *err)
-{
-    const sl_mesh *m = r->a.mesh;
-    uint64_t vert_chunks = with_vertices ? chunks_of(m->vertex_count) : 0;
-    uint64_t total = r->chunks + vert_chunks;
-    partial *parts = malloc((total ? total : 1) * sizeof *parts);
-    if (!parts)
-        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "sample bookkeeping of mesh A");
-    int interrupted = 0;
-#pragma omp parallel for schedule(dynamic, 1)
-    for (uint64_t c = 0; c < total; c++) {
-        if (stopping(&interrupted, progress))
-            continue;
-        if (c >= r->chunks) {
-            uint64_t v = (c - r->chunks) * CHUNK;
-            uint64_t end = v + CHUNK < m->vertex_count ? v + CHUNK : m->vertex_count;
-            parts[c] = sample_vertices(&r->a, v, end, bvh_b, 0);
-            continue;
-        }
-        partial acc = {0.0, 0.0, 0.0, 0};
-        uint32_t hint = UINT32_MAX;
-        for (uint64_t i = r->chunk_start[c]; i < r->chunk_start[c + 1]; i++) {
-            sl_closest q;
-            sl_triangle_bvh_closest(bvh_b, r->points + 3 * i, hint, &q);
-            hint = q.triangle;
-            accumulate(&acc, q.distance_sq, 1);
-        }
-        parts[c] = acc;
-    }
-    if (interrupted) {
-        free(parts);
-        return sl_error_set(err, SL_E_INTERRUPTED, 0, NULL, "distance sampling of mesh A");
-    }
-    side_of(parts, r->chunks, total, side);
-    free(parts);
-    return SL_OK;
-}
-
-/* Both sides against B: with_vertices as in sl_mesh_distance_compute (every figure), or
- * without (the RMS alone). */
-static int reference_measure(const sl_distance_reference *r, const sl_mesh *b, int with_vertices,
-                             sl_mesh_distance *out, sl_progress *progress, sl_error *err)
-{
-    memset(out, 0, sizeof *out);
-    surface sb = {0};
-    sl_triangle_bvh bvh_b = {0};
-    int rc = check_surface(&sb, b, "B", NULL, err);
-    if (rc == SL_OK)
-        rc = sl_triangle_bvh_build(&bvh_b, b, err);
-    if (rc == SL_OK)
-        rc = reference_side(r, &bvh_b, with_vertices, &out->a_to_b, progress, err);
-    sl_triangle_bvh_release(&bvh_b);
-    if (rc == SL_OK)
-        rc = measure_side(&sb, &r->bvh, &r->cfg, with_vertices, &out->b_to_a, progress, err);
-    if (rc == SL_OK)
-        fill_out(out, &r->a);
-    free(sb.used);
-    return rc;
-}
-
-int sl_distance_reference_rms(const sl_distance_reference *r, const sl_mesh *b, double *rms,
-                              sl_progress *progress, sl_error *err)
-{
-    *rms = INFINITY;
-    sl_mesh_distance d;
-    int rc = reference_measure(r, b, 0, &d, progress, err);
-    if (rc == SL_OK)
-        *rms = d.fraction.rms;
-    return rc;
-}
-
-int sl_distance_reference_compute(const sl_distance_reference *r, const sl_mesh *b,
-                                  int vertices, sl_mesh_distance *out, sl_progress *progress,
-                                  sl_error *err)
-{
-    return reference_measure(r, b, vertices != 0, out, progress, err);
 }
