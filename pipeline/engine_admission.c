@@ -24,11 +24,7 @@ int sl_engine_admitted(sl_engine *e, int s, const sl_ticket *t, const char *sour
     if (budget == 0 || need <= (double)budget)
         return 1;
     e->counts.transient++;
-    static const char *const methods[] = {"octree", "segment", "cluster", "best"};
-    const char *method = "?";
-    for (int m = 0; m < 4; m++)
-        if (e->method == 1u << m)
-            method = methods[m];
+    const char *method = sl_config_string(e->cfg, "lod", "method"); /* as choose_method read it */
     snprintf(e->admission, sizeof e->admission,
              "not run: expected to need about %.0f MB (method %s, its %s stage; `scanlod "
              "plan`), over the %llu MB of %s; raise [run] memory_limit_mb, run it on a larger "

@@ -355,12 +355,12 @@ int refine_make_candidates(refine_item *it, const sl_rung *r, uint64_t target,
      * the others are measured as they come against it, and one it outranks is left
      * uncollapsed (outranked). */
     int lead = n > 1 && makes[n - 1] == scan_candidate ? n - 1 : -1;
+    /* One candidate is measured too when the fit is to judge it by [refine] fit_floor. */
+    int judge = n > 1 || (it->c->fit && it->c->fit_floor > 0 && r->kind != SL_RUNG_EXPANSIONS);
     for (int at = 0; at < n && rc == 0; at++) {
         int i = lead < 0 ? at : (at + n - 1) % n; /* lead, then 0, 1, ... */
         rc = one(it, r, target, makes[i], i == lead || lead < 0 ? NULL : &cands[lead],
                  &cands[i], err);
-        /* One candidate is measured too when the fit is to judge it by [refine] fit_floor. */
-        int judge = n > 1 || (it->c->fit && it->c->fit_floor > 0 && r->kind != SL_RUNG_EXPANSIONS);
         if (rc == 0 && judge && !cands[i].outranked)
             rc = measure(it, &cands[i], err);
         if (rc == 0)
