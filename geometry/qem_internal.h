@@ -140,6 +140,8 @@ typedef struct qem_state {
 } qem_state;
 
 /* qem_setup.c */
+/* The input's and the config's checks (sl_qem_simplify's errors). */
+int qem_check_input(const sl_qem_mesh *in, const sl_qem_config *cfg, sl_error *err);
 int qem_setup(qem_state *st, const sl_qem_mesh *in, const sl_qem_config *cfg, sl_error *err);
 void qem_release(qem_state *st);
 

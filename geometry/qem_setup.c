@@ -24,7 +24,7 @@
 #include "geometry/qem_internal.h"
 #include "geometry/vec3.h"
 
-static int check_input(const sl_qem_mesh *in, const sl_qem_config *cfg, sl_error *err)
+int qem_check_input(const sl_qem_mesh *in, const sl_qem_config *cfg, sl_error *err)
 {
     if (cfg->allow_topology_change < SL_QEM_TOPOLOGY_KEEP ||
         cfg->allow_topology_change > SL_QEM_TOPOLOGY_RELAX)
@@ -33,10 +33,11 @@ static int check_input(const sl_qem_mesh *in, const sl_qem_config *cfg, sl_error
                             cfg->allow_topology_change);
     if (!(cfg->border_weight >= 0 && cfg->border_weight < 1e12) ||
         !(cfg->attribute_weight >= 0 && cfg->attribute_weight < 1e12) ||
-        !(cfg->max_error >= 0 && isfinite(cfg->max_error)))
+        !(cfg->max_error >= 0 && isfinite(cfg->max_error)) ||
+        !(cfg->diagonal >= 0 && isfinite(cfg->diagonal)))
         return sl_error_set(err, SL_E_BADINPUT, 0, NULL,
-                            "simplify: border_weight, attribute_weight and max_error must be "
-                            "finite and >= 0");
+                            "simplify: border_weight, attribute_weight, max_error and diagonal "
+                            "must be finite and >= 0");
     if (in->vertex_count > UINT32_MAX - 1 || in->triangle_count > SL_ADJACENCY_MAX_TRIANGLES)
         return sl_error_set(err, SL_E_LIMIT, 0, NULL,
                             "simplify: %llu vertices, %llu triangles: at most 2^32 - 2 and %u",
@@ -161,6 +162,8 @@ static void place_points(qem_state *st)
         st->origin[i] = st->point_count ? (lo[i] + hi[i]) / 2 : 0;
         d2 += st->point_count ? (hi[i] - lo[i]) * (hi[i] - lo[i]) : 0;
     }
+    if (st->cfg.diagonal > 0) /* a brick of a larger mesh: the whole's scale */
+        d2 = st->cfg.diagonal * st->cfg.diagonal;
     st->diagonal = sqrt(d2);
     st->key_scale = d2 > 0 ? 1 / (d2 * sqrt(d2)) : 1;
     for (uint32_t p = 0; p < st->point_count; p++)
@@ -355,7 +358,7 @@ int qem_setup(qem_state *st, const sl_qem_mesh *in, const sl_qem_config *cfg, sl
     memset(st, 0, sizeof *st);
     st->in = in;
     st->cfg = *cfg;
-    int rc = check_input(in, cfg, err);
+    int rc = qem_check_input(in, cfg, err);
     if (rc)
         return rc;
     st->vertex_count = (uint32_t)in->vertex_count;

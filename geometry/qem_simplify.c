@@ -123,6 +123,10 @@ static int run(qem_state *st, sl_progress *progress, sl_error *err)
     uint64_t made = 0, compacted = 0; /* the queue's size after the last compaction */
     st->stats.stop = SL_QEM_STOP_TARGET;
     st->slack = target / 100;
+    float *curve = st->cfg.error_curve;
+    double worst = 0;
+    for (uint64_t c = start; curve && c <= st->triangle_count; c++)
+        curve[c] = 0; /* (degenerate triangles dropped: start below the input's count) */
     while (st->live_triangles > target) {
         qem_entry e;
         int rc = qem_queue_pop(&st->queue, st->point, &e);
@@ -135,8 +139,14 @@ static int run(qem_state *st, sl_progress *progress, sl_error *err)
             st->stats.stop = SL_QEM_STOP_TOPOLOGY;
             break;
         }
+        uint64_t before = st->live_triangles;
         if (rc > 0)
             rc = step(st, &e);
+        if (rc == 1 && curve) { /* the running maximum at each count passed */
+            worst = fmax(worst, st->stats.last_error);
+            for (uint64_t c = st->live_triangles; c < before; c++)
+                curve[c] = (float)worst;
+        }
         if (rc < 0)
             return sl_error_set(err, SL_E_NOMEM, 0, NULL, "simplify: queue");
         if (rc == 2) {

@@ -69,6 +69,16 @@ typedef struct sl_qem_config {
     const uint8_t *locked;     /* NULL, or per input vertex: nonzero = never moved or
                                   removed (brick borders); its position's other wedges too */
     int allow_topology_change; /* enum sl_qem_topology; default SL_QEM_TOPOLOGY_KEEP */
+    double diagonal;           /* the bounding-box diagonal the attribute weight and the
+                                  queue's keys are scaled by, world; 0 (default) = the
+                                  input's own (a brick of a larger mesh gives the whole's,
+                                  so its costs compare with its neighbours') */
+    float *error_curve;        /* NULL, or room for the input's triangle count + 1 entries:
+                                  entry c set to the largest collapse error (world) made
+                                  before the live triangles first fell to c or below, for
+                                  c from the input's count down to the output's (the
+                                  others left as they were; non-increasing in c): what a
+                                  brick tells its pass (qem_bricked.c) */
 } sl_qem_config;
 
 /* What the collapses may do to the topology (the relaxed rules above). */
@@ -123,6 +133,23 @@ sl_qem_config sl_qem_default_config(void);
 int sl_qem_simplify(const sl_qem_mesh *in, const sl_qem_config *cfg,
                     sl_qem_mesh *out /* OUT */, sl_qem_stats *stats /* OUT */,
                     sl_progress *progress, sl_error *err);
+
+/* The same by bricks (qem_bricked.c; docs/simplify.md "By bricks"), for a mesh too large
+ * to simplify whole in memory or on one thread: bricks of at most `brick_triangles`
+ * triangles, consecutive in the Morton order of their centroids, each simplified alone and
+ * in parallel (OpenMP) with the points it shares with another brick locked, all stopping
+ * at one collapse error (a sample of the bricks' error curves brings the count there);
+ * then passes on strips around the borders, cut into bricks elsewhere; once the mesh fits
+ * one brick, sl_qem_simplify on the whole. Peak memory: about 180 bytes per triangle of a
+ * brick per thread, plus the passes' meshes. RMS within about 10 % of the whole's, often
+ * closer (docs/simplify.md). Output as sl_qem_simplify's (vertices in the order of the
+ * input vertices they descend from; triangles brick by brick); stats summed over bricks
+ * and passes, `stop` that of the whole. brick_triangles 0, or at least the input's:
+ * exactly sl_qem_simplify. Same errors. */
+int sl_qem_simplify_bricked(const sl_qem_mesh *in, const sl_qem_config *cfg,
+                            uint64_t brick_triangles, sl_qem_mesh *out /* OUT */,
+                            sl_qem_stats *stats /* OUT */, sl_progress *progress,
+                            sl_error *err);
 
 void sl_qem_mesh_release(sl_qem_mesh *m); /* frees every array and zeroes *m */
 

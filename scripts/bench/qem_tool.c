@@ -1,8 +1,9 @@
-/* qem_tool IN.ply OUT.ply TARGET [endpoint] [relaxed|relaxed-last]: runs the quadric
+/* qem_tool IN.ply OUT.ply TARGET [endpoint] [relaxed|relaxed-last] [bricks=N]: runs the quadric
  * simplifier (geometry/qem_simplify.h) on a PLY and writes the result, for the comparisons
  * of docs/simplify.md. TARGET is a triangle count, or a fraction of the input's (< 1);
  * endpoint: no optimal placement; relaxed, relaxed-last: allow_topology_change
- * SL_QEM_TOPOLOGY_RELAX, SL_QEM_TOPOLOGY_RELAX_LAST.
+ * SL_QEM_TOPOLOGY_RELAX, SL_QEM_TOPOLOGY_RELAX_LAST; bricks=N: by bricks of N triangles
+ * (sl_qem_simplify_bricked; N < 1: that fraction of the input's).
  * Prints one line: triangles, seconds, peak memory growth, stop reason, counters. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -32,7 +33,7 @@ int main(int argc, char **argv)
 {
     if (argc < 4) {
         fprintf(stderr, "usage: qem_tool IN.ply OUT.ply TARGET [endpoint] "
-                        "[relaxed|relaxed-last]\n");
+                        "[relaxed|relaxed-last] [bricks=N]\n");
         return 64;
     }
     sl_error err;
@@ -45,7 +46,12 @@ int main(int argc, char **argv)
     double t = atof(argv[3]);
     sl_qem_config cfg = sl_qem_default_config();
     cfg.target_triangles = t < 1 ? (uint64_t)(t * mesh.triangle_count + 0.5) : (uint64_t)t;
+    uint64_t brick = 0;
     for (int i = 4; i < argc; i++) {
+        if (!strncmp(argv[i], "bricks=", 7)) {
+            double b = atof(argv[i] + 7);
+            brick = b < 1 ? (uint64_t)(b * mesh.triangle_count) : (uint64_t)b;
+        }
         cfg.optimal_placement &= strcmp(argv[i], "endpoint") != 0;
         if (!strcmp(argv[i], "relaxed"))
             cfg.allow_topology_change = SL_QEM_TOPOLOGY_RELAX;
@@ -58,7 +64,7 @@ int main(int argc, char **argv)
     sl_qem_stats st;
     long before = peak_kb();
     double t0 = sl_now_seconds(), c0 = cpu_seconds();
-    int rc = sl_qem_simplify(&in, &cfg, &out, &st, NULL, &err);
+    int rc = sl_qem_simplify_bricked(&in, &cfg, brick, &out, &st, NULL, &err);
     double seconds = sl_now_seconds() - t0, cpu = cpu_seconds() - c0;
     if (rc) {
         fprintf(stderr, "qem_tool: %s\n", err.message);

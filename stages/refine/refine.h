@@ -33,6 +33,8 @@ typedef struct sl_refine_config {
     int best;                /* [lod] method = best: the scan simplified is a candidate */
     int collapse;            /* quadric edge collapse to the rung's count */
     int relax_topology;      /* ... giving up the topology when it alone stops above it */
+    uint64_t collapse_brick_triangles; /* ... by bricks of this many from a larger level
+                                          (0: whole) */
     int fit;                 /* vertices fitted to the input surface */
     int fit_rounds;          /* the fit's projection and solve rounds */
     double fit_floor;        /* no fit for a level measured within this of the input

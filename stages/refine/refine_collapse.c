@@ -1,7 +1,7 @@
 /* A candidate brought to its count and fitted to the input (refine_internal.h).
  *
  * Collapse: quadric edge collapse (geometry/qem_simplify.h) from the method's level to the
- * rung's count, keeping its topology, borders, colours and texture seams; where that alone
+ * rung's count (by bricks from a level above [refine] collapse_brick_triangles), keeping its topology, borders, colours and texture seams; where that alone
  * stops above the count, its relaxed phase gives up the topology for the rest of the way. Fit: its
  * vertices moved, connectivity fixed, to the least squared distance between it and the
  * input, both ways (geometry/surface_fit.h), against one reference per item built on the
@@ -64,13 +64,14 @@ static int collapse(refine_item *it, uint64_t target, refine_candidate *cand, sl
     cfg.target_triangles = target;
     sl_qem_mesh out;
     sl_qem_stats stats;
-    int rc = sl_qem_simplify(&in, &cfg, &out, &stats, it->io->progress, err);
+    uint64_t brick = it->c->collapse_brick_triangles;
+    int rc = sl_qem_simplify_bricked(&in, &cfg, brick, &out, &stats, it->io->progress, err);
     if (rc == 0 && it->c->relax_topology && stats.stop == SL_QEM_STOP_TOPOLOGY &&
         out.triangle_count > target) {
         cand->strict_triangles = out.triangle_count;
         sl_qem_mesh_release(&out);
         cfg.allow_topology_change = SL_QEM_TOPOLOGY_RELAX;
-        rc = sl_qem_simplify(&in, &cfg, &out, &stats, it->io->progress, err);
+        rc = sl_qem_simplify_bricked(&in, &cfg, brick, &out, &stats, it->io->progress, err);
         cand->relaxed_collapses = rc == 0 ? stats.relaxed_collapses : 0;
     }
     if (rc)

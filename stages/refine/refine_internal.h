@@ -84,6 +84,15 @@ typedef struct refine_item {
     } methods[2];
     int method_count;
     sl_level scan_chain;         /* best: the last scan candidate before its fit */
+    struct refine_raw_cut {      /* the last octree cut measured before its collapse: the
+                                    next rung's is often the same cut (capped at the
+                                    input's count), measured once */
+        int valid;
+        uint32_t k;
+        uint64_t triangles;
+        double rms, hausdorff, largest_part;
+        int watertight;
+    } raw_cut;
     struct sl_fit_reference *fit_reference; /* the input prepared for fits, on the first */
     struct sl_distance_reference *distance_reference; /* ... for measures, on the first */
 } refine_item;

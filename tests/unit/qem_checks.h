@@ -55,6 +55,23 @@ static inline void normal_of(const float *pos, const uint32_t *t, double n[3])
     sl_cross3(e, f, n);
 }
 
+/* A mesh as the simplifier's borrowed input. */
+static inline sl_qem_mesh view_of(sl_mesh *m)
+{
+    sl_qem_mesh q = {m->vertex_count, m->positions, m->colors, m->texcoords, m->triangle_count,
+                     m->triangles, NULL};
+    return q;
+}
+
+/* The same vertices (positions and sources) and triangles, byte for byte. */
+static inline int same_mesh(const sl_qem_mesh *a, const sl_qem_mesh *b)
+{
+    return a->vertex_count == b->vertex_count && a->triangle_count == b->triangle_count &&
+           !memcmp(a->positions, b->positions, 12 * a->vertex_count) &&
+           !memcmp(a->source, b->source, 4 * a->vertex_count) &&
+           !memcmp(a->triangles, b->triangles, 12 * a->triangle_count);
+}
+
 /* The tree of the input's triangles (a failure is a failed check). */
 static inline void build_bvh(const sl_qem_mesh *in, sl_triangle_bvh *bvh)
 {

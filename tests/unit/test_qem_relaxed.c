@@ -17,6 +17,7 @@
 
 #include "tests/check.h"
 #include "tests/unit/analytic_meshes.h"
+#include "tests/unit/qem_checks.h"
 #include "geometry/qem_simplify.h"
 #include "geometry/vec3.h"
 
@@ -214,14 +215,6 @@ static void test_targets(void)
     tm_free(&board);
     tm_free(&field);
     tm_free(&set);
-}
-
-static int same_mesh(const sl_qem_mesh *a, const sl_qem_mesh *b)
-{
-    return a->vertex_count == b->vertex_count && a->triangle_count == b->triangle_count &&
-           !memcmp(a->positions, b->positions, 12 * a->vertex_count) &&
-           !memcmp(a->source, b->source, 4 * a->vertex_count) &&
-           !memcmp(a->triangles, b->triangles, 12 * a->triangle_count);
 }
 
 /* The same bytes on 1 and 2 threads; locked vertices (the board's left column of cells)

@@ -30,13 +30,6 @@ static int simplify(const sl_qem_mesh *in, const sl_qem_config *cfg, sl_qem_mesh
     return rc;
 }
 
-static sl_qem_mesh view_of(sl_mesh *m)
-{
-    sl_qem_mesh q = {m->vertex_count, m->positions, m->colors, m->texcoords, m->triangle_count,
-                     m->triangles, NULL};
-    return q;
-}
-
 static sl_qem_mesh view_of_test(test_mesh *m)
 {
     sl_qem_mesh q = {m->vertex_count, m->positions, NULL, NULL, m->triangle_count, m->triangles, NULL};
@@ -369,14 +362,6 @@ static void test_texcoords(void)
         sl_qem_mesh_release(&out);
     }
     sl_mesh_release(&m);
-}
-
-static int same_mesh(const sl_qem_mesh *a, const sl_qem_mesh *b)
-{
-    return a->vertex_count == b->vertex_count && a->triangle_count == b->triangle_count &&
-           !memcmp(a->positions, b->positions, 12 * a->vertex_count) &&
-           !memcmp(a->source, b->source, 4 * a->vertex_count) &&
-           !memcmp(a->triangles, b->triangles, 12 * a->triangle_count);
 }
 
 /* Same bytes on 1 and 2 threads; locked vertices (a slab of the model) kept exactly. */
