@@ -4,8 +4,8 @@
  * one thread; the refine stage's first collapse takes the whole scan (20 M triangles: 4 GB).
  * Here the mesh is cut into bricks of at most `brick_triangles` triangles, consecutive in
  * the Morton order of their centroids; each brick is simplified alone with the points it
- * shares with another brick locked, so the bricks stitch back without a crack whatever
- * each did, and the bricks run in parallel. Their counts follow one error, as one greedy
+ * shares with another brick (and the ring around them) locked, so the bricks stitch back
+ * without a crack whatever each did, and the bricks run in parallel. Their counts follow one error, as one greedy
  * queue over the whole would: a sample of the bricks records its error curves, and every
  * brick stops at the error that brings the sample to the count. The locked borders stay
  * at full density; the next passes take them down on strips around them, cut into bricks
@@ -35,9 +35,9 @@
                                  the sharing by error may put it. Later passes (what the
                                  borders kept) run to the share: one run, not two */
 #define MORTON_BITS 20        /* per axis, before the shift */
-#define STRIP_RINGS 3         /* a later pass works on the triangles at least this many
+#define STRIP_RINGS 6         /* a later pass works on the triangles at least this many
                                  rings around the last pass's brick borders (its excess) */
-#define STRIP_ROOM 4          /* ... and at least this many times the excess */
+#define STRIP_ROOM 8          /* ... and at least this many times the excess */
 #define BRICK_SAMPLE 4        /* the first pass prices every this-many-th brick (a curve
                                  run) and stops the others at the error the sample gives */
 #define BRICK_SAMPLE_MARGIN 200 /* ... aiming 1/this of the triangles above the count, for
@@ -147,7 +147,8 @@ static int cut_bricks(const sl_qem_mesh *m, const uint8_t *active, uint64_t bric
 enum {
     LOCK_CALLER = 1,  /* the caller's */
     LOCK_BORDER = 2,  /* its position is used by triangles of two bricks */
-    LOCK_OUTSIDE = 4  /* ... by a brick's and a triangle the pass leaves alone */
+    LOCK_OUTSIDE = 4, /* ... by a brick's and a triangle the pass leaves alone */
+    LOCK_RING = 8     /* shares a triangle with such a point (below) */
 };
 
 /* Per vertex, the LOCK_ bits; *border_triangles: the active triangles with a corner on a
@@ -194,11 +195,23 @@ static uint8_t *shared_points(const sl_qem_mesh *m, const brick_cut *cut, const 
         if (locked && locked[v])
             out[v] |= LOCK_CALLER;
     }
+    /* The ring around them locked too. Why: a brick sees only its own triangles, so its
+     * link condition cannot see an edge between two border points that lies in another
+     * brick, and a collapse of a point next to both could give that edge a third triangle
+     * (eight spheres, test_qem_bricked). With the ring locked nothing collapses into a
+     * border point: their stars do not change in any brick. The next pass's strips take
+     * the ring down with the borders. */
+    for (uint64_t t = 0; t < m->triangle_count; t++) {
+        const uint32_t *c = m->triangles + 3 * t;
+        if ((out[c[0]] | out[c[1]] | out[c[2]]) & (LOCK_BORDER | LOCK_OUTSIDE))
+            for (int k = 0; k < 3; k++)
+                out[c[k]] |= LOCK_RING;
+    }
     *border_triangles = 0;
     for (uint64_t t = 0; t < m->triangle_count; t++)
         if (!active || active[t])
             *border_triangles += ((out[m->triangles[3 * t]] | out[m->triangles[3 * t + 1]] |
-                                   out[m->triangles[3 * t + 2]]) & LOCK_BORDER) != 0;
+                                   out[m->triangles[3 * t + 2]]) & (LOCK_BORDER | LOCK_RING)) != 0;
     free(owner);
     free(outside);
     free(point);
@@ -654,7 +667,7 @@ static int brick_pass(const sl_qem_mesh *m, const uint8_t *active, const sl_qem_
             rc = sl_error_set(err, SL_E_NOMEM, 0, NULL, "simplify: brick borders");
         }
         for (uint64_t v = 0; rc == 0 && v < out->vertex_count; v++)
-            (*border_out)[v] = (locked[out->source[v]] & LOCK_BORDER) != 0;
+            (*border_out)[v] = (locked[out->source[v]] & (LOCK_BORDER | LOCK_RING)) != 0;
     }
     free(locked);
     for (uint64_t b = 0; b < cut.count; b++) {
@@ -755,11 +768,11 @@ int sl_qem_simplify_bricked(const sl_qem_mesh *in, const sl_qem_config *cfg,
     sl_qem_mesh cur = *in; /* borrowed until the first pass */
     cur.source = NULL;
     uint8_t *border = NULL; /* per vertex of cur: on the last pass's brick borders */
-    int owned = 0, idle = 0, max_error = 0, whole = 0, full = 1;
+    int owned = 0, max_error = 0, whole = 0, full = 1;
+    uint64_t brick = brick_triangles; /* doubled when a pass could take nothing (below) */
     for (int pass = 0; rc == 0; pass++) {
-        int last = owned && cur.triangle_count <= brick_triangles;
-        if (owned && (cur.triangle_count <= target || whole || pass == BRICK_MAX_PASSES ||
-                      idle == 2))
+        int last = owned && cur.triangle_count <= brick;
+        if (owned && (cur.triangle_count <= target || whole || pass == BRICK_MAX_PASSES))
             break;
         uint8_t *locks = NULL, *active = NULL;
         uint64_t strip = 0;
@@ -782,15 +795,19 @@ int sl_qem_simplify_bricked(const sl_qem_mesh *in, const sl_qem_config *cfg,
         } else { /* (a first pass at or below the target only copies, as the whole would) */
             /* the golden-ratio sequence: each pass's grid off the earlier ones' */
             double shift = fmod(pass * 0.6180339887498949, 1.0);
-            rc = brick_pass(&cur, active, &c, brick_triangles, shift, pass == 0, 0, target,
-                            &next, &next_border, &s, progress, err);
+            /* after the first pass, aim up to half the 1 % the count allows below it: the
+             * borders' last triangles sit beside locked ones, and an exact aim takes them
+             * a few at a time, pass after pass */
+            uint64_t aim = pass == 0 ? target : target - target / 200;
+            rc = brick_pass(&cur, active, &c, brick, shift, pass == 0, 0, aim, &next,
+                            &next_border, &s, progress, err);
             if (rc == 0 && pass == 0 && next.triangle_count < target - target / 100) {
                 /* the sample misjudged the error below the count: every brick priced */
                 sl_qem_mesh_release(&next);
                 free(next_border);
                 next_border = NULL;
                 memset(&s, 0, sizeof s);
-                rc = brick_pass(&cur, active, &c, brick_triangles, shift, 1, 1, target, &next,
+                rc = brick_pass(&cur, active, &c, brick, shift, 1, 1, target, &next,
                                 &next_border, &s, progress, err);
             }
         }
@@ -800,11 +817,14 @@ int sl_qem_simplify_bricked(const sl_qem_mesh *in, const sl_qem_config *cfg,
             break;
         add_stats(&sum, &s);
         max_error |= cfg->max_error > 0 && s.stop == SL_QEM_STOP_MAX_ERROR; /* the caller's */
-        idle = next.triangle_count < cur.triangle_count ? 0 : idle + 1;
         /* The next pass on strips around these borders, unless this one (on strips) took
-         * less than half of what was left to take: then on all of it. */
+         * less than half of what was left to take: then on all of it; and when a pass on
+         * all of it took nothing (bricks so small that their locked borders and rings are
+         * most of them), on bricks twice as large, up to the whole. */
         uint64_t excess = cur.triangle_count > target ? cur.triangle_count - target : 0;
         uint64_t taken = cur.triangle_count - next.triangle_count;
+        if (full && pass > 0 && 2 * taken < excess)
+            brick = brick > UINT64_MAX / 2 ? UINT64_MAX : 2 * brick;
         full = !full && 2 * taken < excess;
         compose_source(&next, cur.source);
         if (owned)

@@ -137,12 +137,14 @@ int sl_qem_simplify(const sl_qem_mesh *in, const sl_qem_config *cfg,
 /* The same by bricks (qem_bricked.c; docs/simplify.md "By bricks"), for a mesh too large
  * to simplify whole in memory or on one thread: bricks of at most `brick_triangles`
  * triangles, consecutive in the Morton order of their centroids, each simplified alone and
- * in parallel (OpenMP) with the points it shares with another brick locked, all stopping
- * at one collapse error (a sample of the bricks' error curves brings the count there);
+ * in parallel (OpenMP) with the points it shares with another brick and the ring around
+ * them locked, all stopping at one collapse error (a sample of the bricks' error curves
+ * brings the count there);
  * then passes on strips around the borders, cut into bricks elsewhere; once the mesh fits
  * one brick, sl_qem_simplify on the whole. Peak memory: about 180 bytes per triangle of a
- * brick per thread, plus the passes' meshes. RMS within about 10 % of the whole's, often
- * closer (docs/simplify.md). Output as sl_qem_simplify's (vertices in the order of the
+ * brick per thread, plus the passes' meshes. RMS within about 20 % of the whole's, often
+ * closer; a count within 1 % below, as the relaxed rules allow (docs/simplify.md). Output
+ * as sl_qem_simplify's (vertices in the order of the
  * input vertices they descend from; triangles brick by brick); stats summed over bricks
  * and passes, `stop` that of the whole. brick_triangles 0, or at least the input's:
  * exactly sl_qem_simplify. Same errors. */
