@@ -1,8 +1,9 @@
 /* A candidate brought to its count and fitted to the input (refine_internal.h).
  *
  * Collapse: quadric edge collapse (geometry/qem_simplify.h) from the method's level to the
- * rung's count (by bricks from a level above [refine] collapse_brick_triangles), keeping its topology, borders, colours and texture seams; where that alone
- * stops above the count, its relaxed phase gives up the topology for the rest of the way. Fit: its
+ * rung's count (by bricks from a level above [refine] collapse_brick_triangles), keeping
+ * its topology, borders, colours and texture seams; where that alone stops above the
+ * count, its relaxed phase gives up the topology for the rest of the way. Fit: its
  * vertices moved, connectivity fixed, to the least squared distance between it and the
  * input, both ways (geometry/surface_fit.h), against one reference per item built on the
  * first fit. A level that changed no longer has the method's proven bound (paper 2) nor

@@ -72,6 +72,37 @@ static inline int same_mesh(const sl_qem_mesh *a, const sl_qem_mesh *b)
            !memcmp(a->triangles, b->triangles, 12 * a->triangle_count);
 }
 
+/* Locks of a slab across the model (x within 3 % of the box's width of its middle), like
+ * a brick border: malloc'd, *count set. */
+static inline uint8_t *slab_locks(const sl_mesh *m, uint64_t *count)
+{
+    uint8_t *locked = calloc(m->vertex_count + 1, 1);
+    double lo = INFINITY, hi = -INFINITY;
+    for (uint64_t v = 0; v < m->vertex_count; v++) {
+        lo = fmin(lo, m->positions[3 * v]);
+        hi = fmax(hi, m->positions[3 * v]);
+    }
+    *count = 0;
+    for (uint64_t v = 0; v < m->vertex_count; v++)
+        *count += locked[v] = fabs(m->positions[3 * v] - (lo + hi) / 2) < 0.03 * (hi - lo);
+    return locked;
+}
+
+/* Output vertices descending from a locked input vertex (*kept) and of them those not at
+ * its position exactly (*moved). */
+static inline void locks_kept(const sl_qem_mesh *out, const float *in_positions,
+                              const uint8_t *locked, uint64_t *kept, uint64_t *moved)
+{
+    *kept = *moved = 0;
+    for (uint64_t v = 0; v < out->vertex_count; v++) {
+        uint32_t s = out->source[v];
+        if (!locked[s])
+            continue;
+        ++*kept;
+        *moved += memcmp(out->positions + 3 * v, in_positions + 3 * (uint64_t)s, 12) != 0;
+    }
+}
+
 /* The tree of the input's triangles (a failure is a failed check). */
 static inline void build_bvh(const sl_qem_mesh *in, sl_triangle_bvh *bvh)
 {

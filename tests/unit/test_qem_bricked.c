@@ -115,15 +115,8 @@ static void test_threads_locks_whole(void)
     sl_mesh m;
     load("tests/data/scans/cow.ply", &m);
     sl_qem_mesh in = view_of(&m), out[2], whole;
-    uint8_t *locked = calloc(m.vertex_count, 1);
-    double lo = INFINITY, hi = -INFINITY;
-    for (uint64_t v = 0; v < m.vertex_count; v++) {
-        lo = fmin(lo, m.positions[3 * v]);
-        hi = fmax(hi, m.positions[3 * v]);
-    }
-    uint64_t locked_count = 0;
-    for (uint64_t v = 0; v < m.vertex_count; v++)
-        locked_count += locked[v] = fabs(m.positions[3 * v] - (lo + hi) / 2) < 0.03 * (hi - lo);
+    uint64_t locked_count;
+    uint8_t *locked = slab_locks(&m, &locked_count);
     sl_qem_config cfg = sl_qem_default_config();
     cfg.target_triangles = in.triangle_count / 20;
     cfg.locked = locked;
@@ -132,14 +125,8 @@ static void test_threads_locks_whole(void)
         CHECK(simplify(&in, &cfg, in.triangle_count / 10, &out[threads - 1], NULL) == 0);
     }
     CHECK(same_mesh(&out[0], &out[1]));
-    uint64_t kept = 0, moved = 0;
-    for (uint64_t v = 0; v < out[0].vertex_count; v++) {
-        uint32_t s = out[0].source[v];
-        if (!locked[s])
-            continue;
-        kept++;
-        moved += memcmp(out[0].positions + 3 * v, m.positions + 3 * (uint64_t)s, 12) != 0;
-    }
+    uint64_t kept, moved;
+    locks_kept(&out[0], m.positions, locked, &kept, &moved);
     printf("cow by bricks: %llu locked vertices, %llu in the output, %llu moved; 1 and 2 "
            "threads %s\n", (unsigned long long)locked_count, (unsigned long long)kept,
            (unsigned long long)moved, same_mesh(&out[0], &out[1]) ? "identical" : "DIFFER");

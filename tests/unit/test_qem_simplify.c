@@ -374,15 +374,8 @@ static void test_threads_and_locks(void)
     const char *file = check_light() ? "tests/data/scans/cow.ply" : "tests/data/scans/rocker_arm.ply";
     CHECK(sl_ply_read(check_source_path(file, path, sizeof path), NULL, &m, NULL, NULL, &err) == 0);
     sl_qem_mesh in = view_of(&m), out[2];
-    uint8_t *locked = calloc(m.vertex_count, 1);
-    double lo = INFINITY, hi = -INFINITY;
-    for (uint64_t v = 0; v < m.vertex_count; v++) {
-        lo = fmin(lo, m.positions[3 * v]);
-        hi = fmax(hi, m.positions[3 * v]);
-    }
-    uint64_t locked_count = 0;
-    for (uint64_t v = 0; v < m.vertex_count; v++) /* a slab across the model, like a brick border */
-        locked_count += locked[v] = fabs(m.positions[3 * v] - (lo + hi) / 2) < 0.03 * (hi - lo);
+    uint64_t locked_count;
+    uint8_t *locked = slab_locks(&m, &locked_count);
     sl_qem_config cfg = sl_qem_default_config();
     cfg.target_triangles = in.triangle_count / 20;
     cfg.locked = locked;
@@ -391,14 +384,8 @@ static void test_threads_and_locks(void)
         CHECK(simplify(&in, &cfg, &out[threads - 1], NULL) == 0);
     }
     CHECK(same_mesh(&out[0], &out[1]));
-    uint64_t kept = 0, moved = 0;
-    for (uint64_t v = 0; v < out[0].vertex_count; v++) {
-        uint32_t s = out[0].source[v];
-        if (!locked[s])
-            continue;
-        kept++;
-        moved += memcmp(out[0].positions + 3 * v, m.positions + 3 * (uint64_t)s, 12) != 0;
-    }
+    uint64_t kept, moved;
+    locks_kept(&out[0], m.positions, locked, &kept, &moved);
     printf("%s: %llu locked vertices, %llu in the output, %llu moved; 1 and 2 threads %s\n",
            file, (unsigned long long)locked_count, (unsigned long long)kept,
            (unsigned long long)moved, same_mesh(&out[0], &out[1]) ? "identical" : "DIFFER");
