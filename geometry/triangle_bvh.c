@@ -331,10 +331,34 @@ static double box_distance_sq(const sl_bvh_node *node, const double p[3])
     return d_sq;
 }
 
+/* Squared distance from p to the bounding box of the triangle at corners f: a lower
+ * bound of its distance to the triangle, a tenth of the exact test's cost. */
+static inline double corners_box_distance_sq(const float *f, const double p[3])
+{
+    double d_sq = 0.0;
+    for (int a = 0; a < 3; a++) {
+        double lo = min_f(min_f(f[a], f[3 + a]), f[6 + a]);
+        double hi = max_f(max_f(f[a], f[3 + a]), f[6 + a]);
+        double below = lo - p[a], above = p[a] - hi;
+        double d = below > above ? below : above;
+        d = d > 0.0 ? d : 0.0;
+        d_sq += d * d;
+    }
+    return d_sq;
+}
+
+/* A triangle replaces the best only when strictly closer, so one whose box is not closer
+ * than the best cannot: it is skipped without the exact test. The margin keeps the skip
+ * exact under rounding (the exact test's point may fall a rounding step outside the box),
+ * so the answers are the same as without it. */
+#define BOX_SKIP_MARGIN (1.0 - 1e-9)
+
 static void try_triangle(const sl_triangle_bvh *bvh, const double p[3], uint32_t t,
                          sl_closest *best)
 {
     const float *f = &bvh->corners[9 * (uint64_t)t];
+    if (corners_box_distance_sq(f, p) * BOX_SKIP_MARGIN >= best->distance_sq)
+        return;
     double a[3] = {f[0], f[1], f[2]}, b[3] = {f[3], f[4], f[5]}, c[3] = {f[6], f[7], f[8]};
     double q[3];
     int feature;
