@@ -300,6 +300,7 @@ static int one(refine_item *it, const sl_rung *r, uint64_t target, make_fn make,
     int paper = r->kind == SL_RUNG_EXPANSIONS; /* published as paper 1 cuts it */
     if (rc == 0 && !paper && lead && it->c->collapse && cand->level.triangle_count > target) {
         rc = measure_raw(it, cand, err); /* as it comes: is it worth collapsing? */
+        cand->rms_uncollapsed = rc == 0 && cand->measured ? cand->rms : 0;
         cand->outranked = rc == 0 && outranked(it, lead, cand, target);
     }
     if (rc == 0 && !paper && !cand->outranked)

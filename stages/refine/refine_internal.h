@@ -115,6 +115,7 @@ typedef struct refine_candidate {
                                   input than the scan collapsed allows: left uncollapsed,
                                   above its count (its figures are those before) */
     double rms_collapsed;      /* when it was fitted to be compared: its RMS before the fit */
+    double rms_uncollapsed;    /* when it was measured before its collapse: that RMS */
     int watertight;            /* its topology, when measured */
     double largest_part;       /* the largest connected part's share of its area */
     double fit_rms_before, fit_rms_after; /* the fit's own estimate, world (0: no fit) */

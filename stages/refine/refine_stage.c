@@ -294,6 +294,8 @@ void refine_report_candidates(sl_json *r, const refine_candidate *cands, int cou
         sl_json_bool(r, "fitted", c->fitted);
         if (c->measured) { /* after the collapse; after the fit too when it was compared
                               after it (docs/levels.md) */
+            if (c->rms_uncollapsed > 0 && !c->outranked) /* collapsed after it */
+                sl_json_double(r, "rms_before_collapse", c->rms_uncollapsed);
             if (c->rms_collapsed > 0)
                 sl_json_double(r, "rms_before_fit", c->rms_collapsed);
             sl_json_double(r, "rms", c->rms);

@@ -83,6 +83,12 @@ for r in s["refine"]["levels"]:
             need(not x["chosen"] and x["triangles"] > r["budget"] and lead is not None and
                  x["rms"] > 1.5 * lead, "%s: %s outranked by the scan (%s)" % (r["name"], x["method"], c))
             outranked.append(r["name"])
+        # Measured before its collapse and collapsed after it: came above the count, left
+        # at it (the figure the rule judged, docs/levels.md).
+        if "rms_before_collapse" in x:
+            need(not x.get("outranked") and x["base_triangles"] > r["budget"] and
+                 x["triangles"] <= 1.01 * r["budget"] and x["rms_before_collapse"] > 0,
+                 "%s: %s measured before its collapse (%s)" % (r["name"], x["method"], x))
 t = json.load(open(os.path.join(out, item, "timings.json")))["stages"]["refine"]
 need(all(len(v) >= 1 for v in t.get("detail", {"x": []}).values()) and t.get("detail"),
      "timings.json gives each candidate's seconds")
