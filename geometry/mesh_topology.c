@@ -39,6 +39,10 @@ static void position_key(const sl_mesh *m, uint32_t v, uint32_t k[3])
         k[a] = coordinate_bits(m->positions[3 * (uint64_t)v + a]);
 }
 
+/* Below this many triangles or ids the topology's loops run on one thread: a parallel
+ * region costs more than it saves. */
+#define PARALLEL_MIN 65536
+
 /* Declared in mesh_distance.h (the topology's welding, shared with the simplifier). */
 int64_t sl_mesh_weld_positions(const sl_mesh *m, uint32_t *weld)
 {
@@ -110,9 +114,14 @@ static int welded_triangle(const sl_mesh *m, const uint32_t *weld, uint64_t t, u
     return w[0] != w[1] && w[1] != w[2] && w[2] != w[0];
 }
 
+/* Each bucket's ends sorted and their runs counted: an edge per run, a border edge for a
+ * run of one, a non-manifold edge for a run of three or more. Buckets are independent. */
 static void count_edge_runs(uint32_t *ends, const uint64_t *start, uint64_t ids,
                             sl_mesh_topology *out)
 {
+    uint64_t edges = 0, boundary = 0, nonmanifold = 0;
+#pragma omp parallel for schedule(dynamic, 4096) reduction(+ : edges, boundary, nonmanifold) \
+    if (ids >= PARALLEL_MIN)
     for (uint64_t lo = 0; lo < ids; lo++) {
         uint64_t n = start[lo + 1] - start[lo];
         uint32_t *v = ends + start[lo];
@@ -121,14 +130,17 @@ static void count_edge_runs(uint32_t *ends, const uint64_t *start, uint64_t ids,
             uint64_t j = i + 1;
             while (j < n && v[j] == v[i])
                 j++;
-            out->edges++;
+            edges++;
             if (j - i == 1)
-                out->boundary_edges++;
+                boundary++;
             else if (j - i > 2)
-                out->nonmanifold_edges++;
+                nonmanifold++;
             i = j;
         }
     }
+    out->edges += edges;
+    out->boundary_edges += boundary;
+    out->nonmanifold_edges += nonmanifold;
 }
 
 static uint32_t find_root(uint32_t *parent, uint32_t x)
@@ -206,6 +218,7 @@ int sl_mesh_topology_compute(const sl_mesh *m, sl_mesh_topology *out, sl_error *
         return sl_error_set(err, SL_E_LIMIT, 0, NULL,
                             "%llu vertices: edge topology handles at most 2^32 - 1",
                             (unsigned long long)m->vertex_count);
+    const int wide = m->triangle_count >= PARALLEL_MIN;
     uint32_t *weld = malloc((m->vertex_count ? m->vertex_count : 1) * sizeof *weld);
     int64_t ids = weld ? sl_mesh_weld_positions(m, weld) : -1;
     uint64_t *start = ids >= 0 ? calloc((uint64_t)ids + 2, sizeof *start) : NULL;
@@ -213,17 +226,21 @@ int sl_mesh_topology_compute(const sl_mesh *m, sl_mesh_topology *out, sl_error *
     if (start) {
         /* start[lo + 2] counts edges with lower end lo, so that after the prefix sum
          * start[lo + 1] is the fill cursor and, once filled, bucket lo's end. */
+        uint64_t degenerate = 0;
+#pragma omp parallel for schedule(static) reduction(+ : degenerate) if (wide)
         for (uint64_t t = 0; t < m->triangle_count; t++) {
             uint32_t w[3];
             if (!welded_triangle(m, weld, t, w)) {
-                out->degenerate_triangles++;
+                degenerate++;
                 continue;
             }
             for (int c = 0; c < 3; c++) {
                 uint32_t a = w[c], b = w[(c + 1) % 3];
+#pragma omp atomic update
                 start[(a < b ? a : b) + 2]++;
             }
         }
+        out->degenerate_triangles = degenerate;
         for (int64_t i = 0; i < ids; i++)
             start[i + 2] += start[i + 1];
         ends = malloc((start[ids + 1] ? start[ids + 1] : 1) * sizeof *ends);
@@ -234,6 +251,8 @@ int sl_mesh_topology_compute(const sl_mesh *m, sl_mesh_topology *out, sl_error *
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "edge topology of %llu triangles",
                             (unsigned long long)m->triangle_count);
     }
+    /* Filled in any order (the buckets are sorted before they are counted). */
+#pragma omp parallel for schedule(static) if (wide)
     for (uint64_t t = 0; t < m->triangle_count; t++) {
         uint32_t w[3];
         if (!welded_triangle(m, weld, t, w))
@@ -241,7 +260,10 @@ int sl_mesh_topology_compute(const sl_mesh *m, sl_mesh_topology *out, sl_error *
         for (int c = 0; c < 3; c++) {
             uint32_t a = w[c], b = w[(c + 1) % 3];
             uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
-            ends[start[lo + 1]++] = hi;
+            uint64_t at;
+#pragma omp atomic capture
+            at = start[lo + 1]++;
+            ends[at] = hi;
         }
     }
     out->welded_vertices = (uint64_t)ids;
