@@ -35,6 +35,8 @@ typedef struct sl_refine_config {
     int relax_topology;      /* ... giving up the topology when it alone stops above it */
     uint64_t collapse_brick_triangles; /* ... by bricks of this many from a larger level
                                           (0: whole) */
+    double octree_max_share; /* beside the scan simplified, an octree candidate only for a
+                                level of at most this share of the input's count */
     int fit;                 /* vertices fitted to the input surface */
     int fit_rounds;          /* the fit's projection and solve rounds */
     double fit_floor;        /* no fit for a level measured within this of the input

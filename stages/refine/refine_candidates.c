@@ -85,7 +85,9 @@ static int octree_candidate(refine_item *it, const sl_rung *r, uint64_t target,
                             refine_candidate *cand, sl_error *err)
 {
     refine_cut cut;
-    int rc;
+    int rc = refine_model(it, err);
+    if (rc)
+        return rc;
     if (r->kind == SL_RUNG_EXPANSIONS)
         rc = refine_cut_percent(&it->cutter, r->percent, &cut, err);
     else
@@ -364,12 +366,19 @@ static int fit_chosen(refine_item *it, refine_candidate *cands, int count, uint6
     return rc;
 }
 
+int refine_octree_wanted(const refine_item *it, const sl_rung *r, uint64_t target)
+{
+    if (r->kind == SL_RUNG_EXPANSIONS || !(it->c->best && it->is_mesh))
+        return 1;
+    return (double)target <= it->c->octree_max_share * (double)it->input_triangles;
+}
+
 int refine_make_candidates(refine_item *it, const sl_rung *r, uint64_t target,
                            refine_candidate *cands, int *count, int *chosen, sl_error *err)
 {
     make_fn makes[SL_REFINE_MAX_CANDIDATES];
     int n = 0;
-    if (it->have_model)
+    if (it->have_model && refine_octree_wanted(it, r, target))
         makes[n++] = octree_candidate;
     if (r->kind != SL_RUNG_EXPANSIONS) {
         if (it->method_count > 0)

@@ -75,8 +75,13 @@ typedef struct refine_item {
     double diagonal;             /* its bounding-box diagonal, world */
     uint64_t input_triangles;    /* what a share of the input is of: the mesh's triangles, or
                                     for a point set the octree's finest cut */
-    sl_lod_model model;          /* the octree's, when an upstream stage made one */
-    int have_model;
+    sl_lod_model model;          /* the octree's, when an upstream stage made one: opened
+                                    when the first rung wants a cut of it (refine_model) */
+    int have_model;              /* an upstream stage made one */
+    int model_open;              /* ... and `model` holds it */
+    const char *model_dir;       /* ... in this stage folder */
+    uint32_t model_expansions;   /* its level tables' size, read at the item's opening */
+    uint64_t model_triangles;    /* its finest cut's triangles */
     refine_cutter cutter;
     struct refine_method_list {  /* the segment and cluster methods' level lists */
         const char *method, *dir;
@@ -96,6 +101,14 @@ typedef struct refine_item {
     struct sl_fit_reference *fit_reference; /* the input prepared for fits, on the first */
     struct sl_distance_reference *distance_reference; /* ... for measures, on the first */
 } refine_item;
+
+/* The item's model opened (once; no-op when open): a scan's top levels, which get no
+ * octree candidate, are made without it held (refine_stage.c). */
+int refine_model(refine_item *it, sl_error *err);
+
+/* Whether rung r (of `target` triangles) gets an octree candidate: always but beside the
+ * scan simplified above [refine] octree_max_share of the input's count (docs/levels.md). */
+int refine_octree_wanted(const refine_item *it, const sl_rung *r, uint64_t target);
 
 /* The scan itself as rung r's level (its record and mesh). */
 int refine_scan_level(refine_item *it, const sl_rung *r, uint64_t target, sl_level *lv,

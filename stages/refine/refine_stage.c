@@ -10,6 +10,7 @@
 #include "geometry/mesh_distance.h"
 #include "geometry/surface_fit.h"
 #include "runtime/lod_io.h"
+#include "runtime/lod_prefix.h"
 #include "stages/refine/refine_internal.h"
 
 /* 1: the first refine stage (levels from every method, the scan at the top). 2: a level
@@ -17,8 +18,10 @@
  * topology rules relaxed ([refine] relax_topology); the report says which. 3: levels made
  * from the scan's vertices (the scan, its collapses) keep its texture coordinates. 4: a
  * level already within [refine] fit_floor of the input is not fitted. 5: a collapse from
- * more than [refine] collapse_brick_triangles runs by bricks (default off). */
-#define REFINE_STAGE_VERSION 5u
+ * more than [refine] collapse_brick_triangles runs by bricks (default off). 6: beside the
+ * scan simplified, no octree candidate for a level above [refine] octree_max_share of the
+ * input's count. */
+#define REFINE_STAGE_VERSION 6u
 
 static const sl_option refine_options[] = {
     {"refine", "collapse", SL_OPT_BOOL, "true", 0, 0, NULL,
@@ -42,6 +45,14 @@ static const sl_option refine_options[] = {
      "triangles, bricks of 1 M: 1.3 GB against 3.9, about the same time); RMS as close or "
      "closer on closed scans, up to 19 % farther on an open, non-manifold one. 0 "
      "(default): every collapse on the whole mesh at once."},
+    {"refine", "octree_max_share", SL_OPT_DOUBLE, "0.3", 0, 1, NULL,
+     "When the scan simplified is a candidate ([lod] method = best on a mesh), the octree's "
+     "cut is one too only for a level of at most this share of the input's triangles. Above "
+     "it the cut, a remesh with about as many triangles as the level, was at least 1.76 times "
+     "farther from the input than the scan collapsed on every input measured (21 scans and "
+     "tori of 1 and 20 M triangles, levels of 29-80 %; at 20 % it won once, 0.53 times), and making "
+     "and measuring it was a fifth of a 20 M scan's run (docs/levels.md). 1: every level "
+     "gets one, as before."},
     {"refine", "fit", SL_OPT_BOOL, "true", 0, 0, NULL,
      "Move every refined level's vertices to fit the input surface (the squared distance of "
      "dense samples both ways, connectivity fixed, no fold; Hoppe et al. 1993): what the "
@@ -92,6 +103,7 @@ static int refine_configure(const sl_config *cfg, void **out, sl_error *err)
     c->relax_topology = sl_config_bool(cfg, "refine", "relax_topology");
     c->collapse_brick_triangles =
         (uint64_t)sl_config_int(cfg, "refine", "collapse_brick_triangles");
+    c->octree_max_share = sl_config_double(cfg, "refine", "octree_max_share");
     c->fit = sl_config_bool(cfg, "refine", "fit");
     c->fit_rounds = (int)sl_config_int(cfg, "refine", "fit_rounds");
     c->fit_floor = sl_config_double(cfg, "refine", "fit_floor");
@@ -124,21 +136,44 @@ sl_refine_config sl_refine_default_config(void)
 
 /* --- the item's inputs -------------------------------------------------------------------- */
 
-static int open_model(refine_item *it, const char *dir, sl_error *err)
+int refine_model(refine_item *it, sl_error *err)
 {
+    if (it->model_open || !it->have_model)
+        return 0;
     char path[PATH_MAX];
-    int rc = sl_stage_path(path, dir, SL_MODEL_FILE, err);
+    int rc = sl_stage_path(path, it->model_dir, SL_MODEL_FILE, err);
     if (rc == 0)
         rc = sl_lod_model_open(path, &it->model, err);
     if (rc)
         return rc;
-    it->have_model = 1;
+    it->model_open = 1;
     it->cutter.model = &it->model;
     it->cutter.one_body = -1;
-    it->cutter.cap = it->c->cap_at_input && it->is_mesh ? it->points.triangle_count : 0;
     it->cutter.min_part_area = it->c->min_part_area;
     it->cutter.shard_reach = it->c->shard_reach;
     return 0;
+}
+
+/* The model found in `dir`: its level tables' size read now (the file's header and tables
+ * only, lod_prefix.h), the model itself when a rung first cuts it (refine_model); a point
+ * set's at once, whose every level is cut from it. */
+static int find_model(refine_item *it, const char *dir, sl_error *err)
+{
+    char path[PATH_MAX];
+    int rc = sl_stage_path(path, dir, SL_MODEL_FILE, err);
+    sl_lod_file *f = NULL;
+    if (rc == 0)
+        rc = sl_lod_file_open(path, &f, err);
+    if (rc)
+        return rc;
+    const sl_lod_model *levels = sl_lod_file_levels(f);
+    it->model_expansions = levels->expansion_count;
+    it->model_triangles = levels->accumulation[levels->expansion_count];
+    sl_lod_file_close(f);
+    it->have_model = 1;
+    it->model_dir = dir;
+    it->cutter.cap = it->c->cap_at_input && it->is_mesh ? it->points.triangle_count : 0;
+    return it->is_mesh && it->c->best ? 0 : refine_model(it, err);
 }
 
 /* The inputs found by the artifacts the earlier stages left: the range stage's points, an
@@ -173,7 +208,7 @@ static int open_item(refine_item *it, sl_error *err)
     for (const struct sl_stage_dir_entry *u = it->io->upstream; rc == 0 && u && u->stage; u++) {
         if (sl_stage_path(path, u->dir, SL_MODEL_FILE, err) == 0 && !it->have_model &&
             access(path, F_OK) == 0)
-            rc = open_model(it, u->dir, err);
+            rc = find_model(it, u->dir, err);
         if (rc == 0 && sl_level_list_present(u->dir) && it->method_count < 2) {
             struct refine_method_list *m = &it->methods[it->method_count++];
             m->method = u->stage;
@@ -182,7 +217,7 @@ static int open_item(refine_item *it, sl_error *err)
         }
     }
     it->input_triangles = it->is_mesh ? ps->triangle_count
-                          : it->have_model ? it->model.accumulation[it->model.expansion_count]
+                          : it->have_model ? it->model_triangles
                                            : 0;
     if (rc == 0 && !it->have_model && it->method_count == 0 && !it->is_mesh)
         rc = sl_error_set(err, SL_E_UNSUPPORTED, 0, it->io->source_path,
@@ -194,7 +229,7 @@ static void close_item(refine_item *it)
 {
     for (int m = 0; m < it->method_count; m++)
         sl_level_list_release(&it->methods[m].list);
-    if (it->have_model)
+    if (it->model_open)
         sl_lod_model_release(&it->model);
     sl_level_release_mesh(&it->scan_chain);
     sl_fit_reference_free(it->fit_reference);
@@ -396,9 +431,8 @@ static int refine_run(const void *config, const sl_stage_io *io, sl_error *err)
         out.input_triangles = it.points.triangle_count;
         out.input_points = it.points.count;
         out.diagonal = it.diagonal;
-        out.model_expansions = it.have_model ? it.model.expansion_count : 0;
-        out.model_triangles =
-            it.have_model ? it.model.accumulation[it.model.expansion_count] : 0;
+        out.model_expansions = it.have_model ? it.model_expansions : 0;
+        out.model_triangles = it.have_model ? it.model_triangles : 0;
         sl_json *r = io->report;
         sl_json_string(r, "method", it.c->best ? "best" : it.have_model ? "octree"
                                     : it.method_count ? it.methods[0].method : "scan");
@@ -410,6 +444,8 @@ static int refine_run(const void *config, const sl_stage_io *io, sl_error *err)
         sl_json_bool(r, "collapse", it.c->collapse);
         sl_json_bool(r, "relax_topology", it.c->relax_topology);
         sl_json_bool(r, "fit", it.c->fit);
+        if (it.have_model && it.c->best && it.is_mesh)
+            sl_json_double(r, "octree_max_share", it.c->octree_max_share);
         rc = make_levels(&it, &out, err);
     }
     free(out.levels);

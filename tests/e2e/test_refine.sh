@@ -182,6 +182,33 @@ EOF
 )
 check "bricked collapse: counts, topology and RMS as the whole's (${bricked:-ok})" [ -z "$bricked" ]
 
+# [refine] octree_max_share: beside the scan simplified, a level above 30 % of the input
+# gets no octree candidate (its cut was never within 1.76 times of the scan's RMS there,
+# docs/levels.md) and one at or below it does; at 1, every level gets one. The earlier
+# stages reused.
+share_ladder=("[levels]" "percents = 100" "budgets = b50:50%,b20:20%")
+for share in default 1; do
+  extra=(); [ "$share" = default ] || extra=("[refine]" "octree_max_share = $share")
+  write_config "$TMP/share-$share.ini" "$TMP/in" "$TMP/work-best" "$TMP/out-share-$share" \
+    "${share_ladder[@]}" "${export_lines[@]}" "${extra[@]}"
+  run_scanlod run "$TMP/share-$share.ini" -q
+  check "octree_max_share $share: run exits 0 (got $rc: $err)" [ "$rc" -eq 0 ]
+  made=$(python3 - "$TMP/out-share-$share" "${scans[@]}" <<'EOF'
+import json, os, sys
+seen = set()
+for s in sys.argv[2:]:
+    for r in json.load(open(os.path.join(sys.argv[1], s + ".ply", "report.json")))["stages"]["refine"]["levels"]:
+        if r["name"] in ("b50", "b20"):
+            seen.add("%s:%s" % (r["name"], "+".join(sorted(c["method"] for c in r["candidates"]))))
+            if not (r["budget"] * 0.99 <= r["triangles"] <= r["budget"]):
+                seen.add("%s-%s-missed:%d/%d" % (s, r["name"], r["triangles"], r["budget"]))
+print(" ".join(sorted(seen)))
+EOF
+)
+  if [ "$share" = default ]; then want="b20:octree+scan b50:scan"; else want="b20:octree+scan b50:octree+scan"; fi
+  check "octree_max_share $share: candidates per level ($made; want $want)" [ "$made" = "$want" ]
+done
+
 # The paper's mode needs each method's own level at its count: collapse off with the
 # default oversample would leave levels at twice their counts, so it is refused.
 run_scanlod run "$TMP/best.ini" -q -s refine.collapse=false
