@@ -49,7 +49,7 @@ static const sl_option refine_options[] = {
      "When the scan simplified is a candidate ([lod] method = best on a mesh), the octree's "
      "cut is one too only for a level of at most this share of the input's triangles. Above "
      "it the cut, a remesh with about as many triangles as the level, was at least 1.76 times "
-     "farther from the input than the scan collapsed on every input measured (21 scans and "
+     "farther from the input than the scan collapsed on every input measured (20 scans and "
      "tori of 1 and 20 M triangles, levels of 29-80 %; at 20 % it won once, 0.53 times), and making "
      "and measuring it was a fifth of a 20 M scan's run (docs/levels.md). 1: every level "
      "gets one, as before."},
