@@ -98,7 +98,7 @@ static int octree_candidate(refine_item *it, const sl_rung *r, uint64_t target,
     start_record(lv, r, target, "octree");
     lv->expansions = cut.k;
     lv->unpatched_cells = cut.cracks > UINT32_MAX ? UINT32_MAX : (uint32_t)cut.cracks;
-    lv->bound = it->model.error_after[cut.k];
+    lv->bound = it->cutter.levels->error_after[cut.k];
     lv->bound_fraction = it->diagonal > 0 ? lv->bound / it->diagonal : 0;
     lv->vertex_count = cut.mesh.vertex_count;
     lv->triangle_count = cut.mesh.triangle_count;

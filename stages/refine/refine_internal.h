@@ -34,11 +34,15 @@ int refine_largest_part(const sl_lod_mesh *mesh, double *fraction /* OUT */, sl_
 int refine_drop_parts(sl_lod_mesh *mesh, double min_fraction, double reach,
                       refine_parts *out /* OUT */, sl_error *err);
 
-/* What cuts the model's levels: the model, whether its finest cut is one body (-1 not
- * known yet, 0 several pieces, 1 one body), the most triangles a cut may have (cap, 0 =
- * none), and the shard rule. */
+/* What cuts the model's levels: the model (held whole, or read by prefixes from `file`:
+ * then `model` is the prefix last reached, lod_prefix.h), its level tables (the whole
+ * model's either way), whether its finest cut is one body (-1 not known yet, 0 several
+ * pieces, 1 one body), the most triangles a cut may have (cap, 0 = none), and the shard
+ * rule. */
 typedef struct refine_cutter {
     sl_lod_model *model;
+    struct sl_lod_file *file;
+    const sl_lod_model *levels;
     int one_body;
     uint64_t cap;
     double min_part_area, shard_reach;
@@ -76,7 +80,9 @@ typedef struct refine_item {
     uint64_t input_triangles;    /* what a share of the input is of: the mesh's triangles, or
                                     for a point set the octree's finest cut */
     sl_lod_model model;          /* the octree's, when an upstream stage made one: opened
-                                    when the first rung wants a cut of it (refine_model) */
+                                    when the first rung wants a cut of it (refine_model),
+                                    whole for a point set, else read by prefixes
+                                    (cutter.file) */
     int have_model;              /* an upstream stage made one */
     int model_open;              /* ... and `model` holds it */
     const char *model_dir;       /* ... in this stage folder */

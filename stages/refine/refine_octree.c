@@ -3,6 +3,7 @@
  * (refine_shards.c), a budget cut refilled with the triangles its shards had. */
 #include <string.h>
 
+#include "runtime/lod_prefix.h"
 #include "stages/refine/refine_internal.h"
 
 void refine_cut_release(refine_cut *c)
@@ -20,7 +21,10 @@ static int learn_one_body(refine_cutter *x, const sl_lod_mesh *mesh, int finest,
         rc = refine_largest_part(mesh, &share, err);
     } else {
         sl_lod_mesh whole;
-        int cut = sl_lod_generate(x->model, x->model->expansion_count, &whole, NULL);
+        uint32_t e = x->levels->expansion_count;
+        if (x->file && (rc = sl_lod_file_reach(x->file, e, &x->model, err)))
+            return rc; /* the whole model, read: a caller that knows sets one_body first */
+        int cut = sl_lod_generate(x->model, e, &whole, NULL);
         sl_mesh_scratch_shrink(&x->model->scratch);
         rc = cut ? sl_error_nomem(err, NULL, "the finest cut")
                  : refine_largest_part(&whole, &share, err);
@@ -36,13 +40,18 @@ int refine_cut_at(refine_cutter *x, uint32_t k, refine_cut *out, sl_error *err)
 {
     memset(out, 0, sizeof *out);
     out->k = k;
+    if (x->file) { /* the prefix k needs (held from before when it reached as far) */
+        int rc = sl_lod_file_reach(x->file, k, &x->model, err);
+        if (rc)
+            return rc;
+    }
     int failed = sl_lod_generate(x->model, k, &out->mesh, &out->cracks);
     /* The cut is refined and measured while it is held: the extraction scratch (over 100
      * bytes per triangle of the largest cut) goes. */
     sl_mesh_scratch_shrink(&x->model->scratch);
     if (failed)
         return sl_error_nomem(err, NULL, "a cut of %u expansions", k);
-    int finest = k >= x->model->expansion_count;
+    int finest = k >= x->levels->expansion_count;
     if (!(x->min_part_area > 0) || (finest && x->one_body >= 0))
         return 0;
     int rc = x->one_body < 0 ? learn_one_body(x, &out->mesh, finest, err) : 0;
@@ -58,17 +67,17 @@ int refine_cut_at(refine_cutter *x, uint32_t k, refine_cut *out, sl_error *err)
 static uint32_t capped_k(const refine_cutter *x, uint32_t k, int *capped)
 {
     *capped = 0;
-    if (!x->cap || x->model->accumulation[k] <= x->cap)
+    if (!x->cap || x->levels->accumulation[k] <= x->cap)
         return k;
-    uint32_t within = sl_lod_expansions_for_triangles(x->model, x->cap);
-    *capped = x->model->accumulation[within] > 0;
+    uint32_t within = sl_lod_expansions_for_triangles(x->levels, x->cap);
+    *capped = x->levels->accumulation[within] > 0;
     return *capped ? within : k;
 }
 
 int refine_cut_percent(refine_cutter *x, double percent, refine_cut *out, sl_error *err)
 {
     int capped;
-    uint32_t k = capped_k(x, sl_lod_expansions_for_percent(x->model, percent), &capped);
+    uint32_t k = capped_k(x, sl_lod_expansions_for_percent(x->levels, percent), &capped);
     int rc = refine_cut_at(x, k, out, err);
     out->capped = capped;
     return rc;
@@ -83,7 +92,7 @@ int refine_cut_percent(refine_cutter *x, double percent, refine_cut *out, sl_err
 int refine_cut_within(refine_cutter *x, uint64_t budget, refine_cut *out, sl_error *err)
 {
     int capped;
-    uint32_t k = capped_k(x, sl_lod_expansions_for_triangles(x->model, budget), &capped);
+    uint32_t k = capped_k(x, sl_lod_expansions_for_triangles(x->levels, budget), &capped);
     if (capped && x->cap < budget)
         budget = x->cap;
     int rc = refine_cut_at(x, k, out, err);
@@ -91,7 +100,7 @@ int refine_cut_within(refine_cutter *x, uint64_t budget, refine_cut *out, sl_err
     if (rc || out->dropped.triangles * REFILL_WORTH <= budget)
         return rc;
     uint32_t lo = k;
-    uint32_t hi = sl_lod_expansions_for_triangles(x->model, budget + out->dropped.triangles) + 1;
+    uint32_t hi = sl_lod_expansions_for_triangles(x->levels, budget + out->dropped.triangles) + 1;
     for (int step = 0; step < REFILL_CUTS && hi - lo > 1; step++) {
         uint32_t at = step == 0 ? hi - 1 : lo + (hi - lo) / 2; /* the raised budget's first */
         refine_cut refill;

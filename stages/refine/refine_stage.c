@@ -142,13 +142,23 @@ int refine_model(refine_item *it, sl_error *err)
         return 0;
     char path[PATH_MAX];
     int rc = sl_stage_path(path, it->model_dir, SL_MODEL_FILE, err);
-    if (rc == 0)
+    /* A mesh's levels below the top are cut from the model read as far as each cut needs
+     * (lod_prefix.h): the largest is [levels] oversample times octree_max_share of the
+     * input, so most of a large model is never read (the 20 M torus: 3 GB held whole).
+     * Whether its finest cut is one body (the shards' rule, refine_octree.c) is then taken
+     * from the input mesh, which the finest cut remeshes, instead of from that cut, which
+     * would read all of it. A point set's levels are all cut: its model is opened whole. */
+    int prefix = it->is_mesh && it->c->best;
+    if (rc == 0 && prefix)
+        rc = sl_lod_file_open(path, &it->cutter.file, err);
+    else if (rc == 0)
         rc = sl_lod_model_open(path, &it->model, err);
     if (rc)
         return rc;
     it->model_open = 1;
-    it->cutter.model = &it->model;
-    it->cutter.one_body = -1;
+    it->cutter.model = prefix ? NULL : &it->model;
+    it->cutter.levels = prefix ? sl_lod_file_levels(it->cutter.file) : &it->model;
+    it->cutter.one_body = prefix ? it->input_one_body : -1;
     it->cutter.min_part_area = it->c->min_part_area;
     it->cutter.shard_reach = it->c->shard_reach;
     return 0;
@@ -229,7 +239,9 @@ static void close_item(refine_item *it)
 {
     for (int m = 0; m < it->method_count; m++)
         sl_level_list_release(&it->methods[m].list);
-    if (it->model_open)
+    if (it->cutter.file)
+        sl_lod_file_close(it->cutter.file);
+    else if (it->model_open)
         sl_lod_model_release(&it->model);
     sl_level_release_mesh(&it->scan_chain);
     sl_fit_reference_free(it->fit_reference);
