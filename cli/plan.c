@@ -109,8 +109,13 @@ static const stage_cost mesh_costs[] = {
      * 76.1 s, 923 MB); then the growth benchmark's 1, 5 and 20 M (21.3 / 58.8 / 266 s,
      * 461 / 1,956 / 7,594 MB; docs/benchmarks.md section 4; 380 bytes per input triangle
      * at 20 M), and rocker_arm's 33 MB (20k): time fitted, within 0.92-1.11 of the five
-     * tori; memory the least largest error over all six, within 0.88-1.14. */
-    {"refine", 9.15, 10.56, 1.04, 18, 505.7, 0.86, 0, 0},
+     * tori; memory the least largest error over all six, within 0.88-1.14. Refitted when
+     * a scan's top levels stopped getting octree candidates and the model came to be read
+     * by prefixes (issue 38; tori of 1, 5 and 20 M and rocker_arm, 2 threads, one run
+     * each, 2026-12-07: 18.3 / 46.6 / 149 / 4.2 s, 398 / 1,501 / 5,316 / 25.4 MB; the line
+     * before said 19.7 / 66 / 248 / 9.3 s and 524 / 2,036 / 6,663 / 35.6 MB): time within
+     * 0.9-1.15, memory 0.96-1.04. */
+    {"refine", 4.0, 14.3, 0.773, 12, 386, 0.861, 0, 0},
     /* The segment and cluster methods: scripts/bench/bench_methods_scale.sh at 0.1, 0.3, 1
      * and 5 M triangles (tori, 2 threads, quiet, 2026-12-07; issue 38), each line the least
      * largest error over the four (segment: 5.4 / 14.4 / 82.7 / 344 s, 33 / 94 / 259 /

@@ -368,8 +368,8 @@ static int fit_chosen(refine_item *it, refine_candidate *cands, int count, uint6
 
 int refine_octree_wanted(const refine_item *it, const sl_rung *r, uint64_t target)
 {
-    if (r->kind == SL_RUNG_EXPANSIONS || !(it->c->best && it->is_mesh))
-        return 1;
+    if (r->kind == SL_RUNG_EXPANSIONS || !(it->c->best && it->is_mesh && it->c->collapse))
+        return 1; /* no scan simplified to the count beside it (collapse off: paper 1's mode) */
     return (double)target <= it->c->octree_max_share * (double)it->input_triangles;
 }
 

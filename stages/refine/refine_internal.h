@@ -113,7 +113,8 @@ typedef struct refine_item {
 int refine_model(refine_item *it, sl_error *err);
 
 /* Whether rung r (of `target` triangles) gets an octree candidate: always but beside the
- * scan simplified above [refine] octree_max_share of the input's count (docs/levels.md). */
+ * scan simplified to the count ([lod] method = best on a mesh, [refine] collapse on) above
+ * [refine] octree_max_share of the input's count (docs/levels.md). */
 int refine_octree_wanted(const refine_item *it, const sl_rung *r, uint64_t target);
 
 /* The scan itself as rung r's level (its record and mesh). */

@@ -46,7 +46,8 @@ static const sl_option refine_options[] = {
      "closer on closed scans, up to 19 % farther on an open, non-manifold one. 0 "
      "(default): every collapse on the whole mesh at once."},
     {"refine", "octree_max_share", SL_OPT_DOUBLE, "0.3", 0, 1, NULL,
-     "When the scan simplified is a candidate ([lod] method = best on a mesh), the octree's "
+     "When the scan simplified is a candidate ([lod] method = best on a mesh, collapse on), "
+     "the octree's "
      "cut is one too only for a level of at most this share of the input's triangles. Above "
      "it the cut, a remesh with about as many triangles as the level, was at least 1.76 times "
      "farther from the input than the scan collapsed on every input measured (20 scans and "
@@ -74,7 +75,8 @@ static const sl_option refine_options[] = {
      "to choose the most faithful ([lod] method = best)."},
     {"refine", "min_part_area", SL_OPT_DOUBLE, "0.01", 0, 0.5, NULL,
      "Shards (docs/lod.md): when the octree's finest cut is one body (its largest part "
-     "holds 99 % of its area), each coarser cut leaves out the connected parts holding less "
+     "holds 99 % of its area; for a mesh under [lod] method = best: when the input is), "
+     "each coarser cut leaves out the connected parts holding less "
      "than this share of its area (never its largest): pieces of thin parts that the coarse "
      "cells cut loose, and specks. 0 keeps every part as the octree draws it (paper 1). A "
      "scan of several pieces keeps all its parts."},
@@ -456,7 +458,7 @@ static int refine_run(const void *config, const sl_stage_io *io, sl_error *err)
         sl_json_bool(r, "collapse", it.c->collapse);
         sl_json_bool(r, "relax_topology", it.c->relax_topology);
         sl_json_bool(r, "fit", it.c->fit);
-        if (it.have_model && it.c->best && it.is_mesh)
+        if (it.have_model && it.c->best && it.is_mesh && it.c->collapse)
             sl_json_double(r, "octree_max_share", it.c->octree_max_share);
         rc = make_levels(&it, &out, err);
     }
