@@ -83,8 +83,8 @@ typedef struct refine_item {
                                     when the first rung wants a cut of it (refine_model),
                                     whole for a point set, else read by prefixes
                                     (cutter.file) */
-    int have_model;              /* an upstream stage made one */
-    int model_open;              /* ... and `model` holds it */
+    int have_model;              /* an upstream stage made one (open once cutter.levels is
+                                    set) */
     const char *model_dir;       /* ... in this stage folder */
     uint32_t model_expansions;   /* its level tables' size, read at the item's opening */
     uint64_t model_triangles;    /* its finest cut's triangles */

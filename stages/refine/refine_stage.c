@@ -138,9 +138,15 @@ sl_refine_config sl_refine_default_config(void)
 
 /* --- the item's inputs -------------------------------------------------------------------- */
 
+/* A mesh under [lod] method = best: its model read by prefixes, opened late (below). */
+static int model_by_prefixes(const refine_item *it)
+{
+    return it->is_mesh && it->c->best;
+}
+
 int refine_model(refine_item *it, sl_error *err)
 {
-    if (it->model_open || !it->have_model)
+    if (it->cutter.levels || !it->have_model) /* open already, or none */
         return 0;
     char path[PATH_MAX];
     int rc = sl_stage_path(path, it->model_dir, SL_MODEL_FILE, err);
@@ -150,14 +156,13 @@ int refine_model(refine_item *it, sl_error *err)
      * Whether its finest cut is one body (the shards' rule, refine_octree.c) is then taken
      * from the input mesh, which the finest cut remeshes, instead of from that cut, which
      * would read all of it. A point set's levels are all cut: its model is opened whole. */
-    int prefix = it->is_mesh && it->c->best;
+    int prefix = model_by_prefixes(it);
     if (rc == 0 && prefix)
         rc = sl_lod_file_open(path, &it->cutter.file, err);
     else if (rc == 0)
         rc = sl_lod_model_open(path, &it->model, err);
     if (rc)
         return rc;
-    it->model_open = 1;
     it->cutter.model = prefix ? NULL : &it->model;
     it->cutter.levels = prefix ? sl_lod_file_levels(it->cutter.file) : &it->model;
     it->cutter.one_body = prefix ? it->input_one_body : -1;
@@ -167,7 +172,8 @@ int refine_model(refine_item *it, sl_error *err)
 }
 
 /* The model found in `dir`: its level tables' size read now (the file's header and tables
- * only, lod_prefix.h), the model itself when a rung first cuts it (refine_model); a point
+ * only, lod_prefix.h; closed again, so the tables are not held through a scan's top
+ * levels), the model itself when a rung first cuts it (refine_model); a point
  * set's at once, whose every level is cut from it. */
 static int find_model(refine_item *it, const char *dir, sl_error *err)
 {
@@ -185,7 +191,7 @@ static int find_model(refine_item *it, const char *dir, sl_error *err)
     it->have_model = 1;
     it->model_dir = dir;
     it->cutter.cap = it->c->cap_at_input && it->is_mesh ? it->points.triangle_count : 0;
-    return it->is_mesh && it->c->best ? 0 : refine_model(it, err);
+    return model_by_prefixes(it) ? 0 : refine_model(it, err);
 }
 
 /* The inputs found by the artifacts the earlier stages left: the range stage's points, an
@@ -243,7 +249,7 @@ static void close_item(refine_item *it)
         sl_level_list_release(&it->methods[m].list);
     if (it->cutter.file)
         sl_lod_file_close(it->cutter.file);
-    else if (it->model_open)
+    else if (it->cutter.levels)
         sl_lod_model_release(&it->model);
     sl_level_release_mesh(&it->scan_chain);
     sl_fit_reference_free(it->fit_reference);
