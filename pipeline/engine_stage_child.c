@@ -21,17 +21,82 @@
 #include <unistd.h>
 
 #include "core/atomicfile.h"
+#include "core/clock.h"
 #include "core/io.h"
 #include "core/json.h"
 #include "core/log.h"
 #include "core/memory.h"
 #include "core/progress.h"
 
+/* Where a stage's time went, by the phases it reports progress in: wall and CPU seconds
+ * per phase name (a phase met again adds to its first entry), written to the stage's
+ * _timings.json as "phases" and so to its _stats.json. The time before the first phase
+ * is "start" (mostly reading the stage's input). Phases change on the reporting thread
+ * only (core/progress.h), so one writer. */
+#define PHASE_CLOCK_MAX 32
+
+typedef struct phase_clock {
+    shared_progress *sp;
+    int count, current;
+    char name[PHASE_CLOCK_MAX][sizeof ((shared_progress *)0)->phase];
+    double wall[PHASE_CLOCK_MAX], cpu[PHASE_CLOCK_MAX];
+    double wall_mark, cpu_mark;
+} phase_clock;
+
+static double process_cpu_seconds(void)
+{
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    return (double)ru.ru_utime.tv_sec + ru.ru_utime.tv_usec * 1e-6 +
+           (double)ru.ru_stime.tv_sec + ru.ru_stime.tv_usec * 1e-6;
+}
+
+/* The current phase's time so far goes to its entry; then `phase` (NULL: none) is current. */
+static void phase_clock_switch(phase_clock *c, const char *phase)
+{
+    double wall = sl_now_seconds(), cpu = process_cpu_seconds();
+    if (c->current >= 0) {
+        c->wall[c->current] += wall - c->wall_mark;
+        c->cpu[c->current] += cpu - c->cpu_mark;
+    }
+    c->wall_mark = wall;
+    c->cpu_mark = cpu;
+    c->current = -1;
+    if (!phase)
+        return;
+    for (int i = 0; i < c->count && c->current < 0; i++)
+        if (strncmp(c->name[i], phase, sizeof c->name[i] - 1) == 0)
+            c->current = i;
+    if (c->current < 0 && c->count < PHASE_CLOCK_MAX) {
+        c->current = c->count++;
+        snprintf(c->name[c->current], sizeof c->name[c->current], "%s", phase);
+        c->wall[c->current] = c->cpu[c->current] = 0;
+    }
+}
+
 static void report_to_parent(void *ctx, const char *phase, double fraction)
 {
-    shared_progress *sp = ctx;
+    phase_clock *c = ctx;
+    shared_progress *sp = c->sp;
+    const char *name = phase ? phase : "";
+    if (strncmp(sp->phase, name, sizeof sp->phase - 1) != 0)
+        phase_clock_switch(c, name);
     sp->fraction = fraction;
-    snprintf(sp->phase, sizeof sp->phase, "%s", phase ? phase : "");
+    snprintf(sp->phase, sizeof sp->phase, "%s", name);
+}
+
+/* "phases": {"name": [wall seconds, CPU seconds], ...}, in the order first met. */
+static void phase_clock_write(phase_clock *c, sl_json *timings)
+{
+    phase_clock_switch(c, NULL);
+    sl_json_object_begin(timings, "phases");
+    for (int i = 0; i < c->count; i++) {
+        sl_json_array_begin(timings, c->name[i]);
+        sl_json_double(timings, NULL, c->wall[i]);
+        sl_json_double(timings, NULL, c->cpu[i]);
+        sl_json_array_end(timings);
+    }
+    sl_json_object_end(timings);
 }
 
 static void write_all(int fd, const void *data, size_t size)
@@ -76,10 +141,16 @@ static int run_stage_in_child(sl_engine *e, const claim_work *w, shared_progress
     sl_json_object_begin(&report, NULL);
     sl_json_init(&timings, 0);
     sl_json_object_begin(&timings, NULL);
+    static phase_clock clock; /* one per stage process; too large for the stack's taste */
+    memset(&clock, 0, sizeof clock);
+    clock.sp = sp;
+    clock.current = -1;
+    sp->phase[0] = '\0';
+    phase_clock_switch(&clock, "start");
     sl_progress progress;
     memset(&progress, 0, sizeof progress);
     progress.report = report_to_parent;
-    progress.ctx = sp;
+    progress.ctx = &clock;
     progress.interrupt_flag = sl_interrupt_flag();
     sl_stage_io io = {.item = item, .source_path = source, .in_dir = in_dir,
                       .out_dir = out_dir, .report = &report, .timings = &timings,
@@ -106,6 +177,7 @@ static int run_stage_in_child(sl_engine *e, const claim_work *w, shared_progress
         sl_engine_path(path, sizeof path, "%s/report.json", out_dir);
         rc = sl_write_file_atomic(path, report.buf, report.len, err);
     }
+    phase_clock_write(&clock, &timings);
     sl_json_object_end(&timings);
     if (rc == 0 && !timings.failed && timings.len > 2) { /* more than "{}" */
         char path[PATH_MAX];

@@ -122,6 +122,16 @@ def check_item(out, item, formats, thumbnails, fidelity, summary_md):
         t = timings.get("stages", {}).get(stage, {})
         check(t.get("seconds", -1) >= 0 and t.get("cpu_seconds", -1) >= 0 and
               t.get("peak_rss_kb", 0) > 0, f"{item}: timings.json has {stage} seconds and peak RSS")
+        # where the stage's time went, by the phases it reports progress in: wall and CPU
+        # seconds each, from the stage's start ("start") to its end, inside its own seconds
+        phases = t.get("detail", {}).get("phases", {})
+        wall = sum(p[0] for p in phases.values() if len(p) == 2)
+        check("start" in phases and all(len(p) == 2 and p[0] >= 0 and p[1] >= 0 for p in phases.values())
+              and wall <= t.get("seconds", 0) + 0.05 and wall >= 0.5 * t.get("seconds", 0) - 0.05,
+              f"{item}: timings.json gives {stage}'s phases, within its {t.get('seconds')} s: {phases}")
+        named = {"priority": ["priority: order", "priority: write"], "crack": ["crack: transitions", "crack: write"]}
+        check(all(n in phases for n in named.get(stage, [])),
+              f"{item}: {stage}'s phases name its steps: {sorted(phases)}")
     return report
 
 
