@@ -178,3 +178,73 @@ done:
     close(fd);
     return rc;
 }
+
+int sl_artifact_reader_open(sl_artifact_reader *r, const char *path, const char magic[8],
+                            uint32_t oldest, uint32_t newest, uint64_t max_body_size,
+                            sl_error *err)
+{
+    memset(r, 0, sizeof *r);
+    r->fd = -1;
+    r->path = path;
+    int rc = sl_artifact_open(path, magic, oldest, newest, &r->fd, &r->info, err);
+    if (rc)
+        return rc;
+    if (r->info.body_size > max_body_size)
+        rc = sl_error_set(err, SL_E_LIMIT, 0, path, "body of %llu bytes exceeds limit %llu",
+                          (unsigned long long)r->info.body_size,
+                          (unsigned long long)max_body_size);
+    else if (!(r->hash = XXH3_createState()))
+        rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, path, "out of memory");
+    else
+        XXH3_64bits_reset(r->hash);
+    if (rc)
+        sl_artifact_reader_close(r);
+    return rc;
+}
+
+int sl_artifact_reader_take(sl_artifact_reader *r, void *dest, uint64_t size, sl_error *err)
+{
+    if (size > r->info.body_size - r->at)
+        return sl_error_set(err, SL_E_CORRUPT, 0, r->path, "counts exceed the bytes present");
+    if (size && read_all(r->fd, dest, size))
+        return sl_error_set(err, SL_E_CORRUPT, 0, r->path, "truncated artifact body");
+    if (size)
+        XXH3_64bits_update(r->hash, dest, size);
+    r->at += size;
+    return 0;
+}
+
+int sl_artifact_reader_take_new(sl_artifact_reader *r, void **dest, uint64_t size, sl_error *err)
+{
+    *dest = NULL;
+    if (size > r->info.body_size - r->at) /* before the allocation it would size */
+        return sl_error_set(err, SL_E_CORRUPT, 0, r->path, "counts exceed the bytes present");
+    void *p = malloc(size ? size : 1);
+    if (!p)
+        return sl_error_set(err, SL_E_NOMEM, ENOMEM, r->path, "out of memory");
+    int rc = sl_artifact_reader_take(r, p, size, err);
+    if (rc)
+        free(p);
+    else
+        *dest = p;
+    return rc;
+}
+
+int sl_artifact_reader_finish(sl_artifact_reader *r, sl_error *err)
+{
+    if (r->at != r->info.body_size)
+        return sl_error_set(err, SL_E_CORRUPT, 0, r->path, "trailing bytes");
+    if (XXH3_64bits_digest(r->hash) != r->info.checksum)
+        return sl_error_set(err, SL_E_CORRUPT, 0, r->path, "checksum mismatch");
+    return 0;
+}
+
+void sl_artifact_reader_close(sl_artifact_reader *r)
+{
+    if (r->fd >= 0)
+        close(r->fd);
+    if (r->hash)
+        XXH3_freeState(r->hash);
+    r->fd = -1;
+    r->hash = NULL;
+}

@@ -62,6 +62,34 @@ int sl_artifact_open(const char *path, const char magic[8], uint32_t oldest, uin
 int sl_artifact_pread(int fd, const char *path, void *dest, uint64_t size, uint64_t at,
                       sl_error *err);
 
+/* A body read in order straight into the reader's own arrays, checksummed as it goes:
+ * for large artifacts (the octree, the priority file) whose whole body held beside the
+ * arrays parsed from it was the stage's peak (at 20 M triangles 1.6 GB twice over).
+ * Counts read from the body before the checksum is known must be checked against
+ * `info.body_size` before they size an allocation; nothing read is trusted until
+ * sl_artifact_reader_finish has compared the checksum. */
+typedef struct sl_artifact_reader {
+    int fd;
+    const char *path;
+    sl_artifact_info info;
+    uint64_t at;  /* body bytes read so far */
+    void *hash;   /* XXH3 state */
+} sl_artifact_reader;
+
+/* The header checked (as sl_artifact_open); max_body_size as sl_artifact_read's. */
+int sl_artifact_reader_open(sl_artifact_reader *r, const char *path, const char magic[8],
+                            uint32_t oldest, uint32_t newest, uint64_t max_body_size,
+                            sl_error *err);
+/* The next `size` bytes of the body into dest (SL_E_CORRUPT past the body's end). */
+int sl_artifact_reader_take(sl_artifact_reader *r, void *dest, uint64_t size, sl_error *err);
+/* The same into a fresh malloc'd block (*dest; NULL and SL_E_NOMEM when out of memory). */
+int sl_artifact_reader_take_new(sl_artifact_reader *r, void **dest, uint64_t size, sl_error *err);
+/* Every byte of the body taken and its checksum right (SL_E_CORRUPT: "trailing bytes" or
+ * "checksum mismatch"). */
+int sl_artifact_reader_finish(sl_artifact_reader *r, sl_error *err);
+/* Closes the file and frees the state (after finish, or to give up). */
+void sl_artifact_reader_close(sl_artifact_reader *r);
+
 /* Little-endian helpers for bodies (the format is LE on every host). */
 static inline void sl_put_u32(unsigned char *p, uint32_t v)
 {

@@ -360,6 +360,50 @@ int sl_octree_check(sl_octree *t, const char *name, sl_error *err)
     return rc;
 }
 
+/* Where a parse takes its arrays from: a body in memory (`at`), or a file read in order. */
+typedef struct part_source {
+    const unsigned char *at;
+    sl_artifact_reader *reader;
+} part_source;
+
+static int take_part(part_source *src, void *dest, uint64_t size, const char *name, sl_error *err)
+{
+    void **out = dest;
+    if (src->reader)
+        return sl_artifact_reader_take_new(src->reader, out, size, err);
+    *out = copy_out(src->at, size);
+    src->at += size;
+    return *out ? 0 : sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
+}
+
+/* The arrays after the header, in file order. On failure the tree is released. */
+static int take_arrays(part_source *src, const sl_octree_layout *lay, const char *name,
+                       sl_octree *out, sl_error *err)
+{
+    int rc = take_part(src, &out->nodes, lay->nodes, name, err);
+    if (rc == 0)
+        rc = take_part(src, &out->node_crossings, lay->ids, name, err);
+    if (rc == 0)
+        rc = take_part(src, &out->crossing_position, lay->positions, name, err);
+    if (rc == 0 && lay->has_color)
+        rc = take_part(src, &out->crossing_color, lay->colors, name, err);
+    if (rc == 0 && (lay->flags & HAS_VERTICES)) {
+        out->vertex_count = lay->vertex_count;
+        rc = take_part(src, &out->vertex_first, lay->vertex_first, name, err);
+        if (rc == 0)
+            rc = take_part(src, &out->vertex_position, lay->vertices, name, err);
+        if (rc == 0 && lay->has_color)
+            rc = take_part(src, &out->vertex_color, lay->vertex_colors, name, err);
+        if (rc == 0 && lay->metrics)
+            rc = take_part(src, &out->node_error, lay->metrics, name, err);
+        if (rc == 0 && lay->metrics)
+            rc = take_part(src, &out->node_area, lay->metrics, name, err);
+    }
+    if (rc)
+        sl_octree_release(out);
+    return rc;
+}
+
 int sl_octree_parse(const unsigned char *body, uint64_t size, const char *name, sl_octree *out,
                     uint64_t *used, sl_error *err)
 {
@@ -371,38 +415,10 @@ int sl_octree_parse(const unsigned char *body, uint64_t size, const char *name, 
         return bad(err, name, "nodes in LOD order where levels are expected");
     if (lay.total > size)
         return bad(err, name, "counts exceed the bytes present");
-    const unsigned char *p = body + HEADER_SIZE;
-    out->nodes = copy_out(p, lay.nodes);
-    p += lay.nodes;
-    out->node_crossings = copy_out(p, lay.ids);
-    p += lay.ids;
-    out->crossing_position = copy_out(p, lay.positions);
-    p += lay.positions;
-    out->crossing_color = lay.has_color ? copy_out(p, lay.colors) : NULL;
-    p += lay.colors;
-    int failed = !out->nodes || !out->node_crossings || !out->crossing_position ||
-                 (lay.has_color && !out->crossing_color);
-    if ((lay.flags & HAS_VERTICES) && !failed) {
-        out->vertex_count = lay.vertex_count;
-        out->vertex_first = copy_out(p, lay.vertex_first);
-        p += lay.vertex_first;
-        out->vertex_position = copy_out(p, lay.vertices);
-        p += lay.vertices;
-        out->vertex_color = lay.has_color ? copy_out(p, lay.vertex_colors) : NULL;
-        p += lay.vertex_colors;
-        if (lay.metrics) {
-            out->node_error = copy_out(p, lay.metrics);
-            out->node_area = copy_out(p + lay.metrics, lay.metrics);
-        }
-        failed = !out->vertex_first || !out->vertex_position ||
-                 (lay.has_color && !out->vertex_color) ||
-                 (lay.metrics && (!out->node_error || !out->node_area));
-    }
-    if (failed) {
-        sl_octree_release(out);
-        return sl_error_set(err, SL_E_NOMEM, ENOMEM, name, "out of memory");
-    }
-    rc = sl_octree_check(out, name, err);
+    part_source src = {body + HEADER_SIZE, NULL};
+    rc = take_arrays(&src, &lay, name, out, err);
+    if (rc == 0)
+        rc = sl_octree_check(out, name, err);
     if (rc) {
         sl_octree_release(out);
         return rc;
@@ -420,19 +436,39 @@ int sl_octree_write(const char *path, const sl_octree *t, uint32_t stage_version
                              parts, n, err);
 }
 
+/* Read in order straight into the tree's arrays (sl_artifact_reader): the whole body held
+ * beside them was the priority stage's peak. The header's counts are checked against the
+ * body's size before they size anything; the tree is checked once the checksum is. */
 int sl_octree_read(const char *path, sl_octree *out, sl_error *err)
 {
-    void *body = NULL;
-    uint64_t size = 0, used = 0;
     sl_octree_init(out);
-    int rc = sl_artifact_read(path, SL_OCTREE_MAGIC, SL_OCTREE_FORMAT_VERSION, (uint64_t)1 << 40,
-                              &body, &size, NULL, err);
+    sl_artifact_reader reader;
+    int rc = sl_artifact_reader_open(&reader, path, SL_OCTREE_MAGIC, SL_OCTREE_FORMAT_VERSION,
+                                     SL_OCTREE_FORMAT_VERSION, (uint64_t)1 << 40, err);
+    if (rc)
+        return rc;
+    uint64_t size = reader.info.body_size;
+    unsigned char header[HEADER_SIZE];
+    sl_octree_layout lay;
+    rc = size < HEADER_SIZE ? bad(err, path, "truncated header")
+                            : sl_artifact_reader_take(&reader, header, HEADER_SIZE, err);
     if (rc == 0)
-        rc = sl_octree_parse(body, size, path, out, &used, err);
-    if (rc == 0 && used != size) {
-        sl_octree_release(out);
+        rc = sl_octree_parse_header(header, size, path, out, &lay, err);
+    if (rc == 0 && (lay.flags & LOD_ORDER))
+        rc = bad(err, path, "nodes in LOD order where levels are expected");
+    if (rc == 0 && lay.total > size)
+        rc = bad(err, path, "counts exceed the bytes present");
+    if (rc == 0 && lay.total != size)
         rc = bad(err, path, "trailing bytes");
-    }
-    free(body);
+    part_source src = {NULL, &reader};
+    if (rc == 0)
+        rc = take_arrays(&src, &lay, path, out, err);
+    if (rc == 0)
+        rc = sl_artifact_reader_finish(&reader, err);
+    if (rc == 0)
+        rc = sl_octree_check(out, path, err);
+    if (rc)
+        sl_octree_release(out);
+    sl_artifact_reader_close(&reader);
     return rc;
 }

@@ -2,12 +2,17 @@
  * equals plain marching cubes over the same samples, every uniform level is watertight,
  * parent crossings are child crossings, and the build does not depend on thread count. */
 #include <math.h>
+#include <stddef.h>
 #include <omp.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+#include <xxhash.h>
 
 #include "runtime/lod_mesh.h"
 #include "runtime/mc_cube.h"
+#include "runtime/octree_io.h"
 #include "stages/merge/merge.h"
 #include "tests/check.h"
 #include "tests/unit/mesh_checks.h"
@@ -246,6 +251,111 @@ static void test_bad_samples(void)
     CHECK(sl_octree_build(&wide, &t, NULL, &err) == SL_E_LIMIT);
 }
 
+/* The file as bytes, one byte changed or the body grown, re-sealed (size and checksum put
+ * right, as a producer with a bug would write it) when `seal`. */
+static unsigned char *file_bytes(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *b = NULL;
+    long n = -1;
+    if (f && fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) > 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (b = malloc((size_t)n + 64)) && fread(b, 1, (size_t)n, f) != (size_t)n) {
+        free(b);
+        b = NULL;
+    }
+    if (f)
+        fclose(f);
+    *size = b ? (size_t)n : 0;
+    return b;
+}
+
+static int read_mutant(const char *path, const unsigned char *bytes, size_t size, int seal,
+                       sl_error *err)
+{
+    unsigned char *b = malloc(size);
+    memcpy(b, bytes, size);
+    if (seal) {
+        uint64_t body = size - SL_ARTIFACT_HEADER_SIZE;
+        sl_put_u64(b + 16, body);
+        sl_put_u64(b + 24, XXH3_64bits(b + SL_ARTIFACT_HEADER_SIZE, body));
+    }
+    FILE *f = fopen(path, "wb");
+    int ok = f && fwrite(b, 1, size, f) == size;
+    if (f)
+        fclose(f);
+    free(b);
+    sl_octree t;
+    sl_error_init(err);
+    int rc = ok ? sl_octree_read(path, &t, err) : -1;
+    if (rc == 0)
+        sl_octree_release(&t);
+    return rc;
+}
+
+/* octree.slot read in order into the tree's arrays (no whole body beside them): the same
+ * tree back, and every kind of bad file refused with the file named, before a count read
+ * from it sizes an allocation (a 2^31-node header would ask for 64 GB: ASan stops that). */
+static void test_file(const samples *s)
+{
+    char dir[256], path[300], mutant[300];
+    snprintf(dir, sizeof dir, "%s/scanlod-octree.XXXXXX", getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
+    CHECK(mkdtemp(dir) != NULL);
+    snprintf(path, sizeof path, "%s/octree.slot", dir);
+    snprintf(mutant, sizeof mutant, "%s/mutant.slot", dir);
+    sl_sample_grid g = grid_of(s);
+    sl_octree a, b;
+    sl_error err;
+    sl_error_init(&err);
+    CHECK(sl_octree_build(&g, &a, NULL, &err) == 0);
+    CHECK(sl_octree_write(path, &a, 1, &err) == 0);
+    CHECK(sl_octree_read(path, &b, &err) == 0);
+    CHECK(a.node_count == b.node_count && a.crossing_count == b.crossing_count &&
+          a.node_crossing_count == b.node_crossing_count);
+    CHECK(memcmp(a.nodes, b.nodes, a.node_count * sizeof *a.nodes) == 0);
+    CHECK(memcmp(a.crossing_position, b.crossing_position, 3 * sizeof(float) * a.crossing_count) == 0);
+    CHECK(memcmp(a.node_crossings, b.node_crossings, a.node_crossing_count * sizeof(uint32_t)) == 0);
+    CHECK(memcmp(a.morton, b.morton, a.node_count * sizeof *a.morton) == 0);
+    sl_octree_release(&b);
+    sl_octree_release(&a);
+
+    size_t size;
+    unsigned char *bytes = file_bytes(path, &size);
+    CHECK(bytes && size > 200);
+    if (!bytes)
+        return;
+    /* a crossing's coordinate changed: caught by the checksum after the read */
+    bytes[size - 3] ^= 0x40;
+    CHECK(read_mutant(mutant, bytes, size, 0, &err) == SL_E_CORRUPT &&
+          strstr(err.message, "checksum mismatch") && strstr(err.file, "mutant.slot"));
+    bytes[size - 3] ^= 0x40;
+    /* 2^31 nodes declared, the file sealed again: refused on the counts, not allocated */
+    uint32_t nodes = sl_get_u32(bytes + SL_ARTIFACT_HEADER_SIZE + 4);
+    sl_put_u32(bytes + SL_ARTIFACT_HEADER_SIZE + 4, 1u << 31);
+    CHECK(read_mutant(mutant, bytes, size, 1, &err) == SL_E_CORRUPT &&
+          strstr(err.message, "counts exceed the bytes present"));
+    sl_put_u32(bytes + SL_ARTIFACT_HEADER_SIZE + 4, nodes);
+    /* four bytes more than the counts say, sealed */
+    memset(bytes + size, 0, 4);
+    CHECK(read_mutant(mutant, bytes, size + 4, 1, &err) == SL_E_CORRUPT &&
+          strstr(err.message, "trailing bytes"));
+    /* cut short (the header's size no longer the file's) and cut inside the octree header */
+    CHECK(read_mutant(mutant, bytes, size - 100, 0, &err) == SL_E_CORRUPT);
+    CHECK(read_mutant(mutant, bytes, SL_ARTIFACT_HEADER_SIZE + 40, 1, &err) == SL_E_CORRUPT &&
+          strstr(err.message, "truncated header"));
+    /* a node's parent out of range, sealed: the checksum is right, the tree's check is not */
+    size_t first_node = SL_ARTIFACT_HEADER_SIZE + (size_t)(4 * 4 + 8 + 8 * 4 + 4 * 2 * SL_OCTREE_MAX_LEVELS + 8 * 6 + 16);
+    sl_put_u32(bytes + first_node + offsetof(sl_octree_node, parent), 7);
+    CHECK(read_mutant(mutant, bytes, size, 1, &err) == SL_E_CORRUPT &&
+          strstr(err.message, "invalid octree"));
+    /* and the file as written reads again */
+    sl_put_u32(bytes + first_node + offsetof(sl_octree_node, parent), SL_OCTREE_NONE);
+    CHECK(read_mutant(mutant, bytes, size, 0, &err) == 0);
+    free(bytes);
+    unlink(path);
+    unlink(mutant);
+    rmdir(dir);
+}
+
 int main(void)
 {
     samples sphere = make_samples(sphere_sdf, 16, 2.5);
@@ -256,6 +366,7 @@ int main(void)
     test_levels(&torus, "torus", 0.08, torus_sdf);
     test_deterministic(&torus);
     test_bad_samples();
+    test_file(&torus);
     free(sphere.coords);
     free(sphere.distance);
     free(sphere.colors);
