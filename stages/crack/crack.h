@@ -31,11 +31,14 @@ typedef struct sl_crack_config {
 /* The (empty) section at its defaults (sl_stage_default_config). */
 sl_crack_config sl_crack_default_config(void);
 
-/* Gathers every internal node's transition record from the finer level (O(n log n)
- * lookups, OpenMP over nodes, deterministic). *unresolved = how many edge midpoints and
- * face centres of internal nodes no finer cell has (the report's finer_samples_missing).
- * Returns -1 on OOM. */
-int sl_transitions_build(const sl_octree *t, sl_transitions *out, uint64_t *unresolved);
+/* Gathers every internal node's transition record from the finer level (OpenMP over
+ * nodes, deterministic): the 64 finer cells around a node are its own and its neighbours'
+ * children, found through `nb` (the priority stage's links of internal nodes; O(1) each)
+ * or, with nb NULL and for a node without links, by a search (O(log n)); the records are
+ * the same either way. *unresolved = how many edge midpoints and face centres of internal
+ * nodes no finer cell has (the report's finer_samples_missing). Returns -1 on OOM. */
+int sl_transitions_build(const sl_octree *t, const sl_neighbours *nb, sl_transitions *out,
+                         uint64_t *unresolved);
 
 /* Completes a model whose tree, lod_array, neighbours and transitions are set: derives
  * expansion_index, the accumulation table (by drawing the cells each expansion changes)

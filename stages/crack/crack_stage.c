@@ -81,7 +81,7 @@ static int crack_run(const void *config, const sl_stage_io *io, sl_error *err)
     uint64_t unresolved = 0;
     if (rc == 0)
         rc = sl_stage_step(io, "crack: transitions", 0.1, err);
-    if (rc == 0 && sl_transitions_build(&model.tree, &model.transitions, &unresolved))
+    if (rc == 0 && sl_transitions_build(&model.tree, &p.neighbours, &model.transitions, &unresolved))
         rc = sl_error_set(err, SL_E_NOMEM, ENOMEM, NULL, "out of memory");
     if (rc == 0) {
         /* The model takes over the priority stage's arrays. */
@@ -105,7 +105,9 @@ static int crack_run(const void *config, const sl_stage_io *io, sl_error *err)
         /* Laid out for the triangle counts; the writer reads the tree, the records and the
          * tables, not the layout (at 1 M triangles 90 MB beside the pieces being packed). */
         sl_lod_model_drop_layout(&model);
-        rc = sl_lod_model_write(out_path, &model, CRACK_STAGE_VERSION, err);
+        rc = sl_stage_step(io, "crack: write", 0.8, err);
+        if (rc == 0)
+            rc = sl_lod_model_write(out_path, &model, CRACK_STAGE_VERSION, err);
     }
     if (rc == 0) {
         sl_json_u64(io->report, "transition_words", model.transitions.count);

@@ -10,6 +10,7 @@
  * uses on their shared face is what closes the crack (Shekhar et al. move the fine points
  * onto the coarse segment instead; here the coarse side adopts the fine points).
  */
+#include <assert.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -72,16 +73,40 @@ static void note_edge(transition *tr, const int s[3], int a, uint32_t crossing)
     }
 }
 
-static void gather(const sl_octree *t, uint32_t i, transition *tr)
+/* The finer cell at offset (ox, oy, oz), each -1..2, from node i's first child's corner:
+ * a child of i or of one of its same-level neighbours (a finer node exists only under its
+ * parent), found through the neighbour table when i has its links (an internal node), else
+ * by a search of the finer level's Morton order. */
+static uint32_t finer_cell(const sl_octree *t, const sl_neighbours *nb, uint32_t i, int ox,
+                           int oy, int oz)
 {
     const sl_octree_node *n = &t->nodes[i];
+    if (!nb || !n->child_mask)
+        return sl_octree_find(t, n->level - 1u, 2 * (int64_t)n->x + ox, 2 * (int64_t)n->y + oy,
+                              2 * (int64_t)n->z + oz);
+    /* -1 -> the neighbour below, 0 and 1 -> i's own column, 2 -> the neighbour above */
+    int dx = (ox + 2) / 2 - 1, dy = (oy + 2) / 2 - 1, dz = (oz + 2) / 2 - 1;
+    uint32_t m = dx || dy || dz ? sl_neighbour(nb, i, sl_direction(dx, dy, dz)) : i;
+    if (m == SL_OCTREE_NONE)
+        return SL_OCTREE_NONE;
+    const sl_octree_node *parent = &t->nodes[m];
+    unsigned octant = (unsigned)(ox & 1) | (unsigned)(oy & 1) << 1 | (unsigned)(oz & 1) << 2;
+    if (!(parent->child_mask >> octant & 1))
+        return SL_OCTREE_NONE;
+    uint32_t fi = parent->first_child + (uint32_t)__builtin_popcount(parent->child_mask & ((1u << octant) - 1u));
+    assert(fi == sl_octree_find(t, n->level - 1u, 2 * (int64_t)n->x + ox, 2 * (int64_t)n->y + oy,
+                                2 * (int64_t)n->z + oz));
+    return fi;
+}
+
+static void gather(const sl_octree *t, const sl_neighbours *nb, uint32_t i, transition *tr)
+{
     memset(tr, 0, sizeof *tr);
     for (int k = 0; k < 24; k++)
         tr->half[k] = tr->spoke[k] = SL_OCTREE_NONE;
-    int64_t fx = 2 * (int64_t)n->x, fy = 2 * (int64_t)n->y, fz = 2 * (int64_t)n->z;
     for (int cell = 0; cell < 64; cell++) {
         int ox = cell % 4 - 1, oy = cell / 4 % 4 - 1, oz = cell / 16 - 1;
-        uint32_t fi = sl_octree_find(t, n->level - 1u, fx + ox, fy + oy, fz + oz);
+        uint32_t fi = finer_cell(t, nb, i, ox, oy, oz);
         if (fi == SL_OCTREE_NONE)
             continue;
         const sl_octree_node *fine = &t->nodes[fi];
@@ -103,7 +128,8 @@ static void gather(const sl_octree *t, uint32_t i, transition *tr)
     }
 }
 
-int sl_transitions_build(const sl_octree *t, sl_transitions *out, uint64_t *unresolved)
+int sl_transitions_build(const sl_octree *t, const sl_neighbours *nb, sl_transitions *out,
+                         uint64_t *unresolved)
 {
     memset(out, 0, sizeof *out);
     *unresolved = 0;
@@ -131,7 +157,7 @@ int sl_transitions_build(const sl_octree *t, sl_transitions *out, uint64_t *unre
         if (slot[i] == SL_OCTREE_NONE)
             continue;
         transition *tr = &all[slot[i]];
-        gather(t, i, tr);
+        gather(t, nb, i, tr);
         missing += (uint64_t)(12 - __builtin_popcount(tr->mid_known)) +
                    (uint64_t)(6 - __builtin_popcount(tr->centre_known));
     }

@@ -54,6 +54,115 @@ static double small_torus_sdf(const double p[3])
     return sqrt(q * q + p[2] * p[2]) - 1.6;
 }
 
+/* The expansion order as the rule reads (the stage's before it ran in rank space, with
+ * its keys zeroed rather than unset): a binary max-heap over node indices, the 26 cells
+ * around a popped node looked up through its parent's neighbours each time. The stage's
+ * order must equal it entry for entry; *waits counts the nodes held back, so a shape that
+ * never exercises the rule is seen. */
+typedef struct ref_entry {
+    float key;
+    uint32_t node;
+} ref_entry;
+
+static int ref_before(ref_entry a, ref_entry b)
+{
+    return a.key > b.key || (a.key == b.key && a.node < b.node);
+}
+
+static void ref_push(ref_entry *h, uint32_t *size, ref_entry e)
+{
+    uint32_t i = (*size)++;
+    for (; i > 0 && ref_before(e, h[(i - 1) / 2]); i = (i - 1) / 2)
+        h[i] = h[(i - 1) / 2];
+    h[i] = e;
+}
+
+static ref_entry ref_pop(ref_entry *h, uint32_t *size)
+{
+    ref_entry top = h[0], last = h[--*size];
+    uint32_t i = 0;
+    for (uint32_t c; (c = 2 * i + 1) < *size; i = c) {
+        if (c + 1 < *size && ref_before(h[c + 1], h[c]))
+            c++;
+        if (!ref_before(h[c], last))
+            break;
+        h[i] = h[c];
+    }
+    if (*size > 0)
+        h[i] = last;
+    return top;
+}
+
+static uint32_t reference_order(const sl_octree *t, const sl_neighbours *nb, const float *key,
+                                int inherit, uint32_t *order, uint32_t *waits)
+{
+    enum { NOT_YET, IN_HEAP, WAITING, EXPANDED };
+    uint32_t n = t->node_count, k = 0, size = 0;
+    ref_entry *heap = malloc(8 * (size_t)n * sizeof *heap); /* raised entries go stale in it */
+    float *cur = calloc(n, sizeof *cur);
+    uint8_t *state = calloc(n, 1);
+    uint32_t *wait_on = malloc(n * sizeof *wait_on), *head = malloc(n * sizeof *head);
+    uint32_t *next = malloc(n * sizeof *next);
+    memset(head, 0xff, n * sizeof *head);
+    *waits = 0;
+#define REF_PUSH(node, value) (cur[node] = (value), state[node] = IN_HEAP, ref_push(heap, &size, (ref_entry){cur[node], node}))
+    if (t->nodes[0].child_mask)
+        REF_PUSH(0, key[0]);
+    while (size > 0) {
+        ref_entry top = ref_pop(heap, &size);
+        uint32_t v = top.node, b = SL_OCTREE_NONE;
+        if (state[v] != IN_HEAP || top.key != cur[v])
+            continue;
+        const sl_octree_node *node = &t->nodes[v];
+        for (int d = 0; d < 27 && b == SL_OCTREE_NONE && node->parent != SL_OCTREE_NONE; d++) {
+            const sl_octree_node *p = &t->nodes[node->parent];
+            int64_t q[3] = {(int64_t)node->x + d % 3 - 1, (int64_t)node->y + d / 3 % 3 - 1,
+                            (int64_t)node->z + d / 9 - 1}, pc[3] = {p->x, p->y, p->z};
+            int off[3];
+            for (int a = 0; a < 3; a++)
+                off[a] = (int)((q[a] >= 0 ? q[a] / 2 : -1) - pc[a]);
+            int pd = sl_direction(off[0], off[1], off[2]);
+            uint32_t m = d == 13 || pd == 13 ? SL_OCTREE_NONE : sl_neighbour(nb, node->parent, pd);
+            if (m != SL_OCTREE_NONE && state[m] != EXPANDED)
+                b = m;
+        }
+        if (b != SL_OCTREE_NONE) {
+            ++*waits;
+            state[v] = WAITING;
+            wait_on[v] = b;
+            next[v] = head[b];
+            head[b] = v;
+            for (float raised = cur[v]; inherit && cur[b] < raised;) {
+                if (state[b] == IN_HEAP) {
+                    REF_PUSH(b, raised);
+                    break;
+                }
+                cur[b] = raised;
+                if (state[b] != WAITING)
+                    break;
+                b = wait_on[b];
+            }
+            continue;
+        }
+        state[v] = EXPANDED;
+        order[k++] = v;
+        for (int c = 0; c < __builtin_popcount(node->child_mask); c++)
+            if (t->nodes[node->first_child + (uint32_t)c].child_mask)
+                REF_PUSH(node->first_child + (uint32_t)c, key[node->first_child + (uint32_t)c]);
+        for (uint32_t w = head[v]; w != SL_OCTREE_NONE; w = next[w])
+            REF_PUSH(w, cur[w]);
+        head[v] = SL_OCTREE_NONE;
+    }
+#undef REF_PUSH
+    free(heap);
+    free(cur);
+    free(state);
+    free(wait_on);
+    free(head);
+    free(next);
+    return k;
+}
+
 static int build_model(sdf_fn sdf, int n, sl_priority_metric metric, sl_lod_model *m)
 {
     size_t cap = 4096, count = 0;
@@ -120,11 +229,35 @@ static int build_model(sdf_fn sdf, int n, sl_priority_metric metric, sl_lod_mode
     rc = rc || sl_priority_metrics(&m->tree, area, error) ||
          sl_priority_keys(&m->tree, metric, area, key) ||
          sl_priority_order(&m->tree, &m->neighbours, key, inherit, m->lod_array, &m->expansion_count, &err) ||
-         sl_transitions_build(&m->tree, &m->transitions, &unresolved) ||
+         sl_transitions_build(&m->tree, NULL, &m->transitions, &unresolved) ||
          sl_lod_model_finish(m, error, &err);
+    if (!rc) { /* the crack stage's way: the internal nodes' links, not searches */
+        sl_neighbours links;
+        sl_transitions linked;
+        uint64_t all_links, unresolved_linked = 0;
+        memset(&links, 0, sizeof links);
+        memset(&linked, 0, sizeof linked);
+        CHECK(sl_neighbours_build_internal(&m->tree, &links, &all_links) == 0 &&
+              sl_transitions_build(&m->tree, &links, &linked, &unresolved_linked) == 0);
+        CHECK_MSG(linked.count == m->transitions.count && unresolved_linked == unresolved &&
+                      memcmp(linked.base, m->transitions.base, m->tree.node_count * sizeof *linked.base) == 0 &&
+                      memcmp(linked.words, m->transitions.words, linked.count * sizeof *linked.words) == 0,
+                  "metric %s: the transition records differ found through the links",
+                  sl_priority_metric_name(metric));
+        sl_transitions_release(&linked);
+        sl_neighbours_release(&links);
+    }
     CHECK_MSG(rc || (count_one == m->expansion_count &&
                      memcmp(one_thread, m->lod_array, count_one * sizeof *one_thread) == 0),
               "metric %s: the order differs between 1 and 2 threads", sl_priority_metric_name(metric));
+    if (!rc) {
+        uint32_t waits = 0, count_ref = reference_order(&m->tree, &m->neighbours, key, inherit, one_thread, &waits);
+        CHECK_MSG(count_ref == m->expansion_count &&
+                      memcmp(one_thread, m->lod_array, count_ref * sizeof *one_thread) == 0,
+                  "metric %s: the order differs from the rule's reference", sl_priority_metric_name(metric));
+        CHECK_MSG(waits > 0 || m->expansion_count < 64, "metric %s: no node was held back (%u expansions)",
+                  sl_priority_metric_name(metric), m->expansion_count);
+    }
     free(area);
     free(error);
     free(key);

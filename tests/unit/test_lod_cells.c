@@ -101,7 +101,7 @@ static int build_model(int n, int coloured, sl_lod_model *m)
     free(ready);
     uint64_t unresolved;
     return sl_neighbours_build(t, &m->neighbours) ||
-           sl_transitions_build(t, &m->transitions, &unresolved) ||
+           sl_transitions_build(t, &m->neighbours, &m->transitions, &unresolved) ||
            sl_lod_model_finish(m, NULL, &err);
 }
 
