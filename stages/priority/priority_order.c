@@ -59,14 +59,15 @@ static heap_entry heap_pop(heap_entry *h, uint32_t *size)
  * the order was 7-8 s, a third of the stage, all of it on one thread). */
 
 #define NEVER_EXPANDED UINT32_MAX /* a coarser neighbour without children: it never expands */
+#define COARSER_MAX 7 /* the parent's neighbours on a child's side: 2^3 - 1 directions */
 
 typedef struct rank_tables {
     uint32_t count;
     uint32_t *node;          /* rank -> node */
     uint32_t *child_first;   /* rank of the first internal child */
     uint8_t *child_count;    /* internal children */
-    uint32_t *blocker_first; /* count + 1 entries: the rank's run of `blocker` */
-    uint32_t *blocker;       /* coarser neighbours' ranks, or NEVER_EXPANDED */
+    uint8_t *blocker_count;  /* coarser neighbours, at most COARSER_MAX */
+    uint32_t *blocker;       /* COARSER_MAX slots per rank: their ranks, or NEVER_EXPANDED */
 } rank_tables;
 
 static void rank_tables_release(rank_tables *r)
@@ -74,15 +75,14 @@ static void rank_tables_release(rank_tables *r)
     free(r->node);
     free(r->child_first);
     free(r->child_count);
-    free(r->blocker_first);
+    free(r->blocker_count);
     free(r->blocker);
     memset(r, 0, sizeof *r);
 }
 
 /* The coarser neighbours around node n that the level-difference rule waits for, in the
  * rule's order (the 26 directions around n, each mapped to the parent's neighbour it falls
- * in; the first occurrence of each), as ranks; written to out when not NULL. Returns how
- * many. */
+ * in; the first occurrence of each), as ranks into out. Returns how many. */
 static uint32_t coarser_neighbours(const sl_octree *t, const sl_neighbours *nb, const uint32_t *rank_of,
                                    uint32_t n, uint32_t *out)
 {
@@ -108,11 +108,9 @@ static uint32_t coarser_neighbours(const sl_octree *t, const sl_neighbours *nb, 
         uint32_t m = sl_neighbour(nb, node->parent, pd);
         if (m == SL_OCTREE_NONE)
             continue;
-        if (out)
-            out[count] = rank_of[m];
-        count++;
+        assert(count < COARSER_MAX);
+        out[count++] = rank_of[m];
     }
-    assert(count <= 7); /* the parent's neighbours on n's side: 2^3 - 1 directions */
     return count;
 }
 
@@ -123,22 +121,44 @@ static int rank_tables_build(const sl_octree *t, const sl_neighbours *nb, rank_t
     uint32_t *rank_of = malloc((n ? n : 1) * sizeof *rank_of);
     if (!rank_of)
         return -1;
-    uint32_t count = 0;
-    for (uint32_t i = 0; i < n; i++) /* a pass over one byte per 32: memory bound */
-        rank_of[i] = t->nodes[i].child_mask ? count++ : NEVER_EXPANDED;
+    /* ranks by chunks: each chunk's internal nodes counted, the counts summed, the chunks
+     * numbered from their sums (in parallel both times) */
+    enum { RANK_CHUNK = 1 << 16 };
+    uint32_t chunks = n / RANK_CHUNK + 1, count = 0;
+    uint32_t *chunk_first = malloc(((size_t)chunks + 1) * sizeof *chunk_first);
+    if (!chunk_first) {
+        free(rank_of);
+        return -1;
+    }
+#pragma omp parallel for schedule(static)
+    for (uint32_t c = 0; c < chunks; c++) {
+        uint32_t end = c == chunks - 1 ? n : (c + 1) * RANK_CHUNK, internal = 0;
+        for (uint32_t i = c * RANK_CHUNK; i < end; i++)
+            internal += t->nodes[i].child_mask != 0;
+        chunk_first[c + 1] = internal;
+    }
+    chunk_first[0] = 0;
+    for (uint32_t c = 0; c < chunks; c++)
+        chunk_first[c + 1] += chunk_first[c];
+    count = chunk_first[chunks];
     size_t slots = count ? count : 1;
     r->count = count;
     r->node = malloc(slots * sizeof *r->node);
     r->child_first = malloc(slots * sizeof *r->child_first);
     r->child_count = malloc(slots);
-    r->blocker_first = malloc((slots + 1) * sizeof *r->blocker_first);
-    int failed = !r->node || !r->child_first || !r->child_count || !r->blocker_first;
+    r->blocker_count = malloc(slots);
+    r->blocker = malloc(slots * COARSER_MAX * sizeof *r->blocker);
+    int failed = !r->node || !r->child_first || !r->child_count || !r->blocker_count || !r->blocker;
     if (!failed) {
 #pragma omp parallel for schedule(static)
-        for (uint32_t i = 0; i < n; i++)
-            if (rank_of[i] != NEVER_EXPANDED)
-                r->node[rank_of[i]] = i;
-        r->blocker_first[0] = 0;
+        for (uint32_t c = 0; c < chunks; c++) {
+            uint32_t end = c == chunks - 1 ? n : (c + 1) * RANK_CHUNK, k = chunk_first[c];
+            for (uint32_t i = c * RANK_CHUNK; i < end; i++) {
+                rank_of[i] = t->nodes[i].child_mask ? k : NEVER_EXPANDED;
+                if (t->nodes[i].child_mask)
+                    r->node[k++] = i;
+            }
+        }
 #pragma omp parallel for schedule(dynamic, 4096)
         for (uint32_t k = 0; k < count; k++) {
             const sl_octree_node *node = &t->nodes[r->node[k]];
@@ -152,19 +172,12 @@ static int rank_tables_build(const sl_octree *t, const sl_neighbours *nb, rank_t
             }
             r->child_first[k] = first;
             r->child_count[k] = (uint8_t)internal;
-            r->blocker_first[k + 1] = coarser_neighbours(t, nb, rank_of, r->node[k], NULL);
+            r->blocker_count[k] = (uint8_t)coarser_neighbours(t, nb, rank_of, r->node[k],
+                                                              r->blocker + (size_t)COARSER_MAX * k);
         }
-        for (uint32_t k = 0; k < count; k++)
-            r->blocker_first[k + 1] += r->blocker_first[k];
-        r->blocker = malloc((r->blocker_first[count] ? r->blocker_first[count] : 1) * sizeof *r->blocker);
-        failed = !r->blocker;
-    }
-    if (!failed) {
-#pragma omp parallel for schedule(dynamic, 4096)
-        for (uint32_t k = 0; k < count; k++)
-            coarser_neighbours(t, nb, rank_of, r->node[k], r->blocker + r->blocker_first[k]);
     }
     free(rank_of);
+    free(chunk_first);
     if (failed)
         rank_tables_release(r);
     return failed ? -1 : 0;
@@ -184,8 +197,9 @@ typedef struct order_state {
 /* A coarser unexpanded neighbour of rank k (the level-difference rule), or NONE. */
 static uint32_t blocker(const rank_tables *r, const uint8_t *state, uint32_t k)
 {
-    for (uint32_t i = r->blocker_first[k]; i < r->blocker_first[k + 1]; i++) {
-        uint32_t m = r->blocker[i];
+    const uint32_t *around = r->blocker + (size_t)COARSER_MAX * k;
+    for (uint32_t i = 0; i < r->blocker_count[k]; i++) {
+        uint32_t m = around[i];
         if (m == NEVER_EXPANDED || state[m] != EXPANDED)
             return m;
     }
