@@ -106,6 +106,8 @@ static int place_vertices(const sl_merge_config *c, const sl_stage_io *io, sl_oc
     sl_pointset ps;
     int rc = sl_stage_path(path, range_dir, SL_POINTSET_FILE, err);
     if (rc == 0)
+        rc = sl_stage_step(io, "merge: read points", 0.7, err);
+    if (rc == 0)
         rc = sl_pointset_read(path, &ps, err);
     if (rc)
         return rc;
@@ -139,9 +141,16 @@ static int merge_run(const void *config, const sl_stage_io *io, sl_error *err)
     sl_vdb_samples samples;
     sl_vdb_set_threads(io->threads); /* OpenVDB's TBB pool reads the grids: cap it */
     if (rc == 0)
+        rc = sl_stage_step(io, "merge: read samples", 0.0, err);
+    if (rc == 0)
         rc = sl_vdb_samples_read(in_path, c->max_samples, &samples, err);
     if (rc)
         return rc;
+    /* the leaves, until the build's first level step ("merge") */
+    if ((rc = sl_stage_step(io, "merge: leaves", 0.05, err)) != 0) {
+        sl_vdb_samples_release(&samples);
+        return rc;
+    }
     sl_sample_grid grid = {samples.count, samples.coords, samples.distance, samples.colors,
                            samples.leaf_size,
                            {samples.origin[0], samples.origin[1], samples.origin[2]}};
@@ -152,6 +161,8 @@ static int merge_run(const void *config, const sl_stage_io *io, sl_error *err)
         return rc;
     if (c->qef_vertices)
         rc = place_vertices(c, io, &tree, err);
+    if (rc == 0)
+        rc = sl_stage_step(io, "merge: write", 0.95, err);
     if (rc == 0)
         rc = sl_octree_write(out_path, &tree, MERGE_STAGE_VERSION, err);
     if (rc == 0)
