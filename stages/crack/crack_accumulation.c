@@ -161,7 +161,7 @@ static int dual_accumulation(sl_lod_model *m)
     return failed ? -1 : 0;
 }
 
-int sl_lod_model_finish(sl_lod_model *m, const float *node_error, sl_error *err)
+int sl_lod_model_finish(sl_lod_model *m, const float *expansion_error, sl_error *err)
 {
     uint32_t e = m->expansion_count;
     free(m->accumulation);
@@ -192,8 +192,8 @@ int sl_lod_model_finish(sl_lod_model *m, const float *node_error, sl_error *err)
     float worst = 0;
     m->error_after[e] = 0;
     for (uint32_t i = e; i-- > 0;) {
-        if (node_error)
-            worst = fmaxf(worst, node_error[m->lod_array[i]]);
+        if (expansion_error)
+            worst = fmaxf(worst, expansion_error[i]);
         m->error_after[i] = worst;
     }
     return 0;

@@ -20,7 +20,8 @@
  * 5: model format 4 (no node errors and areas), pieces packed at zstd level 6 (was 9).
  * 6: model format 5 (LOD order, checked pieces: a cut reads a prefix, lod_prefix.h).
  * 7: format 5's node crossing ids may name the parent's transition record's (a smaller
- * model; the first format 5 readers refuse such a file as corrupt). */
+ * model; the first format 5 readers refuse such a file as corrupt).
+ * (Unchanged by priority.slpri format 3: the same model from the same inputs.) */
 #define CRACK_STAGE_VERSION 7u
 
 static int crack_configure(const sl_config *cfg, void **out, sl_error *err)
@@ -93,7 +94,7 @@ static int crack_run(const void *config, const sl_stage_io *io, sl_error *err)
         rc = sl_stage_step(io, "crack: accumulation", 0.5, err);
     }
     if (rc == 0)
-        rc = sl_lod_model_finish(&model, p.node_error, err);
+        rc = sl_lod_model_finish(&model, p.expansion_error, err);
 #ifndef NDEBUG
     if (rc == 0)
         check_accumulation(&model);

@@ -35,8 +35,10 @@ typedef struct sl_priority {
     uint32_t node_count;
     uint32_t expansion_count;
     uint32_t *lod_array;
-    float *area_difference; /* per node (0 for leaves) */
-    float *node_error;      /* per node, world units (0 for leaves) */
+    float *area_difference; /* per node (0 for leaves); the stage's own, not in the file */
+    float *node_error;      /* per node, world units (0 for leaves); the stage's own */
+    float *expansion_error; /* per expansion: the expanded node's error (the file's;
+                               what the crack stage reads for error_after) */
     /* The internal nodes' links alone, the leaves' masks 0 (a leaf's cell never meets a
      * finer one, so nothing asks for its neighbours; sl_neighbours_build_internal); the
      * whole table's count in neighbour_links. */

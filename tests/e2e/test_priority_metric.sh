@@ -21,9 +21,10 @@ for item in cow rocker_arm; do
   b=$(sha256sum <"$TMP/work1/artifacts/priority/$item.ply/priority.slpri")
   check "$item: priority.slpri identical on 1 and 2 threads" [ "$a" = "$b" ]
 done
-# priority.slpri version 2 (docs/formats.md) holds the internal nodes' neighbour links
+# priority.slpri version 3 (docs/formats.md) holds the internal nodes' neighbour links
 # alone: fewer than the whole table's count it carries for the model's header, every leaf
-# mask 0 (the leaves come last), and the size the counts give.
+# mask 0 (the leaves come last), and the size the counts give (an error per expansion, no
+# per-node metrics).
 for item in cow rocker_arm; do
   set +e
   python3 - "$TMP/work/artifacts/priority/$item.ply/priority.slpri" <<'PY'
@@ -31,8 +32,8 @@ import struct, sys
 data = open(sys.argv[1], "rb").read()
 body = data[32:]
 n, e, held, whole = struct.unpack_from("<IIQQ", body, 0)
-assert len(body) == 24 + 4 * (e + 4 * n + held), "size %d vs the counts" % len(body)
-masks = struct.unpack_from("<%dI" % n, body, 24 + 4 * (e + 2 * n))
+assert len(body) == 24 + 4 * (2 * e + 2 * n + held), "size %d vs the counts" % len(body)
+masks = struct.unpack_from("<%dI" % n, body, 24 + 4 * 2 * e)
 leaves = n - e  # every internal node is expanded once
 assert all(m == 0 for m in masks[n - leaves:]), "a leaf's neighbours are held"
 assert any(masks[:n - leaves]), "no internal node has neighbours"

@@ -229,8 +229,12 @@ static int build_model(sdf_fn sdf, int n, sl_priority_metric metric, sl_lod_mode
     rc = rc || sl_priority_metrics(&m->tree, area, error) ||
          sl_priority_keys(&m->tree, metric, area, key) ||
          sl_priority_order(&m->tree, &m->neighbours, key, inherit, m->lod_array, &m->expansion_count, &err) ||
-         sl_transitions_build(&m->tree, NULL, &m->transitions, &unresolved) ||
-         sl_lod_model_finish(m, error, &err);
+         sl_transitions_build(&m->tree, NULL, &m->transitions, &unresolved);
+    float *expansion_error = rc ? NULL : malloc((m->expansion_count + 1) * sizeof *expansion_error);
+    for (uint32_t i = 0; expansion_error && i < m->expansion_count; i++)
+        expansion_error[i] = error[m->lod_array[i]];
+    rc = rc || !expansion_error || sl_lod_model_finish(m, expansion_error, &err);
+    free(expansion_error);
     if (!rc) { /* the crack stage's way: the internal nodes' links, not searches */
         sl_neighbours links;
         sl_transitions linked;
