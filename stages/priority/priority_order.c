@@ -58,7 +58,10 @@ static heap_entry heap_pop(heap_entry *h, uint32_t *size)
  * arrays per expansion instead of node records and the neighbour table (at 20 M triangles
  * the order was 7-8 s, a third of the stage, all of it on one thread). */
 
-#define NEVER_EXPANDED UINT32_MAX /* a coarser neighbour without children: it never expands */
+/* A coarser neighbour without children: it never expands, so what waits on it waits for
+ * ever (the order then stops short, an internal error, as the rule says). Not
+ * SL_OCTREE_NONE, which `blocker` returns for "nothing holds it back". */
+#define NEVER_EXPANDED (UINT32_MAX - 1)
 #define COARSER_MAX 7 /* the parent's neighbours on a child's side: 2^3 - 1 directions */
 
 typedef struct rank_tables {
