@@ -7,9 +7,11 @@
  * the finest marching-cube surface, and their meshes face outwards. */
 #include <math.h>
 #include <omp.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <xxhash.h>
 
 #include "core/artifact.h"
 #include "runtime/lod_io.h"
@@ -444,6 +446,91 @@ static void check_k(sl_lod_model *m, uint32_t k, const char *name, k_findings *f
     sl_lod_mesh_release(&mesh);
 }
 
+/* priority.slpri read back as written, and refused when its bytes are changed (the
+ * checksum) or when a producer with a bug sealed wrong contents: counts that do not fit
+ * the octree, a LOD entry that is a leaf, an error that is not finite. */
+static int priority_mutant(const char *path, const unsigned char *bytes, size_t size, int seal,
+                           const sl_octree *t, sl_error *err)
+{
+    unsigned char *b = malloc(size);
+    memcpy(b, bytes, size);
+    if (seal)
+        sl_put_u64(b + 24, XXH3_64bits(b + SL_ARTIFACT_HEADER_SIZE, size - SL_ARTIFACT_HEADER_SIZE));
+    FILE *f = fopen(path, "wb");
+    int ok = f && fwrite(b, 1, size, f) == size;
+    if (f)
+        fclose(f);
+    free(b);
+    sl_priority back;
+    sl_error_init(err);
+    int rc = ok ? sl_priority_read(path, t, &back, err) : -1;
+    if (rc == 0)
+        sl_priority_release(&back);
+    return rc;
+}
+
+static void test_priority_file(const sl_lod_model *m, const char *path)
+{
+    sl_priority p;
+    memset(&p, 0, sizeof p);
+    p.node_count = m->tree.node_count;
+    p.expansion_count = m->expansion_count;
+    p.lod_array = m->lod_array;
+    p.expansion_error = malloc((m->expansion_count + 1) * sizeof *p.expansion_error);
+    for (uint32_t i = 0; i < m->expansion_count; i++)
+        p.expansion_error[i] = 1.0f / (float)(i + 1);
+    sl_error err;
+    sl_error_init(&err);
+    CHECK(sl_neighbours_build_internal(&m->tree, &p.neighbours, &p.neighbour_links) == 0);
+    CHECK(sl_priority_write(path, &p, 1, &err) == 0);
+    sl_priority back;
+    CHECK(sl_priority_read(path, &m->tree, &back, &err) == 0);
+    CHECK(back.expansion_count == p.expansion_count && back.neighbour_links == p.neighbour_links &&
+          back.neighbours.count == p.neighbours.count &&
+          memcmp(back.lod_array, p.lod_array, p.expansion_count * 4) == 0 &&
+          memcmp(back.expansion_error, p.expansion_error, p.expansion_count * 4) == 0 &&
+          memcmp(back.neighbours.mask, p.neighbours.mask, p.node_count * 4) == 0 &&
+          memcmp(back.neighbours.index, p.neighbours.index, p.neighbours.count * 4) == 0);
+    sl_priority_release(&back);
+    free(p.expansion_error);
+    sl_neighbours_release(&p.neighbours);
+
+    FILE *f = fopen(path, "rb");
+    size_t size = 0;
+    unsigned char *bytes = NULL;
+    if (f && fseek(f, 0, SEEK_END) == 0 && (size = (size_t)ftell(f)) > 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (bytes = malloc(size)) && fread(bytes, 1, size, f) != size)
+        size = 0;
+    if (f)
+        fclose(f);
+    CHECK(bytes && size > 100);
+    if (!bytes || size <= 100) {
+        free(bytes);
+        return;
+    }
+    unsigned char *body = bytes + SL_ARTIFACT_HEADER_SIZE, *lod = body + 24;
+    uint32_t e = m->expansion_count;
+    bytes[size - 2] ^= 0x11;
+    CHECK(priority_mutant(path, bytes, size, 0, &m->tree, &err) == SL_E_CORRUPT &&
+          strstr(err.message, "checksum mismatch"));
+    bytes[size - 2] ^= 0x11;
+    sl_put_u32(body + 4, m->tree.node_count); /* every node expanded: the size disagrees */
+    CHECK(priority_mutant(path, bytes, size, 1, &m->tree, &err) == SL_E_CORRUPT &&
+          strstr(err.message, "counts do not match"));
+    sl_put_u32(body + 4, e);
+    uint32_t first = sl_get_u32(lod);
+    sl_put_u32(lod, m->tree.node_count - 1); /* the last node: a leaf */
+    CHECK(priority_mutant(path, bytes, size, 1, &m->tree, &err) == SL_E_CORRUPT &&
+          strstr(err.message, "not an internal node"));
+    sl_put_u32(lod, first);
+    sl_put_f32(lod + 4 * (size_t)e, NAN);
+    CHECK(priority_mutant(path, bytes, size, 1, &m->tree, &err) == SL_E_CORRUPT &&
+          strstr(err.message, "non-finite error"));
+    sl_put_f32(lod + 4 * (size_t)e, 1.0f);
+    CHECK(priority_mutant(path, bytes, size, 1, &m->tree, &err) == 0);
+    free(bytes);
+}
+
 static void test_model(sdf_fn sdf, int n, sl_priority_metric metric, const char *shape)
 {
     char name[64];
@@ -573,6 +660,7 @@ static void test_model(sdf_fn sdf, int n, sl_priority_metric metric, const char 
     sl_error_init(&err);
     CHECK(sl_lod_model_read(path, &back, &err) == SL_E_CORRUPT);
     if (metric == SL_PRIORITY_ERROR) {
+        test_priority_file(&m, path);
         test_hostile_files(&m, path);
         test_level_check_catches_a_dive(&m);
     }
