@@ -141,16 +141,16 @@ static int run_stage_in_child(sl_engine *e, const claim_work *w, shared_progress
     sl_json_object_begin(&report, NULL);
     sl_json_init(&timings, 0);
     sl_json_object_begin(&timings, NULL);
-    static phase_clock clock; /* one per stage process; too large for the stack's taste */
-    memset(&clock, 0, sizeof clock);
-    clock.sp = sp;
-    clock.current = -1;
+    phase_clock phases;
+    memset(&phases, 0, sizeof phases);
+    phases.sp = sp;
+    phases.current = -1;
     sp->phase[0] = '\0';
-    phase_clock_switch(&clock, "start");
+    phase_clock_switch(&phases, "start");
     sl_progress progress;
     memset(&progress, 0, sizeof progress);
     progress.report = report_to_parent;
-    progress.ctx = &clock;
+    progress.ctx = &phases;
     progress.interrupt_flag = sl_interrupt_flag();
     sl_stage_io io = {.item = item, .source_path = source, .in_dir = in_dir,
                       .out_dir = out_dir, .report = &report, .timings = &timings,
@@ -177,7 +177,7 @@ static int run_stage_in_child(sl_engine *e, const claim_work *w, shared_progress
         sl_engine_path(path, sizeof path, "%s/report.json", out_dir);
         rc = sl_write_file_atomic(path, report.buf, report.len, err);
     }
-    phase_clock_write(&clock, &timings);
+    phase_clock_write(&phases, &timings);
     sl_json_object_end(&timings);
     if (rc == 0 && !timings.failed && timings.len > 2) { /* more than "{}" */
         char path[PATH_MAX];
