@@ -256,6 +256,8 @@ static int one_mesh(const sl_export_config *c, const sl_level_list *list, const 
     else
         snprintf(extras, sizeof extras, "{\"scanlod\":{\"level\":\"%s\",\"method\":\"%s\"}}",
                  lv.name, lv.method);
+    if (rc == 0) /* the files and the measures, after the level's read (its own phase) */
+        rc = sl_stage_step(io, "export: write levels", (double)i / list->count, err);
     if (rc == 0)
         rc = sl_export_write_level(&files, &name, &mesh, lv.texcoords,
                                    to >= 0 ? &coarser : NULL, extras, fidelity, frame, texture, io,
@@ -366,7 +368,7 @@ int sl_export_level_list(const sl_export_config *c, const char *list_dir, int mo
     for (uint32_t i = 0; i < list.count && rc == 0; i++)
         rows[i].morph_to = -1;
     for (uint32_t i = 0; i < list.count && rc == 0; i++) {
-        rc = sl_stage_step(io, "export", (double)i / list.count, err);
+        rc = sl_stage_step(io, "export: read levels", (double)i / list.count, err);
         if (rc == 0 && rows[i].file == (int)i)
             rc = one_mesh(c, &list, list_dir, i, morph_coarser(c, &list, rows, i), fidelity, frame,
                           texture, io, &rows[i], err);
@@ -384,7 +386,9 @@ int sl_export_level_list(const sl_export_config *c, const char *list_dir, int mo
         }
         sl_json_bool(r, "fidelity_measured", input != NULL);
         report_meshes(c, &list, rows, frame, r);
-        rc = write_summary(&list, rows, c->thumbnail_size > 0, io, err);
+        rc = sl_stage_step(io, "export: pages", 0.95, err);
+        if (rc == 0)
+            rc = write_summary(&list, rows, c->thumbnail_size > 0, io, err);
     }
     if (rc == 0)
         rc = manifest_and_pages(c, &list, rows, input, frame, io, err);
