@@ -11,7 +11,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-#include <xxhash.h>
 
 #include "core/artifact.h"
 #include "runtime/lod_io.h"
@@ -21,6 +20,7 @@
 #include "tests/check.h"
 #include "tests/unit/lod_format4.h"
 #include "tests/unit/mesh_checks.h"
+#include "tests/unit/sealed_file.h"
 
 typedef double (*sdf_fn)(const double p[3]);
 
@@ -452,18 +452,9 @@ static void check_k(sl_lod_model *m, uint32_t k, const char *name, k_findings *f
 static int priority_mutant(const char *path, const unsigned char *bytes, size_t size, int seal,
                            const sl_octree *t, sl_error *err)
 {
-    unsigned char *b = malloc(size);
-    memcpy(b, bytes, size);
-    if (seal)
-        sl_put_u64(b + 24, XXH3_64bits(b + SL_ARTIFACT_HEADER_SIZE, size - SL_ARTIFACT_HEADER_SIZE));
-    FILE *f = fopen(path, "wb");
-    int ok = f && fwrite(b, 1, size, f) == size;
-    if (f)
-        fclose(f);
-    free(b);
     sl_priority back;
     sl_error_init(err);
-    int rc = ok ? sl_priority_read(path, t, &back, err) : -1;
+    int rc = sealed_file_write(path, bytes, size, seal) == 0 ? sl_priority_read(path, t, &back, err) : -1;
     if (rc == 0)
         sl_priority_release(&back);
     return rc;
@@ -495,14 +486,8 @@ static void test_priority_file(const sl_lod_model *m, const char *path)
     free(p.expansion_error);
     sl_neighbours_release(&p.neighbours);
 
-    FILE *f = fopen(path, "rb");
     size_t size = 0;
-    unsigned char *bytes = NULL;
-    if (f && fseek(f, 0, SEEK_END) == 0 && (size = (size_t)ftell(f)) > 0 && fseek(f, 0, SEEK_SET) == 0 &&
-        (bytes = malloc(size)) && fread(bytes, 1, size, f) != size)
-        size = 0;
-    if (f)
-        fclose(f);
+    unsigned char *bytes = sealed_file_bytes(path, 0, &size);
     CHECK(bytes && size > 100);
     if (!bytes || size <= 100) {
         free(bytes);

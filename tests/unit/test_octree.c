@@ -8,13 +8,13 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-#include <xxhash.h>
 
 #include "runtime/lod_mesh.h"
 #include "runtime/mc_cube.h"
 #include "runtime/octree_io.h"
 #include "stages/merge/merge.h"
 #include "tests/check.h"
+#include "tests/unit/sealed_file.h"
 #include "tests/unit/mesh_checks.h"
 
 typedef struct samples {
@@ -251,42 +251,13 @@ static void test_bad_samples(void)
     CHECK(sl_octree_build(&wide, &t, NULL, &err) == SL_E_LIMIT);
 }
 
-/* The file as bytes, one byte changed or the body grown, re-sealed (size and checksum put
- * right, as a producer with a bug would write it) when `seal`. */
-static unsigned char *file_bytes(const char *path, size_t *size)
-{
-    FILE *f = fopen(path, "rb");
-    unsigned char *b = NULL;
-    long n = -1;
-    if (f && fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) > 0 && fseek(f, 0, SEEK_SET) == 0 &&
-        (b = malloc((size_t)n + 64)) && fread(b, 1, (size_t)n, f) != (size_t)n) {
-        free(b);
-        b = NULL;
-    }
-    if (f)
-        fclose(f);
-    *size = b ? (size_t)n : 0;
-    return b;
-}
-
+/* One mutant of octree.slot written (sealed_file.h) and read. */
 static int read_mutant(const char *path, const unsigned char *bytes, size_t size, int seal,
                        sl_error *err)
 {
-    unsigned char *b = malloc(size);
-    memcpy(b, bytes, size);
-    if (seal) {
-        uint64_t body = size - SL_ARTIFACT_HEADER_SIZE;
-        sl_put_u64(b + 16, body);
-        sl_put_u64(b + 24, XXH3_64bits(b + SL_ARTIFACT_HEADER_SIZE, body));
-    }
-    FILE *f = fopen(path, "wb");
-    int ok = f && fwrite(b, 1, size, f) == size;
-    if (f)
-        fclose(f);
-    free(b);
     sl_octree t;
     sl_error_init(err);
-    int rc = ok ? sl_octree_read(path, &t, err) : -1;
+    int rc = sealed_file_write(path, bytes, size, seal) == 0 ? sl_octree_read(path, &t, err) : -1;
     if (rc == 0)
         sl_octree_release(&t);
     return rc;
@@ -319,7 +290,7 @@ static void test_file(const samples *s)
     sl_octree_release(&a);
 
     size_t size;
-    unsigned char *bytes = file_bytes(path, &size);
+    unsigned char *bytes = sealed_file_bytes(path, 4, &size);
     CHECK(bytes && size > 200);
     if (!bytes)
         return;

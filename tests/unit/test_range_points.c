@@ -8,12 +8,12 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-#include <xxhash.h>
 
 #include "shim/oiio_shim.h"
 #include "core/artifact.h"
 #include "stages/range/range.h"
 #include "tests/check.h"
+#include "tests/unit/sealed_file.h"
 
 static float *copy_floats(const float *src, size_t n)
 {
@@ -410,34 +410,24 @@ static void test_pointset_file(const char *dir)
     /* Sealed again (size and checksum right, as a producer with a bug would write it): a
      * point count the body cannot hold is refused before it sizes an allocation, and a
      * triangle index past the points after the read. */
-    f = fopen(path, "r+b");
-    long size = -1;
-    unsigned char *bytes = NULL;
-    if (f && fseek(f, 0, SEEK_END) == 0 && (size = ftell(f)) > 100 && fseek(f, 0, SEEK_SET) == 0 &&
-        (bytes = malloc((size_t)size)) && fread(bytes, 1, (size_t)size, f) == (size_t)size) {
-        size_t body_size = (size_t)size - SL_ARTIFACT_HEADER_SIZE;
-        const char *why[2] = {"disagrees with the body size", "triangle index out of range"};
-        CHECK(ps.triangle_count > 0);
-        for (int m_ = 0; m_ < 2; m_++) {
-            unsigned char *b = malloc((size_t)size);
-            memcpy(b, bytes, (size_t)size);
-            if (m_ == 0)
-                sl_put_u64(b + SL_ARTIFACT_HEADER_SIZE, (uint64_t)1 << 40);
-            else /* the last triangle's last index: the point count */
-                sl_put_u32(b + size - 4, (uint32_t)ps.count);
-            sl_put_u64(b + 24, XXH3_64bits(b + SL_ARTIFACT_HEADER_SIZE, body_size));
-            fseek(f, 0, SEEK_SET);
-            CHECK(fwrite(b, 1, (size_t)size, f) == (size_t)size);
-            fflush(f);
-            sl_error_init(&err);
-            CHECK_MSG(sl_pointset_read(path, &back, &err) == SL_E_CORRUPT && strstr(err.message, why[m_]),
-                      "sealed mutant %d: %s", m_, err.message);
-            free(b);
-        }
+    size_t size = 0;
+    unsigned char *bytes = sealed_file_bytes(path, 0, &size);
+    CHECK(bytes && size > 100 && ps.triangle_count > 0);
+    const char *why[2] = {"disagrees with the body size", "triangle index out of range"};
+    for (int m_ = 0; bytes && size > 100 && m_ < 2; m_++) {
+        unsigned char *b = malloc(size);
+        memcpy(b, bytes, size);
+        if (m_ == 0)
+            sl_put_u64(b + SL_ARTIFACT_HEADER_SIZE, (uint64_t)1 << 40);
+        else /* the last triangle's last index: the point count */
+            sl_put_u32(b + size - 4, (uint32_t)ps.count);
+        CHECK(sealed_file_write(path, b, size, 1) == 0);
+        sl_error_init(&err);
+        CHECK_MSG(sl_pointset_read(path, &back, &err) == SL_E_CORRUPT && strstr(err.message, why[m_]),
+                  "sealed mutant %d: %s", m_, err.message);
+        free(b);
     }
     free(bytes);
-    if (f)
-        fclose(f);
     sl_error_init(&err);
     CHECK(truncate(path, 60) == 0);
     CHECK(sl_pointset_read(path, &back, &err) == SL_E_CORRUPT);
