@@ -89,9 +89,10 @@ static inline uint32_t fit_next_corner(uint32_t c)
 /* --- surface_fit_level.c --- */
 /* The open edges of welded triangles (in exactly one triangle that is not degenerate),
  * each as the corner id 3 t + k it starts at (the edge runs to the next corner), sorted by
- * their vertex pair. OUT: *open (free it; NULL when none), *count. */
-int fit_open_edges(const uint32_t *tri, uint64_t triangle_count, uint32_t **open,
-                   uint64_t *count, sl_error *err);
+ * their vertex pair; every index below vertex_count. OUT: *open (free it; NULL when
+ * none), *count. */
+int fit_open_edges(const uint32_t *tri, uint64_t triangle_count, uint32_t vertex_count,
+                   uint32_t **open, uint64_t *count, sl_error *err);
 int fit_level_build(fit_level *lv, const float *positions, uint64_t vertex_count,
                     const uint32_t *triangles, uint64_t triangle_count, const uint8_t *locked,
                     sl_error *err);

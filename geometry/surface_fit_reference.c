@@ -165,7 +165,8 @@ static int take_border(sl_fit_reference *r, const sl_mesh *in, double step, sl_e
     uint64_t open_count = 0;
     int rc = welded_triangles(in, &welded, err);
     if (rc == SL_OK)
-        rc = fit_open_edges(welded, in->triangle_count, &open, &open_count, err);
+        rc = fit_open_edges(welded, in->triangle_count, (uint32_t)in->vertex_count, &open,
+                            &open_count, err);
     free(welded);
     if (rc != SL_OK || open_count == 0) {
         free(open);

@@ -9,6 +9,9 @@
  *   - bit-identical positions and statistics on 1 and 2 threads
  *   - a point-set input (rocker_arm's vertices) fits too
  *   - bad input is refused with the level untouched; an interrupt likewise
+ *   - the open edges (fit_open_edges, bucketed by vertex) are those, in the order, that
+ *     sorting every edge by its vertex pair gives: on real scans and on a fan of 300
+ *     triangles with a degenerate one, a doubled one and an edge in three
  * docs/surface-fit.md lists which mutation of the fit makes which check fail.
  */
 #include <math.h>
@@ -21,6 +24,7 @@
 #include "geometry/mesh_distance.h"
 #include "formats/ply.h"
 #include "geometry/surface_fit.h"
+#include "geometry/surface_fit_internal.h"
 #include "geometry/vec3.h"
 
 /* The input and a level of it, welded (the level indexes the welded vertices). */
@@ -148,6 +152,95 @@ static edge *open_edges(const uint32_t *tri, uint64_t triangle_count, uint64_t *
     }
     free(all);
     return open;
+}
+
+/* fit_open_edges against every non-degenerate edge sorted by (pair, corner): the same
+ * corners in the same order, on 1 and 2 threads. */
+static void check_open_edges_of(const char *what, const uint32_t *tri, uint64_t triangle_count,
+                                uint32_t vertex_count)
+{
+    uint64_t corners = 3 * triangle_count, n = 0;
+    uint64_t *keys = malloc((corners + 1) * sizeof *keys);
+    uint32_t *expect = malloc((corners + 1) * sizeof *expect), *corner = malloc((corners + 1) * 4);
+    for (uint64_t c = 0; c < corners; c++) {
+        uint32_t a = tri[c], b = tri[c % 3 == 2 ? c - 2 : c + 1];
+        if (a != b) {
+            keys[n] = (uint64_t)(a < b ? a : b) << 32 | (a < b ? b : a);
+            corner[n++] = (uint32_t)c;
+        }
+    }
+    /* (pair, corner) order: insertion by key keeps the corners ascending within a pair */
+    for (uint64_t i = 1; i < n; i++) {
+        uint64_t k = keys[i];
+        uint32_t c = corner[i];
+        uint64_t j = i;
+        for (; j > 0 && keys[j - 1] > k; j--) {
+            keys[j] = keys[j - 1];
+            corner[j] = corner[j - 1];
+        }
+        keys[j] = k;
+        corner[j] = c;
+    }
+    uint64_t expected = 0;
+    for (uint64_t i = 0, run; i < n; i += run) {
+        for (run = 1; i + run < n && keys[i + run] == keys[i]; run++)
+            ;
+        if (run == 1)
+            expect[expected++] = corner[i];
+    }
+    for (int threads = 1; threads <= 2; threads++) {
+        omp_set_num_threads(threads);
+        uint32_t *open = NULL;
+        uint64_t count = 0;
+        sl_error err;
+        sl_error_init(&err);
+        CHECK(fit_open_edges(tri, triangle_count, vertex_count, &open, &count, &err) == SL_OK);
+        CHECK_MSG(count == expected, "%s, %d threads: %llu open edges, expected %llu", what,
+                  threads, (unsigned long long)count, (unsigned long long)expected);
+        CHECK_MSG(count == expected && (!count || !memcmp(open, expect, count * sizeof *open)),
+                  "%s, %d threads: open edges differ from the sorted edges'", what, threads);
+        free(open);
+    }
+    omp_set_num_threads(2);
+    free(keys);
+    free(expect);
+    free(corner);
+}
+
+static void check_open_edges(void)
+{
+    const char *scans[] = {"bun_zipper_res3", "cow", "rocker_arm"};
+    for (size_t i = 0; i < sizeof scans / sizeof scans[0]; i++) {
+        pair p;
+        if (load_pair(&p, scans[i], 0.5) != 0)
+            continue;
+        /* the input welded as the fit's reference welds it */
+        size_t n = 3 * (size_t)p.input.triangle_count;
+        uint32_t *remap = malloc(p.input.vertex_count * sizeof *remap), *tri = malloc(n * 4);
+        meshopt_generateVertexRemap(remap, p.input.triangles, n, p.input.positions,
+                                    p.input.vertex_count, 3 * sizeof(float));
+        for (size_t c = 0; c < n; c++)
+            tri[c] = remap[p.input.triangles[c]];
+        check_open_edges_of(scans[i], tri, p.input.triangle_count,
+                            (uint32_t)p.input.vertex_count);
+        check_open_edges_of(scans[i], p.triangles, p.triangle_count,
+                            (uint32_t)p.vertex_count); /* the level */
+        free(remap);
+        free(tri);
+        release_pair(&p);
+    }
+    /* A fan of 300 triangles round vertex 0 (one bucket of 600 edges), then a degenerate
+     * triangle, the fan's first triangle again and a third triangle on edge (1, 2). */
+    enum { FAN = 300 };
+    uint32_t tri[3 * (FAN + 3)];
+    for (uint32_t t = 0; t < FAN; t++) {
+        tri[3 * t] = 0;
+        tri[3 * t + 1] = 1 + t;
+        tri[3 * t + 2] = 2 + t;
+    }
+    uint32_t extra[9] = {5, 5, 6, 0, 1, 2, 1, 2, FAN + 2};
+    memcpy(tri + 3 * FAN, extra, sizeof extra);
+    check_open_edges_of("fan", tri, FAN + 3, FAN + 3);
 }
 
 static double segment_distance(const float *p, const float *a, const float *b)
@@ -490,5 +583,6 @@ int main(void)
     check_never_worse();
     check_point_set();
     check_bad_input();
+    check_open_edges();
     return check_report();
 }
