@@ -43,7 +43,8 @@ int sl_transitions_build(const sl_octree *t, const sl_neighbours *nb, sl_transit
 /* Completes a model whose tree, lod_array, neighbours and transitions are set: derives
  * expansion_index, the accumulation table (by drawing the cells each expansion changes)
  * and error_after from the expanded nodes' errors, one per expansion in order (may be
- * NULL: then all zero). */
+ * NULL: then all zero). It does not lay the cells out for generating meshes: call
+ * sl_lod_model_prepare (runtime/lod_model.h) before sl_lod_generate. */
 int sl_lod_model_finish(sl_lod_model *m, const float *expansion_error, sl_error *err);
 
 #endif

@@ -45,6 +45,8 @@ sl_crack_config sl_crack_default_config(void)
  * (its table is only checked for range): this is where the invariant is made. */
 static void check_accumulation(sl_lod_model *m)
 {
+    if (sl_lod_model_prepare(m)) /* laid out for generating, as a reader would */
+        return;
     uint32_t ks[3] = {0, m->expansion_count / 2, m->expansion_count};
     for (int i = 0; i < 3; i++) {
         sl_lod_mesh mesh;
@@ -103,8 +105,9 @@ static int crack_run(const void *config, const sl_stage_io *io, sl_error *err)
         model.neighbour_links = p.neighbour_links;
         sl_priority_release(&p);
         sl_neighbours_release(&model.neighbours);
-        /* Laid out for the triangle counts; the writer reads the tree, the records and the
-         * tables, not the layout (at 1 M triangles 90 MB beside the pieces being packed). */
+        /* The expansion indices the tables were drawn with (and, in Debug builds, the
+         * layout check_accumulation made): the writer reads the tree, the records and the
+         * tables, not these. */
         sl_lod_model_drop_layout(&model);
         rc = sl_stage_step(io, "crack: write", 0.8, err);
         if (rc == 0)

@@ -235,7 +235,8 @@ static int build_model(sdf_fn sdf, int n, sl_priority_metric metric, sl_lod_mode
     float *expansion_error = rc ? NULL : malloc((m->expansion_count + 1) * sizeof *expansion_error);
     for (uint32_t i = 0; expansion_error && i < m->expansion_count; i++)
         expansion_error[i] = error[m->lod_array[i]];
-    rc = rc || !expansion_error || sl_lod_model_finish(m, expansion_error, &err);
+    rc = rc || !expansion_error || sl_lod_model_finish(m, expansion_error, &err) ||
+         sl_lod_model_prepare(m);
     free(expansion_error);
     if (!rc) { /* the crack stage's way: the internal nodes' links, not searches */
         sl_neighbours links;

@@ -102,7 +102,7 @@ static int build_model(int n, int coloured, sl_lod_model *m)
     uint64_t unresolved;
     return sl_neighbours_build(t, &m->neighbours) ||
            sl_transitions_build(t, &m->neighbours, &m->transitions, &unresolved) ||
-           sl_lod_model_finish(m, NULL, &err);
+           sl_lod_model_finish(m, NULL, &err) || sl_lod_model_prepare(m);
 }
 
 /* The mesh after k expansions, every frontier cell drawn the general way. */
