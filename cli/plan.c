@@ -28,8 +28,10 @@
 #include <unistd.h>
 
 #include "core/json.h"
+#include "core/memory.h"
 #include "formats/scan_read.h"
 #include "pipeline/stage.h"
+#include "stages/refine/refine.h"
 
 /* Cost of one stage, N in millions: seconds = a + b * N^e, peak RSS MB = c + d * N^f.
  * An octree stage's work follows its samples, not its triangles (cli/plan_shape.h): for
@@ -78,7 +80,9 @@ typedef struct stage_cost {
  * the build before on one machine: 0.75 / 0.73 / 0.96 at 1 / 5 / 20 M), and the crack's
  * memory when it dropped the node metrics and its layout early (251 / 1,230 / 4,828 MB);
  * their constants c set again to rocker_arm's peaks without thumbnails (merge 24, crack
- * 23 MB; 3 runs). Refit with scripts/bench/plan_calibrate.py.
+ * 23 MB; 3 runs). The crack's memory again when it stopped laying out the model for
+ * generation (188 / 865 / 3,449 MB at 1, 5 and 20 M, 2026-12-07; d through the three).
+ * Refit with scripts/bench/plan_calibrate.py.
  * The octree stages' lines hold for surfaces of about 1.56 samples per triangle (the
  * tori; real scans 1.2-2.2); for slivers and soups, whose samples per triangle are many
  * times that, N is scaled by the shape (cli/plan_shape.h; issue 34: 500k slivers planned
@@ -94,7 +98,7 @@ static const stage_cost mesh_costs[] = {
     {"samples", 0.105, 2.42, 1.047, 15, 133, 0.95, -0.65, 1},
     {"merge", 0.078, 2.34, 1.13, 20, 167, 0.963, 0.6, 1},
     {"priority", 0.107, 0.65, 1.14, 7, 164, 1.0, 0.6, 1},
-    {"crack", 0.117, 3.7, 1.04, 18, 230, 1.0, 1.0, 1},
+    {"crack", 0.117, 3.7, 1.04, 18, 171, 1.0, 1.0, 1},
     {"export", 0.3, 4.05, 1.062, 8, 287, 0.95, 0.6, 0.85},
     {"export+fidelity", 2.5, 5.5, 1.062, 8, 287, 0.95, 0.6, 0.85},
     /* The refine stage (every method's levels to their counts, docs/levels.md): its work
@@ -116,6 +120,14 @@ static const stage_cost mesh_costs[] = {
      * before said 19.7 / 66 / 248 / 9.3 s and 524 / 2,036 / 6,663 / 35.6 MB): time within
      * 0.9-1.15, memory 0.96-1.04. */
     {"refine", 4.0, 14.3, 0.773, 12, 386, 0.861, 0, 0},
+    /* The refine stage when its collapses go by bricks ([refine] collapse_brick_triangles;
+     * by default when the input's triangles times 300 bytes are over the memory budget,
+     * sl_refine_collapse_bricks), bricks of 1 M: tori of 5 and 20 M, 2 threads, one run
+     * each, 2026-12-07 (docs/bricks.md): 67.2 / 243.7 s, 1,310 / 4,377 MB (whole on the
+     * same machine: 57.0 / 207-270 s, 1,318 / 5,140-5,222 MB). Memory through the two,
+     * time the whole line's times 1.2. Only large inputs take this line: under a 24 GB
+     * budget those above 84 M triangles. */
+    {"refine+bricks", 4.0, 17.2, 0.773, 12, 320, 0.87, 0, 0},
     /* The segment and cluster methods: scripts/bench/bench_methods_scale.sh at 0.1, 0.3, 1
      * and 5 M triangles (tori, 2 threads, quiet, 2026-12-07; issue 38), each line the least
      * largest error over the four (segment: 5.4 / 14.4 / 82.7 / 344 s, 33 / 94 / 259 /
@@ -145,11 +157,15 @@ static const stage_cost *find_cost(const char *key)
     return NULL;
 }
 
-/* The method's own line for the stage ("segment:export") if it has one, else the stage's. */
-static const stage_cost *cost_of(const char *method, const char *stage, int fidelity)
+/* The method's own line for the stage ("segment:export") if it has one, else the stage's;
+ * `bricks`: the refine stage's collapses go by bricks. */
+static const stage_cost *cost_of(const char *method, const char *stage, int fidelity,
+                                 int bricks)
 {
     char key[96];
-    const char *suffix = fidelity && !strcmp(stage, "export") ? "+fidelity" : "";
+    const char *suffix = fidelity && !strcmp(stage, "export")  ? "+fidelity"
+                         : bricks && !strcmp(stage, "refine") ? "+bricks"
+                                                              : "";
     snprintf(key, sizeof key, "%s:%s%s", method, stage, suffix);
     const stage_cost *c = find_cost(key);
     if (!c) {
@@ -196,10 +212,17 @@ static void stage_costs(const sl_engine_facts *e, const sl_scan_info *info,
     double tf = thread_factor(e->threads);
     int fidelity = sl_config_bool(e->cfg, "export", "fidelity");
     int thumbnails = sl_config_int(e->cfg, "export", "thumbnail_size") > 0;
+    /* The refine stage's collapses by bricks when its rule says so for this input and
+     * budget (the stage asks the same function with its own count and budget). */
+    uint64_t budget = e->memory_limit_mb > 0 ? (uint64_t)e->memory_limit_mb
+                                             : sl_memory_available_mb(NULL, 0);
+    uint64_t brick = sl_refine_collapse_bricks(
+        sl_config_int(e->cfg, "refine", "collapse_brick_triangles"), points ? 0 : n * 1e6, budget);
+    int bricks = brick > 0 && n * 1e6 > (double)brick;
     *seconds = *peak = 0;
     for (int s = 0; s < e->stage_count; s++) {
         const char *name = e->stages[s]->name;
-        const stage_cost *c = cost_of(e->method, name, fidelity);
+        const stage_cost *c = cost_of(e->method, name, fidelity, bricks);
         if (!c)
             continue; /* a stage the model has not been fitted for: costs nothing here */
         double nt = c->share > 0 ? n * shape->ratio : n;

@@ -6,6 +6,15 @@
 #include "core/log.h"
 #include "core/memory.h"
 
+uint64_t sl_engine_memory_budget(const sl_engine *e, char *what, size_t what_size)
+{
+    if (e->memory_limit_mb > 0) {
+        snprintf(what, what_size, "[run] memory_limit_mb");
+        return (uint64_t)e->memory_limit_mb;
+    }
+    return sl_memory_available_mb(what, what_size);
+}
+
 /* Memory admission (docs/engine.md): an item whose expected peak (the plan's cost model,
  * from its header) is over the budget -- [run] memory_limit_mb, or else what this node
  * or its cgroup has -- is not run: it would be killed for memory hours in, and again on
@@ -14,9 +23,8 @@ int sl_engine_admitted(sl_engine *e, int s, const sl_ticket *t, const char *sour
 {
     if (!e->memory_check || !e->expected_peak_mb)
         return 1;
-    char what[64] = "[run] memory_limit_mb";
-    uint64_t budget = e->memory_limit_mb > 0 ? (uint64_t)e->memory_limit_mb
-                                             : sl_memory_available_mb(what, sizeof what);
+    char what[64];
+    uint64_t budget = sl_engine_memory_budget(e, what, sizeof what);
     sl_engine_facts facts;
     sl_engine_facts_of(e, &facts);
     const char *peak_stage = "?";

@@ -217,6 +217,10 @@ void sl_engine_parts_prune(sl_engine *e, int s, const char *ticket, int from, in
 /* engine_admission.c: 1 when the item's expected peak memory for stage s fits the budget;
  * else 0, with the reason logged and left in e->admission (docs/engine.md). */
 int sl_engine_admitted(sl_engine *e, int s, const sl_ticket *t, const char *source);
+/* The memory an item's stage may use, MB: [run] memory_limit_mb when set, else what this
+ * node or its cgroup has (core/memory.h); `what` says which. 0 when unknown. The
+ * admission's budget, and the stages' (sl_stage_io.memory_budget_mb). */
+uint64_t sl_engine_memory_budget(const sl_engine *e, char *what, size_t what_size);
 /* engine_layout.c: the private folder a claim's stage process writes into, a hidden
  * sibling of `out_dir` named after this process (SL_E_LIMIT when too long). */
 int sl_engine_staged_path(const sl_engine *e, const char *out_dir, char *buf, sl_error *err);

@@ -152,10 +152,13 @@ static int run_stage_in_child(sl_engine *e, const claim_work *w, shared_progress
     progress.report = report_to_parent;
     progress.ctx = &phases;
     progress.interrupt_flag = sl_interrupt_flag();
+    char budget_what[64];
     sl_stage_io io = {.item = item, .source_path = source, .in_dir = in_dir,
                       .out_dir = out_dir, .report = &report, .timings = &timings,
                       .progress = &progress,
                       .threads = omp_get_max_threads(), .upstream = upstream,
+                      .memory_budget_mb = sl_engine_memory_budget(e, budget_what,
+                                                                   sizeof budget_what),
                       .metadata = sl_engine_item_metadata(e, s, item)};
     char **part_dirs = NULL;
     if (w->parts > 1) {

@@ -52,6 +52,10 @@ typedef struct sl_stage_io {
     sl_json *timings;
     sl_progress *progress;
     int threads;             /* OpenMP threads for this item (already set) */
+    /* The memory this stage may use, MB: [run] memory_limit_mb, else the node's or its
+     * cgroup's (docs/engine.md, "Memory admission"); 0 when unknown. A stage that can do
+     * its work by bricks chooses them by it (docs/bricks.md). */
+    uint64_t memory_budget_mb;
     /* Every earlier stage's artifact directory, in pipeline order, ended by {NULL, NULL};
      * the stage key chains over all of them. Find one by name with sl_stage_dir(). */
     const struct sl_stage_dir_entry {

@@ -33,8 +33,9 @@ typedef struct sl_refine_config {
     int best;                /* [lod] method = best: the scan simplified is a candidate */
     int collapse;            /* quadric edge collapse to the rung's count */
     int relax_topology;      /* ... giving up the topology when it alone stops above it */
-    uint64_t collapse_brick_triangles; /* ... by bricks of this many from a larger level
-                                          (0: whole) */
+    int64_t collapse_brick_triangles; /* ... by bricks of this many from a larger level
+                                         (0: whole; SL_REFINE_BRICKS_BY_BUDGET: by the
+                                         stage's memory budget, refine_internal.h) */
     double octree_max_share; /* beside the scan simplified, an octree candidate only for a
                                 level of at most this share of the input's count */
     int fit;                 /* vertices fitted to the input surface */
@@ -49,5 +50,23 @@ typedef struct sl_refine_config {
 
 /* The section at its option tables' defaults (sl_stage_default_config). */
 sl_refine_config sl_refine_default_config(void);
+
+/* [refine] collapse_brick_triangles = -1 (the default): by the stage's memory budget. A
+ * collapse of the whole level holds about 180 bytes per triangle of the level collapsed
+ * from (geometry/qem_simplify.h) beside the input and its measures' reference: with the
+ * scan's top rungs collapsed from the scan, the stage peaked at 255-275 bytes per input
+ * triangle (the 20 M torus: 5,140-5,490 MB, docs/bricks.md). An item whose input times
+ * SL_REFINE_WHOLE_BYTES is over the budget has its collapses made by bricks of
+ * SL_REFINE_BUDGET_BRICK triangles (docs/simplify.md "By bricks"); every other item's are
+ * whole, as before: bricks cost up to 19 % of the RMS on an open scan. */
+#define SL_REFINE_BRICKS_BY_BUDGET (-1)
+#define SL_REFINE_WHOLE_BYTES 300.0
+#define SL_REFINE_BUDGET_BRICK 1000000u
+
+/* The brick size an item's collapses use: `configured` ([refine]
+ * collapse_brick_triangles) when not SL_REFINE_BRICKS_BY_BUDGET (0: whole), else by the
+ * budget (above; 0 MB: unknown, whole). `scanlod plan` asks it too. */
+uint64_t sl_refine_collapse_bricks(int64_t configured, uint64_t input_triangles,
+                                   uint64_t memory_budget_mb);
 
 #endif

@@ -29,6 +29,15 @@ static int keep_chain(refine_item *it, const sl_level *lv, sl_error *err)
     return rc;
 }
 
+uint64_t sl_refine_collapse_bricks(int64_t configured, uint64_t input_triangles,
+                                   uint64_t memory_budget_mb)
+{
+    if (configured != SL_REFINE_BRICKS_BY_BUDGET)
+        return configured > 0 ? (uint64_t)configured : 0;
+    double whole_mb = SL_REFINE_WHOLE_BYTES * (double)input_triangles / (1024.0 * 1024.0);
+    return memory_budget_mb && whole_mb > (double)memory_budget_mb ? SL_REFINE_BUDGET_BRICK : 0;
+}
+
 /* The level's arrays replaced by the collapse's; `source` kept naming the input's points
  * when the level's did. */
 static void take_collapsed(sl_level *lv, sl_qem_mesh *out)
@@ -65,7 +74,7 @@ static int collapse(refine_item *it, uint64_t target, refine_candidate *cand, sl
     cfg.target_triangles = target;
     sl_qem_mesh out;
     sl_qem_stats stats;
-    uint64_t brick = it->c->collapse_brick_triangles;
+    uint64_t brick = it->collapse_bricks;
     int rc = sl_qem_simplify_bricked(&in, &cfg, brick, &out, &stats, it->io->progress, err);
     if (rc == 0 && it->c->relax_topology && stats.stop == SL_QEM_STOP_TOPOLOGY &&
         out.triangle_count > target) {

@@ -79,6 +79,7 @@ typedef struct refine_item {
     double diagonal;             /* its bounding-box diagonal, world */
     uint64_t input_triangles;    /* what a share of the input is of: the mesh's triangles, or
                                     for a point set the octree's finest cut */
+    uint64_t collapse_bricks;    /* the collapses' brick size (0: whole) */
     sl_lod_model model;          /* the octree's, when an upstream stage made one: opened
                                     when the first rung wants a cut of it (refine_model),
                                     whole for a point set, else read by prefixes

@@ -36,15 +36,18 @@ static const sl_option refine_options[] = {
      "move, holes, handles and specks may close, borders may join; still no triangle turns "
      "over (docs/simplify.md; 'topology_relaxed' in the report). false: such a level stays "
      "above its count."},
-    {"refine", "collapse_brick_triangles", SL_OPT_INT, "0", 0, 2000000000, NULL,
+    {"refine", "collapse_brick_triangles", SL_OPT_INT, "-1", -1, 2000000000, NULL,
      "A collapse from more triangles than this runs by bricks of at most this many "
      "(docs/simplify.md \"By bricks\"): each brick alone and in parallel with its borders "
      "and the rings around them locked, all stopping at one collapse error, then strips "
      "around the borders, the last pass on the whole once it fits one brick. Memory about "
      "180 bytes per brick triangle per thread instead of per input triangle (20 M -> 16 M "
      "triangles, bricks of 1 M: 1.3 GB against 3.9, about the same time); RMS as close or "
-     "closer on closed scans, up to 19 % farther on an open, non-manifold one. 0 "
-     "(default): every collapse on the whole mesh at once."},
+     "closer on closed scans, up to 19 % farther on an open, non-manifold one. 0: every "
+     "collapse on the whole mesh at once. -1 (default): by the memory budget ([run] "
+     "memory_limit_mb, else the node's): whole unless the input's triangles times 300 "
+     "bytes are over it (a 20 M-triangle scan against 5.6 GB), then bricks of 1 M "
+     "(docs/bricks.md)."},
     {"refine", "octree_max_share", SL_OPT_DOUBLE, "0.3", 0, 1, NULL,
      "When the scan simplified is a candidate ([lod] method = best on a mesh, collapse on), "
      "the octree's "
@@ -104,7 +107,7 @@ static int refine_configure(const sl_config *cfg, void **out, sl_error *err)
     c->collapse = sl_config_bool(cfg, "refine", "collapse");
     c->relax_topology = sl_config_bool(cfg, "refine", "relax_topology");
     c->collapse_brick_triangles =
-        (uint64_t)sl_config_int(cfg, "refine", "collapse_brick_triangles");
+        sl_config_int(cfg, "refine", "collapse_brick_triangles");
     c->octree_max_share = sl_config_double(cfg, "refine", "octree_max_share");
     c->fit = sl_config_bool(cfg, "refine", "fit");
     c->fit_rounds = (int)sl_config_int(cfg, "refine", "fit_rounds");
@@ -237,6 +240,8 @@ static int open_item(refine_item *it, sl_error *err)
     it->input_triangles = it->is_mesh ? ps->triangle_count
                           : it->have_model ? it->model_triangles
                                            : 0;
+    it->collapse_bricks = sl_refine_collapse_bricks(it->c->collapse_brick_triangles,
+                                                    it->input_triangles, it->io->memory_budget_mb);
     if (rc == 0 && !it->have_model && it->method_count == 0 && !it->is_mesh)
         rc = sl_error_set(err, SL_E_UNSUPPORTED, 0, it->io->source_path,
                           "a point set (no faces) needs the octree method for its levels");
@@ -462,6 +467,7 @@ static int refine_run(const void *config, const sl_stage_io *io, sl_error *err)
         if (it.cutter.cap)
             sl_json_u64(r, "triangles_cap", it.cutter.cap);
         sl_json_bool(r, "collapse", it.c->collapse);
+        sl_json_u64(r, "collapse_brick_triangles", it.collapse_bricks);
         sl_json_bool(r, "relax_topology", it.c->relax_topology);
         sl_json_bool(r, "fit", it.c->fit);
         if (it.have_model && it.c->best && it.is_mesh && it.c->collapse)

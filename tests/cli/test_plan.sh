@@ -60,6 +60,21 @@ plan_threads() { # plan_threads THREADS: the plan's threads with OMP_NUM_THREADS
 check "threads = 0 honours OMP_NUM_THREADS=3 (plan: $(plan_threads 0))" [ "$(plan_threads 0)" = 3 ]
 check "threads = 2 wins over OMP_NUM_THREADS=3 (plan: $(plan_threads 2))" [ "$(plan_threads 2)" = 2 ]
 
+# The refine stage's collapses by bricks when the budget says so (sl_refine_collapse_bricks,
+# the rule the stage applies): a 20 M-triangle header (a sparse file, planned from its
+# header) under a 4 GB budget is costed on the bricked line, under 60 GB on the whole one.
+mkdir -p "$TMP/big"
+printf 'ply\nformat binary_little_endian 1.0\nelement vertex 10000000\nproperty float x\nproperty float y\nproperty float z\nelement face 20000000\nproperty list uchar int vertex_indices\nend_header\n' >"$TMP/big/big.ply"
+truncate -s $(( $(stat -c %s "$TMP/big/big.ply") + 12 * 10000000 + 13 * 20000000 )) "$TMP/big/big.ply"
+write_config "$TMP/big.ini" "$TMP/big" "$TMP/work-big" "$TMP/out-big"
+refine_peak() { # refine_peak BUDGET_MB: the plan's refine peak for big.ply
+  "$SCANLOD" plan "$TMP/big.ini" --json -s "run.memory_limit_mb=$1" 2>/dev/null |
+    python3 -c 'import json, sys; print(round(json.load(sys.stdin)["items"][0]["stages"]["refine"]["peak_rss_mb"]))'
+}
+small=$(refine_peak 4096); large=$(refine_peak 60000)
+check "refine by bricks under a 4 GB budget: $small MB, whole under 60 GB: $large MB" \
+  python3 -c 'import sys; sys.exit(0 if 0 < float(sys.argv[1]) < 0.9 * float(sys.argv[2]) else 1)' "$small" "$large"
+
 # The prediction against the run: the item's largest stage peak (timings.json).
 rm "$TMP/in/broken.ply" "$TMP/in/cow.ply"
 run_scanlod plan "$TMP/run.ini" --threads 2 --json

@@ -181,6 +181,19 @@ print("; ".join(bad))
 EOF
 )
 check "bricked collapse: counts, topology and RMS as the whole's (${bricked:-ok})" [ -z "$bricked" ]
+# The brick size each refine report says it used: the default's is chosen by the memory
+# budget (collapse_brick_triangles = -1: these scans need a few MB, so whole: 0), the set one
+# is the config's.
+brick_sizes() { # brick_sizes OUT: each scan's refine collapse_brick_triangles
+  for s in "${scans[@]}"; do
+    python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["stages"]["refine"].get("collapse_brick_triangles"))' \
+      "$1/$s.ply/report.json"
+  done | sort -u | tr '\n' ' '
+}
+check "the default's collapses whole by the budget (said: $(brick_sizes "$TMP/out-best"))" \
+  [ "$(brick_sizes "$TMP/out-best")" = "0 " ]
+check "the config's bricks said (said: $(brick_sizes "$TMP/out-bricks"))" \
+  [ "$(brick_sizes "$TMP/out-bricks")" = "1000 " ]
 
 # [refine] octree_max_share: beside the scan simplified, a level above 30 % of the input
 # gets no octree candidate (its cut was never within 1.76 times of the scan's RMS there,
