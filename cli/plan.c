@@ -99,8 +99,14 @@ static const stage_cost mesh_costs[] = {
     {"merge", 0.078, 2.34, 1.13, 20, 167, 0.963, 0.6, 1},
     {"priority", 0.107, 0.65, 1.14, 7, 164, 1.0, 0.6, 1},
     {"crack", 0.117, 3.7, 1.04, 18, 171, 1.0, 1.0, 1},
-    {"export", 0.3, 4.05, 1.062, 8, 287, 0.95, 0.6, 0.85},
-    {"export+fidelity", 2.5, 5.5, 1.062, 8, 287, 0.95, 0.6, 0.85},
+    /* The export's lines refitted on tori of 1, 5 and 20 M (2 threads, one run each,
+     * 2026-12-07, fidelity on and off; the 20 M export had never been measured with
+     * fidelity): peaks with thumbnails 314 / 1,016 / 3,532 MB on, 207 / 585 / 1,753 MB
+     * off (the line before said 405 / 1,332 / 5,060 MB for both); times 19.0 / 76.7 / 223
+     * s on, 3.5 / 13.6 / 62-77 s off, on a machine 1.3 times slower than the calibration's
+     * (the whole 20 M run 578 s against 442 the day before), so fitted to them / 1.3. */
+    {"export", 0.3, 2.4, 1.1, 8, 100, 0.95, 0.6, 0.85},
+    {"export+fidelity", 1.5, 13.5, 0.82, 8, 198, 0.95, 0.6, 0.85},
     /* The refine stage (every method's levels to their counts, docs/levels.md): its work
      * follows the input's triangles (the scan's collapses and the fit's samples), not the
      * octree's samples. plan_calibrate.py --methods best at 20k, 100k, 300k and 1 M (tori,
