@@ -220,8 +220,7 @@ static void stage_costs(const sl_engine_facts *e, const sl_scan_info *info,
     int thumbnails = sl_config_int(e->cfg, "export", "thumbnail_size") > 0;
     /* The refine stage's collapses by bricks when its rule says so for this input and
      * budget (the stage asks the same function with its own count and budget). */
-    uint64_t budget = e->memory_limit_mb > 0 ? (uint64_t)e->memory_limit_mb
-                                             : sl_memory_available_mb(NULL, 0);
+    uint64_t budget = sl_memory_budget_mb(e->memory_limit_mb, NULL, 0);
     uint64_t brick = sl_refine_collapse_bricks(
         sl_config_int(e->cfg, "refine", "collapse_brick_triangles"), points ? 0 : n * 1e6, budget);
     int bricks = brick > 0 && n * 1e6 > (double)brick;

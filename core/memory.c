@@ -103,3 +103,13 @@ uint64_t sl_memory_available_mb(char *what, size_t what_size)
                  by_cgroup ? "the cgroup's memory limit" : "the node's physical memory");
     return (by_cgroup ? cgroup : physical) >> 20;
 }
+
+uint64_t sl_memory_budget_mb(int64_t limit_mb, char *what, size_t what_size)
+{
+    if (limit_mb > 0) {
+        if (what && what_size)
+            snprintf(what, what_size, "[run] memory_limit_mb");
+        return (uint64_t)limit_mb;
+    }
+    return sl_memory_available_mb(what, what_size);
+}

@@ -12,6 +12,11 @@
  * "the cgroup's memory limit"). 0 when neither can be read. */
 uint64_t sl_memory_available_mb(char *what, size_t what_size);
 
+/* The run's memory budget, MiB: `limit_mb` ([run] memory_limit_mb) when above 0, else
+ * sl_memory_available_mb; `what` (may be NULL) says which. The engine's admission, the
+ * stages' io->memory_budget_mb and `scanlod plan` all take it from here. */
+uint64_t sl_memory_budget_mb(int64_t limit_mb, char *what, size_t what_size);
+
 /* Out-of-memory kills the kernel counted in this process's cgroup so far (v2
  * memory.events, v1 memory.oom_control: "oom_kill N"); 0 when it cannot be read. A stage
  * process that died of SIGKILL while this count rose was killed for memory, not by a

@@ -8,11 +8,7 @@
 
 uint64_t sl_engine_memory_budget(const sl_engine *e, char *what, size_t what_size)
 {
-    if (e->memory_limit_mb > 0) {
-        snprintf(what, what_size, "[run] memory_limit_mb");
-        return (uint64_t)e->memory_limit_mb;
-    }
-    return sl_memory_available_mb(what, what_size);
+    return sl_memory_budget_mb(e->memory_limit_mb, what, what_size);
 }
 
 /* Memory admission (docs/engine.md): an item whose expected peak (the plan's cost model,
