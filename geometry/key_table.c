@@ -88,6 +88,44 @@ int sl_sort_keys(uint64_t *keys, size_t count, int bits)
     return radix_sort(keys, count, sizeof *keys, bits);
 }
 
+/* One body for both widths: T the element type, CMP its qsort comparison. */
+#define SORT_RUN(T, CMP, v, n)                                                                    \
+    do {                                                                                       \
+        if ((n) > 32) {                                                                        \
+            qsort((v), (n), sizeof(T), CMP);                                                   \
+            break;                                                                             \
+        }                                                                                      \
+        for (size_t i = 1; i < (n); i++) {                                                     \
+            T x = (v)[i];                                                                      \
+            size_t j = i;                                                                      \
+            for (; j > 0 && (v)[j - 1] > x; j--)                                               \
+                (v)[j] = (v)[j - 1];                                                           \
+            (v)[j] = x;                                                                        \
+        }                                                                                      \
+    } while (0)
+
+static int cmp_u32(const void *x, const void *y)
+{
+    uint32_t a = *(const uint32_t *)x, b = *(const uint32_t *)y;
+    return (a > b) - (a < b);
+}
+
+static int cmp_u64(const void *x, const void *y)
+{
+    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    return (a > b) - (a < b);
+}
+
+void sl_sort_run_u32(uint32_t *v, size_t n)
+{
+    SORT_RUN(uint32_t, cmp_u32, v, n);
+}
+
+void sl_sort_run_u64(uint64_t *v, size_t n)
+{
+    SORT_RUN(uint64_t, cmp_u64, v, n);
+}
+
 size_t sl_unique_keys(uint64_t *keys, size_t count)
 {
     if (count == 0)

@@ -17,6 +17,11 @@ typedef struct sl_key_pair {
  * Returns 0, or -1 when out of memory. */
 int sl_sort_pairs(sl_key_pair *pairs, size_t count, int bits);
 int sl_sort_keys(uint64_t *keys, size_t count, int bits);
+/* Short runs (a bucket's or a vertex's few entries) sorted ascending: by insertion up to
+ * 32 entries, by qsort above (a fan's apex on a broken mesh can hold thousands, which
+ * insertion would make quadratic). */
+void sl_sort_run_u32(uint32_t *v, size_t n);
+void sl_sort_run_u64(uint64_t *v, size_t n);
 /* Removes adjacent duplicates of a sorted array; returns the new count. */
 size_t sl_unique_keys(uint64_t *keys, size_t count);
 

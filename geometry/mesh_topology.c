@@ -9,8 +9,10 @@
  * part's root.
  */
 #include "geometry/mesh_distance.h"
+#include "geometry/key_table.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -43,67 +45,119 @@ static void position_key(const sl_mesh *m, uint32_t v, uint32_t k[3])
  * region costs more than it saves. */
 #define PARALLEL_MIN 65536
 
-/* Declared in mesh_distance.h (the topology's welding, shared with the simplifier). */
+/* Fixed slices of the vertices for the numbering (counted, prefixed, then written): the
+ * serial loop's ids whatever the thread count. */
+#define WELD_SLICES 64
+
+static uint64_t weld_slice(uint64_t n, int s)
+{
+    return n * (uint64_t)s / WELD_SLICES;
+}
+
+/* The slot of v's position: the first empty one on its probe sequence is claimed for v
+ * (compare-and-swap: two positions racing for one slot, the loser probes on), and a slot
+ * already holding the position is lowered to v if v is lower (atomic minimum). Once every
+ * vertex is in, a position's slot holds its lowest vertex, on any thread count. */
+static void weld_insert(_Atomic uint32_t *table, uint64_t mask, const sl_mesh *m, uint32_t v)
+{
+    uint32_t key[3], other[3];
+    position_key(m, v, key);
+    for (uint64_t slot = position_hash(key) & mask;; slot = (slot + 1) & mask) {
+        uint32_t held = atomic_load_explicit(&table[slot], memory_order_relaxed);
+        if (held == NONE && atomic_compare_exchange_strong_explicit(
+                                &table[slot], &held, v, memory_order_relaxed, memory_order_relaxed))
+            return;
+        position_key(m, held, other); /* held: the slot's vertex, read or lost to */
+        if (memcmp(key, other, sizeof key) != 0)
+            continue;
+        while (v < held && !atomic_compare_exchange_weak_explicit(&table[slot], &held, v,
+                                                                  memory_order_relaxed,
+                                                                  memory_order_relaxed))
+            ;
+        return;
+    }
+}
+
+/* The lowest vertex at v's position (v was inserted). */
+static uint32_t weld_lookup(_Atomic uint32_t *table, uint64_t mask, const sl_mesh *m, uint32_t v)
+{
+    uint32_t key[3], other[3];
+    position_key(m, v, key);
+    for (uint64_t slot = position_hash(key) & mask;; slot = (slot + 1) & mask) {
+        uint32_t held = atomic_load_explicit(&table[slot], memory_order_relaxed);
+        position_key(m, held, other);
+        if (memcmp(key, other, sizeof key) == 0)
+            return held;
+    }
+}
+
+/* Declared in mesh_distance.h (the topology's welding, shared with the simplifier). Ids in
+ * the order of each position's first used vertex. In parallel: the used vertices marked,
+ * inserted into the table and looked up by all threads; a vertex is its position's first
+ * when the lookup gives itself back; the firsts numbered in fixed slices. */
 int64_t sl_mesh_weld_positions(const sl_mesh *m, uint32_t *weld)
 {
-    uint64_t used = 0;
-    for (uint64_t v = 0; v < m->vertex_count; v++)
+    uint64_t n = m->vertex_count, corners = 3 * m->triangle_count;
+    const int wide = m->triangle_count >= PARALLEL_MIN;
+#pragma omp parallel for schedule(static) if (wide)
+    for (uint64_t v = 0; v < n; v++)
         weld[v] = NONE;
-    for (uint64_t i = 0; i < 3 * m->triangle_count; i++)
-        if (weld[m->triangles[i]] == NONE) {
-            weld[m->triangles[i]] = 0;
-            used++;
-        }
+#pragma omp parallel for schedule(static) if (wide)
+    for (uint64_t i = 0; i < corners; i++) {
+        uint32_t *mark = &weld[m->triangles[i]];
+#pragma omp atomic write
+        *mark = 0; /* used (every writer writes the same 0) */
+    }
+    uint64_t used = 0;
+#pragma omp parallel for schedule(static) reduction(+ : used) if (wide)
+    for (uint64_t v = 0; v < n; v++)
+        used += weld[v] == 0;
     uint64_t cap = 16;
     while (cap < 2 * used)
         cap *= 2;
-    uint32_t *table = malloc(cap * sizeof *table); /* representative vertex per slot */
+    _Atomic uint32_t *table = malloc(cap * sizeof *table); /* lowest vertex per slot */
     if (!table)
         return -1;
-    memset(table, 0xff, cap * sizeof *table);
-    uint32_t ids = 0;
-    for (uint64_t v = 0; v < m->vertex_count; v++) {
-        if (weld[v] == NONE)
-            continue;
-        uint32_t key[3], other[3];
-        position_key(m, (uint32_t)v, key);
-        uint64_t slot = position_hash(key) & (cap - 1);
-        for (;; slot = (slot + 1) & (cap - 1)) {
-            if (table[slot] == NONE) {
-                table[slot] = (uint32_t)v;
-                weld[v] = ids++;
-                break;
-            }
-            position_key(m, table[slot], other);
-            if (memcmp(key, other, sizeof key) == 0) {
-                weld[v] = weld[table[slot]];
-                break;
-            }
-        }
-    }
+#pragma omp parallel for schedule(static) if (wide)
+    for (uint64_t i = 0; i < cap; i++)
+        atomic_init(&table[i], NONE);
+#pragma omp parallel for schedule(dynamic, 4096) if (wide)
+    for (uint64_t v = 0; v < n; v++)
+        if (weld[v] == 0)
+            weld_insert(table, cap - 1, m, (uint32_t)v);
+    /* weld[v] = the first vertex at v's position, for the used ones */
+#pragma omp parallel for schedule(dynamic, 4096) if (wide)
+    for (uint64_t v = 0; v < n; v++)
+        if (weld[v] == 0)
+            weld[v] = weld_lookup(table, cap - 1, m, (uint32_t)v);
     free(table);
-    return ids;
-}
-
-static int cmp_u32(const void *x, const void *y)
-{
-    uint32_t a = *(const uint32_t *)x, b = *(const uint32_t *)y;
-    return (a > b) - (a < b);
-}
-
-static void sort_bucket(uint32_t *v, uint64_t n)
-{
-    if (n > 32) { /* a fan around one vertex can be large on broken meshes */
-        qsort(v, n, sizeof *v, cmp_u32);
-        return;
+    uint32_t *id = malloc((n ? n : 1) * sizeof *id); /* per first vertex: its id */
+    if (!id)
+        return -1;
+    uint64_t first[WELD_SLICES + 1];
+    first[0] = 0;
+#pragma omp parallel for schedule(static) if (wide)
+    for (int s = 0; s < WELD_SLICES; s++) {
+        uint64_t c = 0;
+        for (uint64_t v = weld_slice(n, s); v < weld_slice(n, s + 1); v++)
+            c += weld[v] == v;
+        first[s + 1] = c;
     }
-    for (uint64_t i = 1; i < n; i++) {
-        uint32_t x = v[i];
-        uint64_t j = i;
-        for (; j > 0 && v[j - 1] > x; j--)
-            v[j] = v[j - 1];
-        v[j] = x;
+    for (int s = 0; s < WELD_SLICES; s++)
+        first[s + 1] += first[s];
+#pragma omp parallel for schedule(static) if (wide)
+    for (int s = 0; s < WELD_SLICES; s++) {
+        uint32_t next = (uint32_t)first[s];
+        for (uint64_t v = weld_slice(n, s); v < weld_slice(n, s + 1); v++)
+            if (weld[v] == v)
+                id[v] = next++;
     }
+#pragma omp parallel for schedule(static) if (wide)
+    for (uint64_t v = 0; v < n; v++)
+        if (weld[v] != NONE)
+            weld[v] = id[weld[v]];
+    free(id);
+    return (int64_t)first[WELD_SLICES];
 }
 
 /* Welded corners of triangle t; returns 0 if two coincide (degenerate). */
@@ -125,7 +179,7 @@ static void count_edge_runs(uint32_t *ends, const uint64_t *start, uint64_t ids,
     for (uint64_t lo = 0; lo < ids; lo++) {
         uint64_t n = start[lo + 1] - start[lo];
         uint32_t *v = ends + start[lo];
-        sort_bucket(v, n);
+        sl_sort_run_u32(v, n);
         for (uint64_t i = 0; i < n;) {
             uint64_t j = i + 1;
             while (j < n && v[j] == v[i])

@@ -3,14 +3,16 @@
  *
  * The unnormalised cross product (b - a) x (c - a) of a triangle is its normal scaled by
  * twice its area, so summing it over a point's triangles is the area-weighted mean.
- * Determinism: no atomics and no per-thread partial sums; a CSR point -> triangle table
- * lists each point's triangles in ascending order and every point sums its own list in
- * double, so the result is the same bits on any thread count.
+ * Determinism: no per-thread partial sums; a CSR point -> triangle table (counted and
+ * filled by all threads, then each list sorted) lists each point's triangles in ascending
+ * order and every point sums its own list in double, so the result is the same bits on
+ * any thread count.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry/key_table.h"
 #include "stages/range/range_internal.h"
 
 static void triangle_normal(const float *positions, const uint32_t *tri, double n[3])
@@ -51,14 +53,23 @@ int range_face_normals(const float *positions, uint64_t point_count, const uint3
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "normals: out of memory (%llu faces)",
                             (unsigned long long)triangle_count);
     }
-    for (uint64_t i = 0; i < 3 * triangle_count; i++)
+#pragma omp parallel for schedule(static)
+    for (uint64_t i = 0; i < 3 * triangle_count; i++) {
+#pragma omp atomic update
         start[triangles[i] + 1]++;
+    }
     for (uint64_t p = 0; p < point_count; p++)
         start[p + 1] += start[p];
     memcpy(fill, start, point_count * sizeof *fill);
+    /* Filled in any order; each list is sorted before it is summed (below). */
+#pragma omp parallel for schedule(static)
     for (uint64_t t = 0; t < triangle_count; t++)
-        for (int c = 0; c < 3; c++)
-            adjacent[fill[triangles[3 * t + c]]++] = t;
+        for (int c = 0; c < 3; c++) {
+            uint64_t at;
+#pragma omp atomic capture
+            at = fill[triangles[3 * t + c]]++;
+            adjacent[at] = t;
+        }
     if (sl_progress_step(progress, "normals", 0.3)) {
         free(start), free(fill), free(adjacent);
         return SL_E_INTERRUPTED;
@@ -68,6 +79,7 @@ int range_face_normals(const float *positions, uint64_t point_count, const uint3
 #pragma omp parallel for schedule(static, 4096) reduction(+ : fallbacks)
     for (int64_t p = 0; p < (int64_t)point_count; p++) {
         double sum[3] = {0, 0, 0}, n[3];
+        sl_sort_run_u64(adjacent + start[p], start[p + 1] - start[p]); /* ascending */
         for (uint64_t i = start[p]; i < start[p + 1]; i++) {
             triangle_normal(positions, triangles + 3 * adjacent[i], n);
             for (int k = 0; k < 3; k++)

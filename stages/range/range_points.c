@@ -37,10 +37,12 @@ int range_mean_spacing(const sl_kdtree *tree, const float *positions, uint64_t p
     return SL_OK;
 }
 
+/* (min and max are exact, so the parallel reduction is the serial loop's result.) */
 static void bounding_box(const float *positions, uint64_t n, float lo[3], float hi[3])
 {
     for (int k = 0; k < 3; k++)
         lo[k] = hi[k] = n ? positions[k] : 0.0f;
+#pragma omp parallel for schedule(static) reduction(min : lo[:3]) reduction(max : hi[:3])
     for (uint64_t i = 1; i < n; i++)
         for (int k = 0; k < 3; k++) {
             float x = positions[3 * i + k];
@@ -196,6 +198,7 @@ int sl_range_points_from_mesh(const sl_range_config *cfg, sl_mesh *mesh, const c
                           (unsigned long long)n);
         goto done;
     }
+#pragma omp parallel for schedule(static)
     for (uint64_t p = 0; p < n; p++)
         memcpy(out->positions + 3 * p, mesh->positions + 3 * (uint64_t)clean.point_vertex[p], 12);
     bounding_box(out->positions, n, out->bbox_min, out->bbox_max);

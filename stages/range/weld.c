@@ -5,7 +5,9 @@
  * floats (so -0.0 welds with +0.0); the group's representative is its lowest input index.
  * Found by a stable LSD radix sort of the vertices on (x, y, z) starting from index order,
  * which leaves every group as one run with its lowest index first: O(n), no hashing, and
- * the result does not depend on the thread count.
+ * the result does not depend on the thread count. Every pass runs in parallel: the sort
+ * in the key tables' slices, the compactions and numberings in fixed slices of the input
+ * (counted, prefixed, then written), so the output is the serial loops' bits.
  * Faces: a face with a non-finite corner is dropped (counted as nonfinite_faces); after
  * welding, a face with a repeated corner or an exactly zero cross product is degenerate.
  * Points are the representatives that a kept face references, numbered in input order;
@@ -15,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry/key_table.h"
 #include "stages/range/range_internal.h"
 
 enum { FACE_KEEP = 0, FACE_NONFINITE = 1, FACE_DEGENERATE = 2 };
@@ -29,66 +32,85 @@ static uint32_t sortable_key(float f)
     return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
 }
 
-/* Stable counting-sort pass of `src` into `dst` on 16 bits of the keys. */
-static void radix_pass(const uint32_t *src, uint32_t *dst, uint64_t n, const uint32_t *keys,
-                       int shift, uint64_t *histogram)
+/* Fixed slices of the loops that compact or number in input order: each slice counts,
+ * the counts are prefixed, each slice writes at its offset, so the result is the serial
+ * loop's whatever the thread count. */
+#define SLICES 64
+
+static uint64_t slice_begin(uint64_t n, int s)
 {
-    memset(histogram, 0, 65536 * sizeof *histogram);
-    for (uint64_t i = 0; i < n; i++)
-        histogram[(keys[src[i]] >> shift) & 0xffffu]++;
-    uint64_t sum = 0;
-    for (int d = 0; d < 65536; d++) {
-        uint64_t c = histogram[d];
-        histogram[d] = sum;
-        sum += c;
-    }
-    for (uint64_t i = 0; i < n; i++)
-        dst[histogram[(keys[src[i]] >> shift) & 0xffffu]++] = src[i];
+    return n * (uint64_t)s / SLICES;
 }
 
-/* rep[v] = lowest index with the same position, for finite v; RANGE_NONE otherwise. */
+/* rep[v] = lowest index with the same position, for finite v; RANGE_NONE otherwise.
+ * The finite vertices as (key, value) pairs sorted by the key tables' stable radix sort
+ * (in parallel slices, the same order on any thread count): first on z's key, then on
+ * x's and y's with z's key carried in the value beside the index, so a group of equal
+ * positions is one run, lowest index first, found without reading the positions again. */
 static int weld_vertices(const sl_mesh *mesh, const uint8_t *finite, uint32_t *rep,
                          uint64_t *welded, sl_error *err)
 {
-    uint64_t n = mesh->vertex_count, m = 0;
-    uint32_t *order = malloc((n ? n : 1) * sizeof *order);
-    uint32_t *tmp = malloc((n ? n : 1) * sizeof *tmp);
-    uint32_t *keys = malloc((n ? n : 1) * sizeof *keys);
-    uint64_t *histogram = malloc(65536 * sizeof *histogram);
-    if (!order || !tmp || !keys || !histogram) {
-        free(order), free(tmp), free(keys), free(histogram);
+    uint64_t n = mesh->vertex_count;
+    uint64_t first[SLICES + 1];
+    first[0] = 0;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int s = 0; s < SLICES; s++) {
+        uint64_t c = 0;
+        for (uint64_t v = slice_begin(n, s); v < slice_begin(n, s + 1); v++) {
+            rep[v] = RANGE_NONE;
+            c += finite[v];
+        }
+        first[s + 1] = c;
+    }
+    for (int s = 0; s < SLICES; s++)
+        first[s + 1] += first[s];
+    uint64_t m = first[SLICES];
+    sl_key_pair *pairs = malloc((m ? m : 1) * sizeof *pairs);
+    if (!pairs)
+        return sl_error_set(err, SL_E_NOMEM, 0, NULL, "weld: out of memory (%llu vertices)",
+                            (unsigned long long)n);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int s = 0; s < SLICES; s++) {
+        uint64_t i = first[s];
+        for (uint64_t v = slice_begin(n, s); v < slice_begin(n, s + 1); v++)
+            if (finite[v])
+                pairs[i++] = (sl_key_pair){sortable_key(mesh->positions[3 * v + 2]), v};
+    }
+    int rc = sl_sort_pairs(pairs, m, 32);
+    if (rc == 0) {
+#pragma omp parallel for schedule(static)
+        for (uint64_t i = 0; i < m; i++) {
+            const float *p = mesh->positions + 3 * pairs[i].value;
+            pairs[i].value |= pairs[i].key << 32; /* z's key above the index */
+            pairs[i].key = (uint64_t)sortable_key(p[0]) << 32 | sortable_key(p[1]);
+        }
+        rc = sl_sort_pairs(pairs, m, 64);
+    }
+    if (rc) {
+        free(pairs);
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "weld: out of memory (%llu vertices)",
                             (unsigned long long)n);
     }
-    for (uint64_t v = 0; v < n; v++) {
-        rep[v] = RANGE_NONE;
-        if (finite[v])
-            order[m++] = (uint32_t)v;
-    }
-    /* Least significant key first: z, y, x; each in two 16-bit passes. */
-    for (int axis = 2; axis >= 0; axis--) {
-        for (uint64_t i = 0; i < m; i++)
-            keys[order[i]] = sortable_key(mesh->positions[3 * (uint64_t)order[i] + axis]);
-        radix_pass(order, tmp, m, keys, 0, histogram);
-        radix_pass(tmp, order, m, keys, 16, histogram);
-    }
+    /* A run of equal (key, z key) is a group; sortable keys are equal exactly when the
+     * floats compare equal (finite values, -0 as +0). A slice starting inside a group
+     * looks back for its first element. */
     uint64_t count = 0;
-    for (uint64_t i = 0; i < m;) {
-        const float *p = mesh->positions + 3 * (uint64_t)order[i];
-        uint64_t j = i + 1;
-        while (j < m) {
-            const float *q = mesh->positions + 3 * (uint64_t)order[j];
-            if (p[0] != q[0] || p[1] != q[1] || p[2] != q[2])
-                break;
-            j++;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : count)
+    for (int s = 0; s < SLICES; s++) {
+        uint64_t lo = slice_begin(m, s), hi = slice_begin(m, s + 1), head = lo;
+        while (head > 0 && pairs[head - 1].key == pairs[lo].key &&
+               pairs[head - 1].value >> 32 == pairs[lo].value >> 32)
+            head--;
+        for (uint64_t i = lo; i < hi; i++) {
+            if (i > head && (pairs[i].key != pairs[head].key ||
+                             pairs[i].value >> 32 != pairs[head].value >> 32))
+                head = i;
+            rep[(uint32_t)pairs[i].value] = (uint32_t)pairs[head].value;
+            count += i > head;
         }
-        for (uint64_t g = i; g < j; g++)
-            rep[order[g]] = order[i];
-        count += j - i - 1;
-        i = j;
     }
     *welded = count;
-    free(order), free(tmp), free(keys), free(histogram);
+    free(pairs);
     return SL_OK;
 }
 
@@ -124,14 +146,22 @@ static int keep_faces(const sl_mesh *mesh, const uint8_t *finite, const uint32_t
     if (!cls)
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "weld: out of memory (%llu faces)",
                             (unsigned long long)nt);
-    uint64_t kept = 0, nonfinite = 0, degenerate = 0;
-#pragma omp parallel for schedule(static) reduction(+ : kept, nonfinite, degenerate)
-    for (int64_t t = 0; t < (int64_t)nt; t++) {
-        cls[t] = (uint8_t)classify_face(mesh, finite, rep, (uint64_t)t);
-        kept += cls[t] == FACE_KEEP;
-        nonfinite += cls[t] == FACE_NONFINITE;
-        degenerate += cls[t] == FACE_DEGENERATE;
+    uint64_t first[SLICES + 1], nonfinite = 0, degenerate = 0;
+    first[0] = 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : nonfinite, degenerate)
+    for (int s = 0; s < SLICES; s++) {
+        uint64_t kept = 0;
+        for (uint64_t t = slice_begin(nt, s); t < slice_begin(nt, s + 1); t++) {
+            cls[t] = (uint8_t)classify_face(mesh, finite, rep, t);
+            kept += cls[t] == FACE_KEEP;
+            nonfinite += cls[t] == FACE_NONFINITE;
+            degenerate += cls[t] == FACE_DEGENERATE;
+        }
+        first[s + 1] = kept;
     }
+    for (int s = 0; s < SLICES; s++)
+        first[s + 1] += first[s];
+    uint64_t kept = first[SLICES];
     counts->nonfinite_faces = nonfinite;
     counts->degenerate_faces = degenerate;
     out->triangle_count = kept;
@@ -142,13 +172,16 @@ static int keep_faces(const sl_mesh *mesh, const uint8_t *finite, const uint32_t
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "weld: out of memory (%llu faces)",
                             (unsigned long long)kept);
     }
-    uint64_t k = 0;
-    for (uint64_t t = 0; t < nt; t++) {
-        if (cls[t] != FACE_KEEP)
-            continue;
-        for (int c = 0; c < 3; c++)
-            out->triangles[3 * k + c] = rep[mesh->triangles[3 * t + c]];
-        out->triangle_source[k++] = t;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int s = 0; s < SLICES; s++) {
+        uint64_t k = first[s];
+        for (uint64_t t = slice_begin(nt, s); t < slice_begin(nt, s + 1); t++) {
+            if (cls[t] != FACE_KEEP)
+                continue;
+            for (int c = 0; c < 3; c++)
+                out->triangles[3 * k + c] = rep[mesh->triangles[3 * t + c]];
+            out->triangle_source[k++] = t;
+        }
     }
     free(cls);
     return SL_OK;
@@ -158,34 +191,57 @@ static int keep_faces(const sl_mesh *mesh, const uint8_t *finite, const uint32_t
 static int number_points(const sl_mesh *mesh, const uint32_t *rep, range_clean *out,
                          sl_range_counts *counts, sl_error *err)
 {
-    uint64_t n = mesh->vertex_count;
+    uint64_t n = mesh->vertex_count, corners = 3 * out->triangle_count;
     int cloud = mesh->triangle_count == 0;
     uint32_t *point_of_rep = out->vertex_point; /* reused: first per rep, then per vertex */
+#pragma omp parallel for schedule(static)
     for (uint64_t v = 0; v < n; v++)
         point_of_rep[v] = RANGE_NONE;
-    for (uint64_t i = 0; i < 3 * out->triangle_count; i++)
-        point_of_rep[out->triangles[i]] = 0; /* referenced */
-    uint64_t points = 0, unreferenced = 0;
-    for (uint64_t v = 0; v < n; v++) {
-        if (rep[v] != v)
-            continue;
-        if (cloud || point_of_rep[v] == 0)
-            point_of_rep[v] = (uint32_t)points++;
-        else
-            unreferenced++;
+#pragma omp parallel for schedule(static)
+    for (uint64_t i = 0; i < corners; i++) {
+        uint32_t *mark = &point_of_rep[out->triangles[i]];
+#pragma omp atomic write
+        *mark = 0; /* referenced (every writer writes the same 0) */
     }
+    uint64_t first[SLICES + 1], unreferenced = 0;
+    first[0] = 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : unreferenced)
+    for (int s = 0; s < SLICES; s++) {
+        uint64_t points = 0;
+        for (uint64_t v = slice_begin(n, s); v < slice_begin(n, s + 1); v++) {
+            if (rep[v] != v)
+                continue;
+            if (cloud || point_of_rep[v] == 0)
+                points++;
+            else
+                unreferenced++;
+        }
+        first[s + 1] = points;
+    }
+    for (int s = 0; s < SLICES; s++)
+        first[s + 1] += first[s];
+    uint64_t points = first[SLICES];
     out->point_count = points;
     counts->unreferenced = unreferenced;
     out->point_vertex = malloc((points ? points : 1) * sizeof *out->point_vertex);
     if (!out->point_vertex)
         return sl_error_set(err, SL_E_NOMEM, 0, NULL, "weld: out of memory (%llu points)",
                             (unsigned long long)points);
-    for (uint64_t v = 0; v < n; v++)
-        if (rep[v] == v && point_of_rep[v] != RANGE_NONE)
-            out->point_vertex[point_of_rep[v]] = (uint32_t)v;
-    for (uint64_t i = 0; i < 3 * out->triangle_count; i++)
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int s = 0; s < SLICES; s++) {
+        uint64_t p = first[s];
+        for (uint64_t v = slice_begin(n, s); v < slice_begin(n, s + 1); v++)
+            if (rep[v] == v && (cloud || point_of_rep[v] == 0)) {
+                point_of_rep[v] = (uint32_t)p;
+                out->point_vertex[p++] = (uint32_t)v;
+            }
+    }
+#pragma omp parallel for schedule(static)
+    for (uint64_t i = 0; i < corners; i++)
         out->triangles[i] = point_of_rep[out->triangles[i]];
-    /* Welded twins take their representative's point (reps come first in index order). */
+    /* Welded twins take their representative's point (a representative is never a twin,
+     * so no loop reads what another writes). */
+#pragma omp parallel for schedule(static)
     for (uint64_t v = 0; v < n; v++)
         if (rep[v] != RANGE_NONE && rep[v] != v)
             point_of_rep[v] = point_of_rep[rep[v]];

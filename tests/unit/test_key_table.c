@@ -102,8 +102,35 @@ static void check_keys(size_t n)
     free(want);
 }
 
+/* Short runs of every length up to 100 (insertion below 33, qsort above), with repeats,
+ * against their counts: ascending, and the same multiset. */
+static void check_runs(void)
+{
+    uint64_t state = 99, bad = 0;
+    uint32_t a[100];
+    uint64_t b[100];
+    for (size_t n = 0; n <= 100; n++) {
+        uint64_t sum_a = 0, sum_b = 0, after_a = 0, after_b = 0;
+        for (size_t i = 0; i < n; i++) {
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            a[i] = (uint32_t)(state >> 59); /* 0..31: repeats */
+            b[i] = state >> 1;
+            sum_a += a[i], sum_b += b[i] & 0xffff;
+        }
+        sl_sort_run_u32(a, n);
+        sl_sort_run_u64(b, n);
+        for (size_t i = 0; i < n; i++) {
+            after_a += a[i], after_b += b[i] & 0xffff;
+            bad += i > 0 && (a[i - 1] > a[i] || b[i - 1] > b[i]);
+        }
+        bad += sum_a != after_a || sum_b != after_b;
+    }
+    CHECK_MSG(bad == 0, "short runs: %llu out of order or changed", (unsigned long long)bad);
+}
+
 int main(void)
 {
+    check_runs();
     check_pairs(0, 64, 1);
     check_pairs(1, 64, 1);
     check_pairs(1000, 62, 50);           /* one slice */

@@ -1,12 +1,13 @@
 /* Range stage on meshes built in memory: exact drop/weld counts, face normals, file
  * normal fallback, grid triangulation and its orientation, PCA normals on spheres
  * (propagated and viewpoint), degenerate clouds, texture sampling, point set round trip
- * and corruption. */
+ * and corruption, and the weld of a large scrambled soup on 1 and 2 threads. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <omp.h>
 #include <unistd.h>
 
 #include "shim/oiio_shim.h"
@@ -436,6 +437,133 @@ static void test_pointset_file(const char *dir)
     sl_mesh_release(&m);
 }
 
+/* --- the weld of a large soup: every triangle with its own three vertices ------------------ */
+
+static int cmp_position(const void *x, const void *y)
+{
+    const float *a = x, *b = y;
+    for (int k = 0; k < 3; k++) {
+        float u = a[k] == 0.0f ? 0.0f : a[k], v = b[k] == 0.0f ? 0.0f : b[k];
+        if (u != v)
+            return u < v ? -1 : 1;
+    }
+    return 0;
+}
+
+/* Two sheets of a G x G grid of a rough height field, one above the other (positions
+ * that differ in z alone), as a soup: their triangles in a scrambled order,
+ * each with three vertices of its own (so a position is held by up to six vertices far
+ * apart in the file), a zero coordinate written as -0.0 on some of them, and a few
+ * vertices NaN (their faces dropped). About 4 G^2 triangles, 12 G^2 vertices: enough for
+ * the sort's parallel slices and for groups across the weld's 64 slices. */
+static void build_soup(sl_mesh *m, int g)
+{
+    uint64_t cells = (uint64_t)(g - 1) * (g - 1), nt = 4 * cells, nv = 3 * nt;
+    sl_mesh_init(m);
+    m->vertex_count = nv;
+    m->triangle_count = nt;
+    m->positions = malloc(12 * nv);
+    m->triangles = malloc(12 * nt);
+    uint64_t *order = malloc(nt * sizeof *order);
+    for (uint64_t t = 0; t < nt; t++)
+        order[t] = t;
+    uint64_t state = 12345;
+    for (uint64_t t = nt - 1; t > 0; t--) { /* Fisher-Yates with a fixed LCG */
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        uint64_t j = (state >> 33) % (t + 1), swap = order[t];
+        order[t] = order[j];
+        order[j] = swap;
+    }
+    for (uint64_t slot = 0; slot < nt; slot++) {
+        uint64_t t = order[slot], cell = t / 2 % cells, sheet = t / (2 * cells);
+        int x = (int)(cell % (uint64_t)(g - 1)), y = (int)(cell / (uint64_t)(g - 1));
+        int corners[2][3][2] = {{{0, 0}, {1, 0}, {1, 1}}, {{0, 0}, {1, 1}, {0, 1}}};
+        for (int c = 0; c < 3; c++) {
+            int cx = x + corners[t % 2][c][0], cy = y + corners[t % 2][c][1];
+            uint64_t v = 3 * slot + (uint64_t)c;
+            float *p = m->positions + 3 * v;
+            p[0] = (float)cx / (float)g;
+            p[1] = (float)cy / (float)g;
+            uint32_t h = (uint32_t)(cx * 73856093) ^ (uint32_t)(cy * 19349663); /* rough */
+            p[2] = 0.05f * sinf(0.37f * (float)cx) * cosf(0.23f * (float)cy) +
+                   0.01f * (float)(h % 1000) / 1000.0f + 0.5f * (float)sheet;
+            if (cx == 0 && (v % 3) == 1)
+                p[0] = -0.0f; /* welds with +0.0 */
+            if (v % 9973 == 17)
+                p[1] = NAN;
+            m->triangles[3 * slot + c] = (uint32_t)v;
+        }
+    }
+    free(order);
+}
+
+static void test_weld_soup(void)
+{
+    sl_range_config cfg = sl_range_default_config();
+    sl_mesh m;
+    build_soup(&m, 300);
+    sl_pointset ps[2];
+    sl_range_counts c[2];
+    int saved = omp_get_max_threads();
+    for (int r = 0; r < 2; r++) {
+        omp_set_num_threads(r + 1);
+        CHECK(run(&cfg, &m, ".", &ps[r], &c[r]) == SL_OK);
+    }
+    omp_set_num_threads(saved);
+    /* The same bits on 1 and 2 threads. */
+    CHECK_EQ_U64(ps[0].count, ps[1].count);
+    CHECK_EQ_U64(ps[0].triangle_count, ps[1].triangle_count);
+    CHECK_EQ_U64(c[0].welded, c[1].welded);
+    if (ps[0].count == ps[1].count && ps[0].triangle_count == ps[1].triangle_count) {
+        CHECK(memcmp(ps[0].positions, ps[1].positions, 12 * ps[0].count) == 0);
+        CHECK(memcmp(ps[0].normals, ps[1].normals, 12 * ps[0].count) == 0);
+        CHECK(memcmp(ps[0].triangles, ps[1].triangles, 12 * ps[0].triangle_count) == 0);
+    }
+    /* Against the positions themselves: finite vertices = distinct finite positions +
+     * welded; no two points at one position; every kept triangle keeps its corners. */
+    uint64_t finite = 0;
+    float *sorted = malloc(12 * m.vertex_count);
+    for (uint64_t v = 0; v < m.vertex_count; v++) {
+        const float *p = m.positions + 3 * v;
+        if (isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]))
+            memcpy(sorted + 3 * finite++, p, 12);
+    }
+    qsort(sorted, finite, 12, cmp_position);
+    uint64_t distinct = finite > 0;
+    for (uint64_t i = 1; i < finite; i++)
+        distinct += cmp_position(sorted + 3 * (i - 1), sorted + 3 * i) != 0;
+    CHECK_EQ_U64(c[1].nonfinite_vertices, m.vertex_count - finite);
+    CHECK_EQ_U64(c[1].welded, finite - distinct);
+    CHECK(c[1].welded > 4 * ps[1].count); /* about five twins a position: it welded */
+    float *points = malloc(12 * ps[1].count);
+    memcpy(points, ps[1].positions, 12 * ps[1].count);
+    qsort(points, ps[1].count, 12, cmp_position);
+    uint64_t twins = 0;
+    for (uint64_t i = 1; i < ps[1].count; i++)
+        twins += cmp_position(points + 3 * (i - 1), points + 3 * i) == 0;
+    CHECK_EQ_U64(twins, 0);
+    uint64_t moved = 0, kept = 0;
+    for (uint64_t t = 0; t < m.triangle_count; t++) {
+        const uint32_t *in = m.triangles + 3 * t;
+        int usable = 1;
+        for (int k = 0; k < 3; k++)
+            usable &= isfinite(m.positions[3 * (uint64_t)in[k] + 1]) != 0;
+        if (!usable)
+            continue;
+        const uint32_t *out = ps[1].triangles + 3 * kept++;
+        for (int k = 0; k < 3 && kept <= ps[1].triangle_count; k++)
+            moved += cmp_position(ps[1].positions + 3 * (uint64_t)out[k],
+                                  m.positions + 3 * (uint64_t)in[k]) != 0;
+    }
+    CHECK_EQ_U64(kept, ps[1].triangle_count);
+    CHECK_EQ_U64(moved, 0);
+    free(points);
+    free(sorted);
+    for (int r = 0; r < 2; r++)
+        sl_pointset_release(&ps[r]);
+    sl_mesh_release(&m);
+}
+
 int main(void)
 {
     char dir[512];
@@ -448,6 +576,7 @@ int main(void)
     test_degenerate_clouds();
     test_texture(dir);
     test_pointset_file(dir);
+    test_weld_soup();
     rmdir(dir);
     return check_report();
 }
