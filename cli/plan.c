@@ -82,6 +82,9 @@ typedef struct stage_cost {
  * their constants c set again to rocker_arm's peaks without thumbnails (merge 24, crack
  * 23 MB; 3 runs). The crack's memory again when it stopped laying out the model for
  * generation (188 / 865 / 3,449 MB at 1, 5 and 20 M, 2026-12-07; d through the three).
+ * The samples' memory by its peaks at 5, 20 and 100 M (708 / 2,818 / 13,842 MB, 141.6 /
+ * 140.9 / 138.4 bytes per triangle, 2026-12-08: the first 100 M run; the line had f 0.95
+ * and said 10,580 MB at 100 M): f 1.0, d 139.
  * Refit with scripts/bench/plan_calibrate.py.
  * The octree stages' lines hold for surfaces of about 1.56 samples per triangle (the
  * tori; real scans 1.2-2.2); for slivers and soups, whose samples per triangle are many
@@ -95,7 +98,7 @@ typedef struct stage_cost {
 #define IMAGES_MB 110.0
 static const stage_cost mesh_costs[] = {
     {"range", 0.014, 0.403, 1.081, 5, 94, 0.95, 0, 0},
-    {"samples", 0.105, 2.42, 1.047, 15, 133, 0.95, -0.65, 1},
+    {"samples", 0.105, 2.42, 1.047, 15, 139, 1.0, -0.65, 1},
     {"merge", 0.078, 2.34, 1.13, 20, 167, 0.963, 0.6, 1},
     {"priority", 0.107, 0.65, 1.14, 7, 164, 1.0, 0.6, 1},
     {"crack", 0.117, 3.7, 1.04, 18, 171, 1.0, 1.0, 1},
