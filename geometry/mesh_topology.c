@@ -197,13 +197,69 @@ static void count_edge_runs(uint32_t *ends, const uint64_t *start, uint64_t ids,
     out->nonmanifold_edges += nonmanifold;
 }
 
-static uint32_t find_root(uint32_t *parent, uint32_t x)
+/* Connected parts by a union-find shared by all threads: a root is linked under another
+ * only by a compare-and-swap that finds it still a root, always the larger under the
+ * smaller, so a set's root is its lowest id whatever the order of the unions (the serial
+ * loop's rule, and its result); finding halves the path with stores of an ancestor,
+ * which any thread may overwrite with another ancestor. */
+static uint32_t find_root(_Atomic uint32_t *parent, uint32_t x)
 {
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
+    for (;;) {
+        uint32_t up = atomic_load_explicit(&parent[x], memory_order_relaxed);
+        if (up == x)
+            return x;
+        uint32_t above = atomic_load_explicit(&parent[up], memory_order_relaxed);
+        if (above != up)
+            atomic_store_explicit(&parent[x], above, memory_order_relaxed);
+        x = above;
     }
-    return x;
+}
+
+static void unite(_Atomic uint32_t *parent, uint32_t a, uint32_t b)
+{
+    for (;;) {
+        a = find_root(parent, a), b = find_root(parent, b);
+        if (a == b)
+            return;
+        uint32_t low = a < b ? a : b, high = a < b ? b : a;
+        if (atomic_compare_exchange_strong_explicit(&parent[high], &high, low,
+                                                    memory_order_relaxed, memory_order_relaxed))
+            return;
+    }
+}
+
+/* parent[] over `ids` ids, every triangle's welded corners joined (the degenerate ones
+ * too unless `skip_degenerate`), then every id pointing at its root. NULL when out of
+ * memory. */
+static _Atomic uint32_t *join_parts(const sl_mesh *m, const uint32_t *weld, uint64_t ids,
+                                    int skip_degenerate)
+{
+    _Atomic uint32_t *parent = malloc((ids ? ids : 1) * sizeof *parent);
+    if (!parent)
+        return NULL;
+    const int wide = m->triangle_count >= PARALLEL_MIN;
+#pragma omp parallel for schedule(static) if (wide)
+    for (uint64_t i = 0; i < ids; i++)
+        atomic_init(&parent[i], (uint32_t)i);
+#pragma omp parallel for schedule(dynamic, 4096) if (wide)
+    for (uint64_t t = 0; t < m->triangle_count; t++) {
+        uint32_t w[3];
+        for (int c = 0; c < 3; c++)
+            w[c] = weld[m->triangles[3 * t + c]];
+        if (skip_degenerate && (w[0] == w[1] || w[1] == w[2] || w[2] == w[0]))
+            continue;
+        unite(parent, w[0], w[1]);
+        unite(parent, w[0], w[2]);
+    }
+#pragma omp parallel for schedule(static) if (wide)
+    for (uint64_t i = 0; i < ids; i++)
+        atomic_store_explicit(&parent[i], find_root(parent, (uint32_t)i), memory_order_relaxed);
+    return parent;
+}
+
+static uint32_t root_of(_Atomic uint32_t *parent, uint32_t id)
+{
+    return atomic_load_explicit(&parent[id], memory_order_relaxed);
 }
 
 static double triangle_area(const sl_mesh *m, uint64_t t)
@@ -225,36 +281,25 @@ static double triangle_area(const sl_mesh *m, uint64_t t)
 static int count_components(const sl_mesh *m, const uint32_t *weld, uint64_t ids,
                             sl_mesh_topology *out)
 {
-    uint32_t *parent = malloc((ids ? ids : 1) * sizeof *parent);
+    _Atomic uint32_t *parent = join_parts(m, weld, ids, 1);
     double *area = calloc(ids ? ids : 1, sizeof *area);
     if (!parent || !area) {
         free(parent);
         free(area);
         return -1;
     }
-    for (uint64_t i = 0; i < ids; i++)
-        parent[i] = (uint32_t)i;
-    for (uint64_t t = 0; t < m->triangle_count; t++) {
-        uint32_t w[3];
-        if (!welded_triangle(m, weld, t, w))
-            continue;
-        for (int c = 1; c < 3; c++) {
-            uint32_t a = find_root(parent, w[0]), b = find_root(parent, w[c]);
-            if (a != b)
-                parent[a > b ? a : b] = a < b ? a : b;
-        }
-    }
+    /* The areas summed in triangle order, on one thread: the same bits as ever. */
     for (uint64_t t = 0; t < m->triangle_count; t++) {
         uint32_t w[3];
         if (!welded_triangle(m, weld, t, w))
             continue;
         double a = triangle_area(m, t);
-        area[find_root(parent, w[0])] += a;
+        area[root_of(parent, w[0])] += a;
         out->area += a;
     }
     uint64_t used = 0;
     for (uint64_t i = 0; i < ids; i++)
-        if (parent[i] == i && area[i] > 0) {
+        if (root_of(parent, (uint32_t)i) == i && area[i] > 0) {
             used++;
             if (area[i] > out->largest_component_area)
                 out->largest_component_area = area[i];
@@ -343,10 +388,12 @@ int sl_mesh_parts(const sl_mesh *m, uint32_t *part_of_triangle, double **part_ar
                             "%llu vertices: parts handle at most 2^32 - 1",
                             (unsigned long long)m->vertex_count);
     uint64_t n = m->vertex_count ? m->vertex_count : 1;
-    uint32_t *weld = malloc(n * sizeof *weld), *parent = NULL, *dense = NULL;
+    uint32_t *weld = malloc(n * sizeof *weld), *dense = NULL;
+    _Atomic uint32_t *parent = NULL;
     int64_t ids = weld ? sl_mesh_weld_positions(m, weld) : -1;
     if (ids >= 0) {
-        parent = malloc(((uint64_t)ids + 1) * sizeof *parent);
+        /* Degenerate triangles join their corners too: they touch the part they lie in. */
+        parent = join_parts(m, weld, (uint64_t)ids, 0);
         dense = malloc(((uint64_t)ids + 1) * sizeof *dense);
     }
     if (!parent || !dense) {
@@ -357,18 +404,10 @@ int sl_mesh_parts(const sl_mesh *m, uint32_t *part_of_triangle, double **part_ar
                             (unsigned long long)m->triangle_count);
     }
     for (int64_t i = 0; i < ids; i++)
-        parent[i] = (uint32_t)i, dense[i] = NONE;
-    /* Degenerate triangles join their corners too: they touch the part they lie in. */
-    for (uint64_t t = 0; t < m->triangle_count; t++)
-        for (int c = 1; c < 3; c++) {
-            uint32_t a = find_root(parent, weld[m->triangles[3 * t]]);
-            uint32_t b = find_root(parent, weld[m->triangles[3 * t + c]]);
-            if (a != b)
-                parent[a > b ? a : b] = a < b ? a : b;
-        }
+        dense[i] = NONE;
     uint64_t parts = 0;
     for (uint64_t t = 0; t < m->triangle_count; t++) {
-        uint32_t r = find_root(parent, weld[m->triangles[3 * t]]);
+        uint32_t r = root_of(parent, weld[m->triangles[3 * t]]);
         if (dense[r] == NONE)
             dense[r] = (uint32_t)parts++;
         part_of_triangle[t] = dense[r];

@@ -6,7 +6,8 @@
  * vertices, the soup six times over, every other one in reverse, with unused vertices between) and
  * on a grid with -0 and +0 coordinates. The soup's topology is fandisk's edges, each one
  * shared by twelve triangles (six copies): as many non-manifold edges, no border, one
- * part; the same on 1 and 2 threads. */
+ * part; the same on 1 and 2 threads; pulled apart, six parts, on 1 and 2 threads. */
+#include <math.h>
 #include <omp.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -176,6 +177,46 @@ static void check_soup_topology(const sl_mesh *soup)
     sl_mesh_release(&m);
 }
 
+/* The soup pulled apart: copy c moved by c metres along x, so six parts of one fandisk
+ * each, found by the union-find shared by the threads: the same parts, areas and
+ * numbering on 1 and 2 threads, each part a sixth of the area. */
+static void check_parts(sl_mesh *soup)
+{
+    uint64_t per_copy = soup->triangle_count / 6;
+    for (uint64_t t = 0; t < soup->triangle_count; t++)
+        for (int j = 0; j < 3; j++)
+            soup->positions[3 * (uint64_t)soup->triangles[3 * t + j]] += (float)(t / per_copy);
+    uint32_t *part[2];
+    double *area[2] = {NULL, NULL};
+    uint64_t parts[2] = {0, 0};
+    sl_mesh_topology topo[2];
+    sl_error err;
+    for (int r = 0; r < 2; r++) {
+        omp_set_num_threads(r + 1);
+        part[r] = malloc(soup->triangle_count * sizeof *part[r]);
+        sl_error_init(&err);
+        CHECK_MSG(sl_mesh_parts(soup, part[r], &area[r], &parts[r], &err) == 0, "parts: %s",
+                  err.message);
+        CHECK_MSG(sl_mesh_topology_compute(soup, &topo[r], &err) == 0, "topology: %s",
+                  err.message);
+    }
+    CHECK_MSG(parts[0] == 6 && parts[1] == 6 && topo[0].components == 6 && topo[1].components == 6,
+              "six parts: %llu and %llu (parts), %llu and %llu (topology)",
+              (unsigned long long)parts[0], (unsigned long long)parts[1],
+              (unsigned long long)topo[0].components, (unsigned long long)topo[1].components);
+    CHECK(memcmp(part[0], part[1], soup->triangle_count * sizeof *part[0]) == 0);
+    CHECK(memcmp(&topo[0], &topo[1], sizeof topo[0]) == 0);
+    uint64_t off = 0;
+    for (uint64_t t = 0; t < soup->triangle_count; t++)
+        off += part[1][t] != t / per_copy;
+    CHECK_MSG(off == 0, "%llu triangles in another copy's part", (unsigned long long)off);
+    for (uint64_t k = 0; parts[1] == 6 && k < 6; k++)
+        CHECK_MSG(fabs(area[1][k] * 6 - topo[1].area) < 1e-6 * topo[1].area,
+                  "part %llu: area %g of %g", (unsigned long long)k, area[1][k], topo[1].area);
+    for (int r = 0; r < 2; r++)
+        free(part[r]), free(area[r]);
+}
+
 int main(void)
 {
     sl_mesh m;
@@ -184,6 +225,7 @@ int main(void)
               (unsigned long long)m.triangle_count);
     check_weld("fandisk soup", &m);
     check_soup_topology(&m);
+    check_parts(&m);
     sl_mesh_release(&m);
     signed_zero_grid(&m);
     check_weld("grid with -0 and +0", &m);
