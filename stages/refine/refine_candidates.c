@@ -268,12 +268,19 @@ typedef int (*make_fn)(refine_item *, const sl_rung *, uint64_t, refine_candidat
  * its triangles. Collapsing it would only take it farther (its triangles are a superset's
  * worth of the surface), and a candidate past CLOSE_RMS of the chosen one is not fitted to
  * be compared (fit_chosen), so it could not be chosen: its collapse, on a large scan the
- * most of the stage's time, is spared (docs/levels.md, "Choice"). */
+ * most of the stage's time, is spared (docs/levels.md, "Choice"). Nor can it be chosen
+ * when it is farther than a lead within [refine] fit_floor at all: the lead, if chosen,
+ * is fitted with no rival (fit_chosen), so the candidate would meet it collapsed and
+ * unfitted, farther still (the 100 M torus's lod20: the octree's 40 M-triangle cut at 1.38
+ * times the scan's RMS, 359 of the stage's 1,024 s and its 20 GB peak to lose at 1.63). */
 static int outranked(const refine_item *it, const refine_candidate *lead,
                      const refine_candidate *raw, uint64_t target)
 {
-    return lead && lead->measured && raw->measured && reached(&lead->level, target) &&
-           keeps(it, lead) >= keeps(it, raw) && raw->rms > CLOSE_RMS * lead->rms;
+    if (!(lead && lead->measured && raw->measured && reached(&lead->level, target) &&
+          keeps(it, lead) >= keeps(it, raw)))
+        return 0;
+    return raw->rms > CLOSE_RMS * lead->rms ||
+           (lead->rms <= it->c->fit_floor && raw->rms > lead->rms);
 }
 
 /* A candidate measured before its collapse; an octree cut the last rung measured so (the

@@ -20,8 +20,9 @@
  * level already within [refine] fit_floor of the input is not fitted. 5: a collapse from
  * more than [refine] collapse_brick_triangles runs by bricks (default off). 6: beside the
  * scan simplified, no octree candidate for a level above [refine] octree_max_share of the
- * input's count. */
-#define REFINE_STAGE_VERSION 6u
+ * input's count. 7: a candidate farther uncollapsed than a lead within [refine] fit_floor
+ * is not collapsed (outranked; the levels as before, the report says outranked). */
+#define REFINE_STAGE_VERSION 7u
 
 static const sl_option refine_options[] = {
     {"refine", "collapse", SL_OPT_BOOL, "true", 0, 0, NULL,
