@@ -84,7 +84,9 @@ typedef struct stage_cost {
  * generation (188 / 865 / 3,449 MB at 1, 5 and 20 M, 2026-12-07; d through the three).
  * The samples' memory by its peaks at 5, 20 and 100 M (708 / 2,818 / 13,842 MB, 141.6 /
  * 140.9 / 138.4 bytes per triangle, 2026-12-08: the first 100 M run; the line had f 0.95
- * and said 10,580 MB at 100 M): f 1.0, d 139.
+ * and said 10,580 MB at 100 M): f 1.0, d 139. The range's the same way (476 / 1,893 /
+ * 9,446 MB, 95.2 / 94.7 / 94.5 bytes per triangle; the line said 7,472 at 100 M): f 1.0,
+ * d 94.5.
  * Refit with scripts/bench/plan_calibrate.py.
  * The octree stages' lines hold for surfaces of about 1.56 samples per triangle (the
  * tori; real scans 1.2-2.2); for slivers and soups, whose samples per triangle are many
@@ -97,7 +99,7 @@ typedef struct stage_cost {
  * the runs at 20k-500k slivers and 5k-80k soups (docs/benchmarks.md section 4b). */
 #define IMAGES_MB 110.0
 static const stage_cost mesh_costs[] = {
-    {"range", 0.014, 0.403, 1.081, 5, 94, 0.95, 0, 0},
+    {"range", 0.014, 0.403, 1.081, 5, 94.5, 1.0, 0, 0},
     {"samples", 0.105, 2.42, 1.047, 15, 139, 1.0, -0.65, 1},
     {"merge", 0.078, 2.34, 1.13, 20, 167, 0.963, 0.6, 1},
     {"priority", 0.107, 0.65, 1.14, 7, 164, 1.0, 0.6, 1},
