@@ -484,7 +484,7 @@ static void build_soup(sl_mesh *m, int g)
             float *p = m->positions + 3 * v;
             p[0] = (float)cx / (float)g;
             p[1] = (float)cy / (float)g;
-            uint32_t h = (uint32_t)(cx * 73856093) ^ (uint32_t)(cy * 19349663); /* rough */
+            uint32_t h = (uint32_t)cx * 73856093u ^ (uint32_t)cy * 19349663u; /* rough */
             p[2] = 0.05f * sinf(0.37f * (float)cx) * cosf(0.23f * (float)cy) +
                    0.01f * (float)(h % 1000) / 1000.0f + 0.5f * (float)sheet;
             if (cx == 0 && (v % 3) == 1)
