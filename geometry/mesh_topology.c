@@ -54,11 +54,13 @@ static uint64_t weld_slice(uint64_t n, int s)
     return n * (uint64_t)s / WELD_SLICES;
 }
 
-/* The slot of v's position: the first empty one on its probe sequence is claimed for v
- * (compare-and-swap: two positions racing for one slot, the loser probes on), and a slot
- * already holding the position is lowered to v if v is lower (atomic minimum). Once every
- * vertex is in, a position's slot holds its lowest vertex, on any thread count. */
-static void weld_insert(_Atomic uint32_t *table, uint64_t mask, const sl_mesh *m, uint32_t v)
+/* The slot of v's position, returned: the first empty one on its probe sequence is
+ * claimed for v (compare-and-swap: two positions racing for one slot, the loser probes
+ * on), and a slot already holding the position is lowered to v if v is lower (atomic
+ * minimum). Once every vertex is in, a position's slot holds its lowest vertex, on any
+ * thread count. */
+static uint64_t weld_insert(_Atomic uint32_t *table, uint64_t mask, const sl_mesh *m,
+                            uint32_t v)
 {
     uint32_t key[3], other[3];
     position_key(m, v, key);
@@ -66,7 +68,7 @@ static void weld_insert(_Atomic uint32_t *table, uint64_t mask, const sl_mesh *m
         uint32_t held = atomic_load_explicit(&table[slot], memory_order_relaxed);
         if (held == NONE && atomic_compare_exchange_strong_explicit(
                                 &table[slot], &held, v, memory_order_relaxed, memory_order_relaxed))
-            return;
+            return slot;
         position_key(m, held, other); /* held: the slot's vertex, read or lost to */
         if (memcmp(key, other, sizeof key) != 0)
             continue;
@@ -74,7 +76,7 @@ static void weld_insert(_Atomic uint32_t *table, uint64_t mask, const sl_mesh *m
                                                                   memory_order_relaxed,
                                                                   memory_order_relaxed))
             ;
-        return;
+        return slot;
     }
 }
 
@@ -93,8 +95,8 @@ static uint32_t weld_lookup(_Atomic uint32_t *table, uint64_t mask, const sl_mes
 
 /* Declared in mesh_distance.h (the topology's welding, shared with the simplifier). Ids in
  * the order of each position's first used vertex. In parallel: the used vertices marked,
- * inserted into the table and looked up by all threads; a vertex is its position's first
- * when the lookup gives itself back; the firsts numbered in fixed slices. */
+ * inserted into the table and read back by all threads; a vertex is its position's first
+ * when its slot gives itself back; the firsts numbered in fixed slices. */
 int64_t sl_mesh_weld_positions(const sl_mesh *m, uint32_t *weld)
 {
     uint64_t n = m->vertex_count, corners = 3 * m->triangle_count;
@@ -121,15 +123,22 @@ int64_t sl_mesh_weld_positions(const sl_mesh *m, uint32_t *weld)
 #pragma omp parallel for schedule(static) if (wide)
     for (uint64_t i = 0; i < cap; i++)
         atomic_init(&table[i], NONE);
+    /* A used vertex keeps its slot where the slots fit below NONE (fewer than 2^30 used
+     * vertices), so its first vertex is read back without hashing again. */
+    const int keep_slot = cap <= (uint64_t)1 << 31;
 #pragma omp parallel for schedule(dynamic, 4096) if (wide)
     for (uint64_t v = 0; v < n; v++)
-        if (weld[v] == 0)
-            weld_insert(table, cap - 1, m, (uint32_t)v);
+        if (weld[v] == 0) {
+            uint64_t slot = weld_insert(table, cap - 1, m, (uint32_t)v);
+            if (keep_slot)
+                weld[v] = (uint32_t)slot;
+        }
     /* weld[v] = the first vertex at v's position, for the used ones */
-#pragma omp parallel for schedule(dynamic, 4096) if (wide)
+#pragma omp parallel for schedule(static) if (wide)
     for (uint64_t v = 0; v < n; v++)
-        if (weld[v] == 0)
-            weld[v] = weld_lookup(table, cap - 1, m, (uint32_t)v);
+        if (weld[v] != NONE)
+            weld[v] = keep_slot ? atomic_load_explicit(&table[weld[v]], memory_order_relaxed)
+                                : weld_lookup(table, cap - 1, m, (uint32_t)v);
     free(table);
     uint32_t *id = malloc((n ? n : 1) * sizeof *id); /* per first vertex: its id */
     if (!id)
