@@ -22,6 +22,13 @@ int sl_sort_keys(uint64_t *keys, size_t count, int bits);
  * insertion would make quadratic). */
 void sl_sort_run_u32(uint32_t *v, size_t n);
 void sl_sort_run_u64(uint64_t *v, size_t n);
+/* The first element of slice s of n elements cut into `slices` fixed slices (the loops
+ * that count per slice, prefix the counts, then write at the offsets: the serial loop's
+ * result whatever the thread count). */
+static inline uint64_t sl_slice_begin(uint64_t n, int s, int slices)
+{
+    return n * (uint64_t)s / (uint64_t)slices;
+}
 /* Removes adjacent duplicates of a sorted array; returns the new count. */
 size_t sl_unique_keys(uint64_t *keys, size_t count);
 

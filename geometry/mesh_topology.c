@@ -45,14 +45,8 @@ static void position_key(const sl_mesh *m, uint32_t v, uint32_t k[3])
  * region costs more than it saves. */
 #define PARALLEL_MIN 65536
 
-/* Fixed slices of the vertices for the numbering (counted, prefixed, then written): the
- * serial loop's ids whatever the thread count. */
+/* Fixed slices of the vertices for the numbering (sl_slice_begin). */
 #define WELD_SLICES 64
-
-static uint64_t weld_slice(uint64_t n, int s)
-{
-    return n * (uint64_t)s / WELD_SLICES;
-}
 
 /* The slot of v's position, returned: the first empty one on its probe sequence is
  * claimed for v (compare-and-swap: two positions racing for one slot, the loser probes
@@ -148,7 +142,7 @@ int64_t sl_mesh_weld_positions(const sl_mesh *m, uint32_t *weld)
 #pragma omp parallel for schedule(static) if (wide)
     for (int s = 0; s < WELD_SLICES; s++) {
         uint64_t c = 0;
-        for (uint64_t v = weld_slice(n, s); v < weld_slice(n, s + 1); v++)
+        for (uint64_t v = sl_slice_begin(n, s, WELD_SLICES); v < sl_slice_begin(n, s + 1, WELD_SLICES); v++)
             c += weld[v] == v;
         first[s + 1] = c;
     }
@@ -157,7 +151,7 @@ int64_t sl_mesh_weld_positions(const sl_mesh *m, uint32_t *weld)
 #pragma omp parallel for schedule(static) if (wide)
     for (int s = 0; s < WELD_SLICES; s++) {
         uint32_t next = (uint32_t)first[s];
-        for (uint64_t v = weld_slice(n, s); v < weld_slice(n, s + 1); v++)
+        for (uint64_t v = sl_slice_begin(n, s, WELD_SLICES); v < sl_slice_begin(n, s + 1, WELD_SLICES); v++)
             if (weld[v] == v)
                 id[v] = next++;
     }
@@ -253,9 +247,7 @@ static _Atomic uint32_t *join_parts(const sl_mesh *m, const uint32_t *weld, uint
 #pragma omp parallel for schedule(dynamic, 4096) if (wide)
     for (uint64_t t = 0; t < m->triangle_count; t++) {
         uint32_t w[3];
-        for (int c = 0; c < 3; c++)
-            w[c] = weld[m->triangles[3 * t + c]];
-        if (skip_degenerate && (w[0] == w[1] || w[1] == w[2] || w[2] == w[0]))
+        if (!welded_triangle(m, weld, t, w) && skip_degenerate)
             continue;
         unite(parent, w[0], w[1]);
         unite(parent, w[0], w[2]);

@@ -32,15 +32,8 @@ static uint32_t sortable_key(float f)
     return (bits & 0x80000000u) ? ~bits : (bits | 0x80000000u);
 }
 
-/* Fixed slices of the loops that compact or number in input order: each slice counts,
- * the counts are prefixed, each slice writes at its offset, so the result is the serial
- * loop's whatever the thread count. */
+/* Fixed slices of the loops that compact or number in input order (sl_slice_begin). */
 #define SLICES 64
-
-static uint64_t slice_begin(uint64_t n, int s)
-{
-    return n * (uint64_t)s / SLICES;
-}
 
 /* rep[v] = lowest index with the same position, for finite v; RANGE_NONE otherwise.
  * The finite vertices as (key, value) pairs sorted by the key tables' stable radix sort
@@ -56,7 +49,7 @@ static int weld_vertices(const sl_mesh *mesh, const uint8_t *finite, uint32_t *r
 #pragma omp parallel for schedule(dynamic, 1)
     for (int s = 0; s < SLICES; s++) {
         uint64_t c = 0;
-        for (uint64_t v = slice_begin(n, s); v < slice_begin(n, s + 1); v++) {
+        for (uint64_t v = sl_slice_begin(n, s, SLICES); v < sl_slice_begin(n, s + 1, SLICES); v++) {
             rep[v] = RANGE_NONE;
             c += finite[v];
         }
@@ -72,7 +65,7 @@ static int weld_vertices(const sl_mesh *mesh, const uint8_t *finite, uint32_t *r
 #pragma omp parallel for schedule(dynamic, 1)
     for (int s = 0; s < SLICES; s++) {
         uint64_t i = first[s];
-        for (uint64_t v = slice_begin(n, s); v < slice_begin(n, s + 1); v++)
+        for (uint64_t v = sl_slice_begin(n, s, SLICES); v < sl_slice_begin(n, s + 1, SLICES); v++)
             if (finite[v])
                 pairs[i++] = (sl_key_pair){sortable_key(mesh->positions[3 * v + 2]), v};
     }
@@ -97,7 +90,7 @@ static int weld_vertices(const sl_mesh *mesh, const uint8_t *finite, uint32_t *r
     uint64_t count = 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : count)
     for (int s = 0; s < SLICES; s++) {
-        uint64_t lo = slice_begin(m, s), hi = slice_begin(m, s + 1), head = lo;
+        uint64_t lo = sl_slice_begin(m, s, SLICES), hi = sl_slice_begin(m, s + 1, SLICES), head = lo;
         while (head > 0 && pairs[head - 1].key == pairs[lo].key &&
                pairs[head - 1].value >> 32 == pairs[lo].value >> 32)
             head--;
@@ -151,7 +144,7 @@ static int keep_faces(const sl_mesh *mesh, const uint8_t *finite, const uint32_t
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : nonfinite, degenerate)
     for (int s = 0; s < SLICES; s++) {
         uint64_t kept = 0;
-        for (uint64_t t = slice_begin(nt, s); t < slice_begin(nt, s + 1); t++) {
+        for (uint64_t t = sl_slice_begin(nt, s, SLICES); t < sl_slice_begin(nt, s + 1, SLICES); t++) {
             cls[t] = (uint8_t)classify_face(mesh, finite, rep, t);
             kept += cls[t] == FACE_KEEP;
             nonfinite += cls[t] == FACE_NONFINITE;
@@ -175,7 +168,7 @@ static int keep_faces(const sl_mesh *mesh, const uint8_t *finite, const uint32_t
 #pragma omp parallel for schedule(dynamic, 1)
     for (int s = 0; s < SLICES; s++) {
         uint64_t k = first[s];
-        for (uint64_t t = slice_begin(nt, s); t < slice_begin(nt, s + 1); t++) {
+        for (uint64_t t = sl_slice_begin(nt, s, SLICES); t < sl_slice_begin(nt, s + 1, SLICES); t++) {
             if (cls[t] != FACE_KEEP)
                 continue;
             for (int c = 0; c < 3; c++)
@@ -208,7 +201,7 @@ static int number_points(const sl_mesh *mesh, const uint32_t *rep, range_clean *
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : unreferenced)
     for (int s = 0; s < SLICES; s++) {
         uint64_t points = 0;
-        for (uint64_t v = slice_begin(n, s); v < slice_begin(n, s + 1); v++) {
+        for (uint64_t v = sl_slice_begin(n, s, SLICES); v < sl_slice_begin(n, s + 1, SLICES); v++) {
             if (rep[v] != v)
                 continue;
             if (cloud || point_of_rep[v] == 0)
@@ -230,7 +223,7 @@ static int number_points(const sl_mesh *mesh, const uint32_t *rep, range_clean *
 #pragma omp parallel for schedule(dynamic, 1)
     for (int s = 0; s < SLICES; s++) {
         uint64_t p = first[s];
-        for (uint64_t v = slice_begin(n, s); v < slice_begin(n, s + 1); v++)
+        for (uint64_t v = sl_slice_begin(n, s, SLICES); v < sl_slice_begin(n, s + 1, SLICES); v++)
             if (rep[v] == v && (cloud || point_of_rep[v] == 0)) {
                 point_of_rep[v] = (uint32_t)p;
                 out->point_vertex[p++] = (uint32_t)v;
